@@ -1,0 +1,323 @@
+//! Gear pair with periodic mesh stiffness and transmission errors (Eqs 36-46).
+//!
+//! ```text
+//! q = rb1 phi1 + rb2 phi2                                   (Eq 38, dynamic transmission error, m)
+//! m_red = J1 J2 / (J1 rb2^2 + J2 rb1^2)                     (Eq 40)
+//! m_red q'' + c_z q' + k_z(t) q = f(t)                      (Eq 42)
+//! f(t) = k0 q0 - (k_z(t) - k0) e(t) - c_z e'(t)            (Eq 42, load from Eq 41)
+//! k_z(t) = k0 + sum_n k_n cos(n w_z t + gamma_n)            (Eq 43), w_z = z1 w1
+//! e(t) = sum_i e_i cos(i w1 t + alpha_i)  [+ wheel orders]  (Eq 44)
+//! c_z = 2 zeta sqrt(k0 m_red)
+//! ```
+//! State x = [q, q'] (m, m/s). The period is the shortest the scene needs: one mesh cycle for a smooth
+//! healthy mesh, one pinion revolution with pinion errors, one wheel revolution with wheel errors only,
+//! and the hunting period z_w / gcd(z_p, z_w) pinion revolutions with both.
+
+use super::{FourierForm, FourierSeries, PeriodicSystem, PiecewiseConstant, Side};
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::PI;
+
+/// Periodic mesh stiffness over one mesh cycle.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshStiffness {
+    /// Fourier series in the mesh angle (base w_z = z1 w1), N/m.
+    Fourier(FourierSeries),
+    /// Piecewise-constant values over one mesh cycle (period 1/f_z), N/m.
+    Piecewise(PiecewiseConstant),
+}
+
+impl MeshStiffness {
+    /// Mean stiffness k0 in N/m.
+    pub fn mean(&self) -> f64 {
+        match self {
+            Self::Fourier(s) => s.mean,
+            Self::Piecewise(p) => p.mean(),
+        }
+    }
+    fn eval(&self, t: f64, side: Side) -> f64 {
+        match self {
+            Self::Fourier(s) => s.eval(t),
+            Self::Piecewise(p) => p.eval(t, side),
+        }
+    }
+}
+
+/// Which gear of the pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Gear {
+    /// The driving gear (index 1 in the paper).
+    Pinion,
+    /// The driven gear (index 2).
+    Wheel,
+}
+
+/// A stiffness drop on one cracked tooth: k_z is multiplied by `1 - loss` during that tooth's mesh cycle
+/// `[ (tooth-1) T_z, tooth T_z )` of each revolution of its gear.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crack {
+    /// Gear carrying the cracked tooth.
+    pub gear: Gear,
+    /// Tooth number, 1-based.
+    pub tooth: usize,
+    /// Fraction of stiffness lost, in (0, 1).
+    pub loss: f64,
+}
+
+/// Physical parameters of the gear pair (SI units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GearPairParams {
+    /// Pinion teeth z1.
+    pub pinion_teeth: usize,
+    /// Wheel teeth z2.
+    pub wheel_teeth: usize,
+    /// Pinion inertia J1 in kg m^2.
+    pub pinion_inertia_kg_m2: f64,
+    /// Wheel inertia J2 in kg m^2.
+    pub wheel_inertia_kg_m2: f64,
+    /// Pinion base radius rb1 in m.
+    pub pinion_base_radius_m: f64,
+    /// Wheel base radius rb2 in m.
+    pub wheel_base_radius_m: f64,
+    /// Pinion speed in rpm.
+    pub speed_rpm: f64,
+    /// Lehr damping ratio zeta of the mesh (c_z = 2 zeta sqrt(k0 m_red)).
+    pub damping_ratio: f64,
+    /// Static tooth deflection q0 in m.
+    pub static_deflection_m: f64,
+    /// Mesh stiffness k_z over one mesh cycle.
+    pub mesh: MeshStiffness,
+    /// Transmission error of pinion origin as a series in the pinion angle (w = w1), m.
+    pub pinion_errors: FourierSeries,
+    /// Transmission error of wheel origin as a series in the wheel angle (w = w2), m.
+    pub wheel_errors: FourierSeries,
+    /// Optional cracked tooth.
+    pub crack: Option<Crack>,
+}
+
+/// The gear pair as a 2-state periodic system.
+#[derive(Clone, Debug)]
+pub struct GearPair {
+    params: GearPairParams,
+    m_red: f64,
+    c_z: f64,
+    k0: f64,
+    period_s: f64,
+    breakpoints: Vec<f64>,
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+impl GearPair {
+    /// Builds the model; the parameters must already be validated (positive masses, radii, teeth).
+    pub fn new(mut params: GearPairParams) -> Self {
+        let (j1, j2) = (params.pinion_inertia_kg_m2, params.wheel_inertia_kg_m2);
+        let (r1, r2) = (params.pinion_base_radius_m, params.wheel_base_radius_m);
+        let m_red = j1 * j2 / (j1 * r2 * r2 + j2 * r1 * r1);
+        let k0 = params.mesh.mean();
+        let c_z = 2.0 * params.damping_ratio * (k0 * m_red).sqrt();
+        let w1 = params.speed_rpm / 60.0 * 2.0 * PI;
+        params.pinion_errors.omega_rad_s = w1;
+        params.wheel_errors.omega_rad_s = w1 * params.pinion_teeth as f64 / params.wheel_teeth as f64;
+        if let MeshStiffness::Fourier(s) = &mut params.mesh {
+            s.omega_rad_s = w1 * params.pinion_teeth as f64;
+        }
+        let mut g = Self { params, m_red, c_z, k0, period_s: 0.0, breakpoints: Vec::new() };
+        g.period_s = g.revolutions_per_period() * g.pinion_period_s();
+        g.breakpoints = g.find_breakpoints();
+        g
+    }
+
+    /// Model parameters (with base frequencies filled in).
+    pub fn params(&self) -> &GearPairParams {
+        &self.params
+    }
+    /// Reduced mass m_red in kg (Eq 40).
+    pub fn reduced_mass_kg(&self) -> f64 {
+        self.m_red
+    }
+    /// Mesh damping c_z in N s/m.
+    pub fn damping_n_s_per_m(&self) -> f64 {
+        self.c_z
+    }
+    /// Mean natural angular frequency w0 = sqrt(k0 / m_red) in 1/s.
+    pub fn natural_frequency_rad_s(&self) -> f64 {
+        (self.k0 / self.m_red).sqrt()
+    }
+    /// Pinion rotation frequency f1 in Hz.
+    pub fn pinion_hz(&self) -> f64 {
+        self.params.speed_rpm / 60.0
+    }
+    /// Wheel rotation frequency f2 in Hz.
+    pub fn wheel_hz(&self) -> f64 {
+        self.pinion_hz() * self.params.pinion_teeth as f64 / self.params.wheel_teeth as f64
+    }
+    /// Mesh frequency f_z = z1 f1 in Hz.
+    pub fn mesh_hz(&self) -> f64 {
+        self.pinion_hz() * self.params.pinion_teeth as f64
+    }
+    fn pinion_period_s(&self) -> f64 {
+        1.0 / self.pinion_hz()
+    }
+    fn needs_pinion(&self) -> bool {
+        !self.params.pinion_errors.is_constant() || self.params.crack.as_ref().is_some_and(|c| c.gear == Gear::Pinion)
+    }
+    fn needs_wheel(&self) -> bool {
+        !self.params.wheel_errors.is_constant() || self.params.crack.as_ref().is_some_and(|c| c.gear == Gear::Wheel)
+    }
+
+    /// Pinion revolutions in the period the scene needs (1/z1 for a healthy smooth mesh, 1 with pinion
+    /// content, z2/z1 with wheel content only, z2/gcd(z1, z2) with both).
+    pub fn revolutions_per_period(&self) -> f64 {
+        let (z1, z2) = (self.params.pinion_teeth, self.params.wheel_teeth);
+        match (self.needs_pinion(), self.needs_wheel()) {
+            (false, false) => 1.0 / z1 as f64,
+            (true, false) => 1.0,
+            (false, true) => z2 as f64 / z1 as f64,
+            (true, true) => (z2 / gcd(z1, z2)) as f64,
+        }
+    }
+
+    /// Mesh cycles in one period.
+    pub fn mesh_cycles_per_period(&self) -> usize {
+        (self.revolutions_per_period() * self.params.pinion_teeth as f64).round() as usize
+    }
+
+    fn mesh_period_s(&self) -> f64 {
+        1.0 / self.mesh_hz()
+    }
+
+    fn crack_window(&self) -> Option<(f64, f64, f64)> {
+        // (start, end, repeat period) in s
+        let c = self.params.crack.as_ref()?;
+        let tz = self.mesh_period_s();
+        let rev = match c.gear {
+            Gear::Pinion => self.pinion_period_s(),
+            Gear::Wheel => 1.0 / self.wheel_hz(),
+        };
+        Some(((c.tooth - 1) as f64 * tz, c.tooth as f64 * tz, rev))
+    }
+
+    fn crack_factor(&self, t: f64, side: Side) -> f64 {
+        let Some((a, b, rev)) = self.crack_window() else { return 1.0 };
+        let loss = self.params.crack.as_ref().map_or(0.0, |c| c.loss);
+        let tau = t.rem_euclid(rev);
+        // guard rounding: tau within 1e-12 rev of rev counts as 0
+        let tau = if rev - tau < 1e-12 * rev { 0.0 } else { tau };
+        let inside = match side {
+            Side::Right => tau >= a && tau < b,
+            Side::Left => (tau > a && tau <= b) || (a == 0.0 && tau == 0.0),
+        };
+        if inside { 1.0 - loss } else { 1.0 }
+    }
+
+    fn find_breakpoints(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        let t = self.period_s;
+        if let MeshStiffness::Piecewise(p) = &self.params.mesh {
+            for cycle in 0..self.mesh_cycles_per_period() {
+                out.extend(p.jumps().iter().map(|j| j + cycle as f64 * p.period_s));
+            }
+        }
+        if let Some((a, b, rev)) = self.crack_window() {
+            let reps = (t / rev).round() as usize;
+            for r in 0..reps {
+                out.push(a + r as f64 * rev);
+                out.push(b + r as f64 * rev);
+            }
+        }
+        out.retain(|&b| b > 1e-12 * t && b < t * (1.0 - 1e-12));
+        out.sort_by(f64::total_cmp);
+        out.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * t);
+        out
+    }
+
+    /// Mesh stiffness k_z(t) in N/m including a crack.
+    pub fn stiffness(&self, t: f64, side: Side) -> f64 {
+        self.params.mesh.eval(t, side) * self.crack_factor(t, side)
+    }
+
+    /// Total transmission error e(t) and e'(t) in m and m/s.
+    pub fn error(&self, t: f64) -> (f64, f64) {
+        let p = self.params.pinion_errors.eval_derivatives(t);
+        let w = self.params.wheel_errors.eval_derivatives(t);
+        (p[0] + w[0], p[1] + w[1])
+    }
+}
+
+impl PeriodicSystem for GearPair {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn period_s(&self) -> f64 {
+        self.period_s
+    }
+    fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+        let kz = self.stiffness(t, side);
+        let (e, ed) = self.error(t);
+        let m = self.m_red;
+        p[(0, 0)] = 0.0;
+        p[(0, 1)] = 1.0;
+        p[(1, 0)] = -kz / m;
+        p[(1, 1)] = -self.c_z / m;
+        f[0] = 0.0;
+        f[1] = (self.k0 * self.params.static_deflection_m - (kz - self.k0) * e - self.c_z * ed) / m;
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.breakpoints.clone()
+    }
+    fn fourier_form(&self) -> Option<FourierForm> {
+        let MeshStiffness::Fourier(mesh) = &self.params.mesh else { return None };
+        if self.params.crack.is_some() {
+            return None;
+        }
+        let w = 2.0 * PI / self.period_s;
+        let per_period = |cycles: f64| cycles.round() as usize;
+        let revs = self.revolutions_per_period();
+        let z1 = self.params.pinion_teeth as f64;
+        let kz = stretch(mesh, per_period(revs * z1), w);
+        let e = stretch(&self.params.pinion_errors, per_period(revs), w).plus(&stretch(
+            &self.params.wheel_errors,
+            per_period(revs * z1 / self.params.wheel_teeth as f64),
+            w,
+        ));
+        let dk = kz.plus(&FourierSeries::constant(-self.k0));
+        let mut forcing = dk.times(&e).scaled(-1.0).plus(&e.derivative().scaled(-self.c_z));
+        forcing.mean += self.k0 * self.params.static_deflection_m;
+        Some(FourierForm {
+            dof: 1,
+            period_s: self.period_s,
+            mass: vec![FourierSeries::constant(self.m_red)],
+            damping: vec![FourierSeries::constant(self.c_z)],
+            stiffness: vec![kz],
+            forcing: vec![forcing],
+        })
+    }
+    fn max_harmonic(&self) -> usize {
+        let revs = self.revolutions_per_period();
+        let z1 = self.params.pinion_teeth as f64;
+        let mesh_h = match &self.params.mesh {
+            MeshStiffness::Fourier(s) => s.harmonics(),
+            MeshStiffness::Piecewise(_) => 0,
+        };
+        let a = (mesh_h as f64 * revs * z1).round() as usize;
+        let b = (self.params.pinion_errors.harmonics() as f64 * revs).round() as usize;
+        let c =
+            (self.params.wheel_errors.harmonics() as f64 * revs * z1 / self.params.wheel_teeth as f64).round() as usize;
+        a.max(b).max(c) + a.min(b.max(c))
+    }
+}
+
+/// Series in an angle that turns `cycles` times per period, re-expressed in the period's base frequency.
+fn stretch(s: &FourierSeries, cycles: usize, w: f64) -> FourierSeries {
+    let h = s.harmonics() * cycles;
+    let (mut c, mut sn) = (vec![0.0; h], vec![0.0; h]);
+    if cycles > 0 {
+        for k in 1..=s.harmonics() {
+            c[k * cycles - 1] = s.cos[k - 1];
+            sn[k * cycles - 1] = s.sin[k - 1];
+        }
+    }
+    FourierSeries { omega_rad_s: w, mean: s.mean, cos: c, sin: sn }
+}

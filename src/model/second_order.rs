@@ -1,0 +1,164 @@
+//! Generic N-DOF second-order periodic system M(t) y'' + C(t) y' + K(t) y = d(t) (Eq 2).
+
+use super::{Coefficient, FourierForm, PeriodicSystem, Side};
+use nalgebra::{DMatrix, DVector};
+
+/// Row-major N x N coefficient matrices and N forcing entries, all of one period `period_s`.
+#[derive(Clone, Debug)]
+pub struct SecondOrderSystem {
+    dof: usize,
+    period_s: f64,
+    mass: Vec<Coefficient>,
+    damping: Vec<Coefficient>,
+    stiffness: Vec<Coefficient>,
+    forcing: Vec<Coefficient>,
+    /// LU of M when M is constant, so that each evaluation is a solve with a stored factorisation.
+    constant_mass: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+    breakpoints: Vec<f64>,
+}
+
+/// Why a second-order system could not be built.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BuildError {
+    /// The named matrix does not have N x N (or N) entries.
+    Size {
+        /// "mass", "damping", "stiffness" or "forcing".
+        what: &'static str,
+        /// Entries expected.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// M(t) is singular (or nearly so) at time t.
+    SingularMass {
+        /// Time in s.
+        t: f64,
+    },
+}
+
+impl SecondOrderSystem {
+    /// Builds the system and checks sizes and that M(t) is invertible at 64 sample times per period.
+    ///
+    /// # Errors
+    /// [`BuildError`] on mismatched sizes or a singular mass matrix.
+    pub fn new(
+        period_s: f64,
+        mass: Vec<Coefficient>,
+        damping: Vec<Coefficient>,
+        stiffness: Vec<Coefficient>,
+        forcing: Vec<Coefficient>,
+    ) -> Result<Self, BuildError> {
+        let dof = forcing.len();
+        for (what, m) in [("mass", &mass), ("damping", &damping), ("stiffness", &stiffness)] {
+            if m.len() != dof * dof {
+                return Err(BuildError::Size { what, expected: dof * dof, got: m.len() });
+            }
+        }
+        let mut breakpoints: Vec<f64> = Vec::new();
+        for c in mass.iter().chain(&damping).chain(&stiffness).chain(&forcing) {
+            if let Coefficient::Piecewise(p) = c {
+                let reps = (period_s / p.period_s).round().max(1.0) as usize;
+                for r in 0..reps {
+                    breakpoints.extend(p.jumps().iter().map(|j| j + r as f64 * p.period_s));
+                }
+            }
+        }
+        breakpoints.retain(|&b| b > 1e-12 * period_s && b < period_s * (1.0 - 1e-12));
+        breakpoints.sort_by(f64::total_cmp);
+        breakpoints.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * period_s);
+        let mut sys = Self { dof, period_s, mass, damping, stiffness, forcing, constant_mass: None, breakpoints };
+        for i in 0..64 {
+            let t = period_s * i as f64 / 64.0;
+            let m = sys.matrix(&sys.mass, t, Side::Right);
+            let scale = m.amax();
+            let lu = m.lu();
+            let ok = scale > 0.0 && lu.u().diagonal().iter().all(|d| d.abs() > 1e-12 * scale);
+            if !ok {
+                return Err(BuildError::SingularMass { t });
+            }
+        }
+        if sys.mass.iter().all(Coefficient::is_constant) {
+            sys.constant_mass = Some(sys.matrix(&sys.mass, 0.0, Side::Right).lu());
+        }
+        Ok(sys)
+    }
+
+    /// Degrees of freedom N.
+    pub fn dof(&self) -> usize {
+        self.dof
+    }
+
+    fn matrix(&self, entries: &[Coefficient], t: f64, side: Side) -> DMatrix<f64> {
+        DMatrix::from_fn(self.dof, self.dof, |i, j| entries[i * self.dof + j].eval(t, side))
+    }
+}
+
+impl PeriodicSystem for SecondOrderSystem {
+    fn dim(&self) -> usize {
+        2 * self.dof
+    }
+    fn period_s(&self) -> f64 {
+        self.period_s
+    }
+    fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+        let n = self.dof;
+        // rhs = [K | C | d]; solve M X = rhs, then P_bottom = -[X_K | X_C], f_bottom = X_d
+        let mut rhs = DMatrix::zeros(n, 2 * n + 1);
+        for i in 0..n {
+            for j in 0..n {
+                rhs[(i, j)] = self.stiffness[i * n + j].eval(t, side);
+                rhs[(i, n + j)] = self.damping[i * n + j].eval(t, side);
+            }
+            rhs[(i, 2 * n)] = self.forcing[i].eval(t, side);
+        }
+        let solved = match &self.constant_mass {
+            Some(lu) => lu.solve(&rhs),
+            None => self.matrix(&self.mass, t, side).lu().solve(&rhs),
+        }
+        .expect("mass matrix checked invertible at construction");
+        p.fill(0.0);
+        f.fill(0.0);
+        for i in 0..n {
+            p[(i, n + i)] = 1.0;
+            for j in 0..2 * n {
+                p[(n + i, j)] = -solved[(i, j)];
+            }
+            f[n + i] = solved[(i, 2 * n)];
+        }
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.breakpoints.clone()
+    }
+    fn fourier_form(&self) -> Option<FourierForm> {
+        let series = |v: &[Coefficient]| -> Option<Vec<_>> {
+            v.iter()
+                .map(|c| match c {
+                    Coefficient::Fourier(s) => {
+                        let mut s = s.clone();
+                        s.omega_rad_s = 2.0 * std::f64::consts::PI / self.period_s;
+                        Some(s)
+                    }
+                    Coefficient::Piecewise(_) => None,
+                })
+                .collect()
+        };
+        Some(FourierForm {
+            dof: self.dof,
+            period_s: self.period_s,
+            mass: series(&self.mass)?,
+            damping: series(&self.damping)?,
+            stiffness: series(&self.stiffness)?,
+            forcing: series(&self.forcing)?,
+        })
+    }
+    fn max_harmonic(&self) -> usize {
+        self.mass
+            .iter()
+            .chain(&self.damping)
+            .chain(&self.stiffness)
+            .chain(&self.forcing)
+            .map(Coefficient::harmonics)
+            .max()
+            .unwrap_or(0)
+    }
+}

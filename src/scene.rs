@@ -1,0 +1,944 @@
+//! Scenes: one JSON file states one simulation (model, solver, output). Parsed with serde
+//! (`deny_unknown_fields`), then validated into typed model objects; every error names the file and the
+//! field. Units are in the field names (SI unless the name says otherwise).
+
+use crate::model::{
+    self, Coefficient, FourierSeries, GearPair, GearPairParams, MeshStiffness, OutputQuantity, PeriodicSystem,
+    PiecewiseConstant, PressParams, SecondOrderSystem, gear::Crack, gear::Gear,
+};
+use crate::solver::{Method, SolverOptions};
+use serde::Deserialize;
+use std::f64::consts::PI;
+
+/// Errors reading or validating a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: cannot read scene: {message}")]
+    Io {
+        /// Scene path.
+        file: String,
+        /// OS message.
+        message: String,
+    },
+    /// JSON syntax, unknown or missing field, wrong type.
+    #[error("{file}: {message}")]
+    Json {
+        /// Scene path.
+        file: String,
+        /// serde_json's message with line and column.
+        message: String,
+    },
+    /// A value that is well-formed but physically meaningless.
+    #[error("{file}: field `{field}`: {message}")]
+    Invalid {
+        /// Scene path.
+        file: String,
+        /// Dotted path of the field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+// ---------- raw serde structures ----------
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    model: String,
+    #[serde(default)]
+    gear_pair: Option<RawGearPair>,
+    #[serde(default)]
+    press: Option<RawPress>,
+    #[serde(default)]
+    ltp: Option<RawLtp>,
+    #[serde(default)]
+    solver: RawSolver,
+    #[serde(default)]
+    output: RawOutput,
+}
+
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    #[serde(default)]
+    method: Option<String>,
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    steps: Option<u64>,
+}
+
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+struct RawOutput {
+    #[serde(default)]
+    quantity: Option<String>,
+    #[serde(default)]
+    sample_rate_hz: Option<f64>,
+    #[serde(default)]
+    duration_s: Option<f64>,
+    #[serde(default)]
+    max_order: Option<f64>,
+    #[serde(default)]
+    noise_rms: Option<f64>,
+    #[serde(default)]
+    seed: Option<u64>,
+    #[serde(default)]
+    speed_modulation: Option<RawSpeedModulation>,
+    #[serde(default)]
+    tacho: Option<bool>,
+    #[serde(default)]
+    wav_format: Option<String>,
+    #[serde(default)]
+    full_scale: Option<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawSpeedModulation {
+    depth: f64,
+    frequency_hz: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawHarmonic {
+    order: u32,
+    amplitude_m: f64,
+    #[serde(default)]
+    phase_rad: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawToothFault {
+    tooth: u32,
+    depth_m: f64,
+    #[serde(default = "one")]
+    width_teeth: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawGear {
+    teeth: u32,
+    inertia_kg_m2: f64,
+    base_radius_m: f64,
+    #[serde(default)]
+    errors: Vec<RawHarmonic>,
+    #[serde(default)]
+    tooth_faults: Vec<RawToothFault>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawStiffnessHarmonic {
+    amplitude_n_per_m: f64,
+    #[serde(default)]
+    phase_rad: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+enum RawMesh {
+    Fourier {
+        mean_n_per_m: f64,
+        #[serde(default)]
+        harmonics: Vec<RawStiffnessHarmonic>,
+    },
+    Rectangular {
+        contact_ratio: f64,
+        pair_stiffness_n_per_m: f64,
+    },
+    Samples {
+        values_n_per_m: Vec<f64>,
+    },
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawCrack {
+    gear: String,
+    tooth: u32,
+    stiffness_loss: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawGearPair {
+    speed_rpm: f64,
+    damping_ratio: f64,
+    static_deflection_m: f64,
+    pinion: RawGear,
+    wheel: RawGear,
+    mesh_stiffness: RawMesh,
+    #[serde(default)]
+    crack: Option<RawCrack>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawPress {
+    speed_rpm: f64,
+    torsional_stiffness_n_m_per_rad: f64,
+    follower_stiffness_n_per_m: f64,
+    torsional_damping_n_m_s_per_rad: f64,
+    follower_damping_n_s_per_m: f64,
+    cam_inertia_kg_m2: f64,
+    follower_mass_kg: f64,
+    load_n: f64,
+    cam_cos_m_per_rad: Vec<f64>,
+    #[serde(default)]
+    cam_sin_m_per_rad: Vec<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawEntry {
+    #[serde(default)]
+    mean: Option<f64>,
+    #[serde(default)]
+    cos: Vec<f64>,
+    #[serde(default)]
+    sin: Vec<f64>,
+    #[serde(default)]
+    steps: Option<RawSteps>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawSteps {
+    starts_s: Vec<f64>,
+    values: Vec<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawLtp {
+    period_s: f64,
+    mass: Vec<Vec<RawEntry>>,
+    damping: Vec<Vec<RawEntry>>,
+    stiffness: Vec<Vec<RawEntry>>,
+    forcing: Vec<RawEntry>,
+}
+
+// ---------- validated scene ----------
+
+/// The model a scene builds.
+#[derive(Clone, Debug)]
+pub enum Model {
+    /// Gear pair (Eqs 36-46).
+    GearPair(GearPair),
+    /// Forging-press cam mechanism (Eqs 32-35).
+    Press(PressParams, SecondOrderSystem),
+    /// Generic LTP system.
+    Ltp(SecondOrderSystem),
+}
+
+/// Slow sinusoidal speed fluctuation: speed(t) = nominal (1 + depth sin(2 pi f t)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedModulation {
+    /// Relative depth (0.01 = 1 %).
+    pub depth: f64,
+    /// Modulation frequency in Hz.
+    pub frequency_hz: f64,
+}
+
+/// Sample format of a written WAV file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WavFormat {
+    /// 32-bit IEEE float, values in the physical unit.
+    F32,
+    /// 16-bit integer, full scale = `full_scale` physical units.
+    I16,
+    /// 24-bit integer, full scale = `full_scale` physical units.
+    I24,
+}
+
+/// What `simulate` reports and writes.
+#[derive(Clone, Debug)]
+pub struct OutputOptions {
+    /// Output quantity.
+    pub quantity: OutputQuantity,
+    /// Frequency whose multiples are the orders (pinion rotation, press input shaft, 1/T), Hz.
+    pub base_hz: f64,
+    /// Name of the base ("pinion rotation").
+    pub base_name: String,
+    /// Highest order listed in `orders`.
+    pub max_order: f64,
+    /// Sample rate of a written signal, Hz.
+    pub sample_rate_hz: f64,
+    /// Duration of a written signal, s.
+    pub duration_s: f64,
+    /// RMS of white measurement noise added to the written signal (physical unit).
+    pub noise_rms: f64,
+    /// Seed of the noise generator.
+    pub seed: u64,
+    /// Optional speed fluctuation.
+    pub speed_modulation: Option<SpeedModulation>,
+    /// Add once-per-revolution tachometer channels.
+    pub tacho: bool,
+    /// WAV sample format.
+    pub wav_format: WavFormat,
+    /// Physical value mapped to integer full scale (integer WAV only).
+    pub full_scale: Option<f64>,
+    /// True when `sample_rate_hz` came from the scene rather than a default.
+    pub sample_rate_given: bool,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name (file stem when not given).
+    pub name: String,
+    /// Path it was read from.
+    pub file: String,
+    /// Model.
+    pub model: Model,
+    /// Solver options.
+    pub solver: SolverOptions,
+    /// Output options.
+    pub output: OutputOptions,
+    /// What was modelled and what was dropped, in plain words.
+    pub notes: Vec<String>,
+    /// The raw JSON, for parameter sweeps.
+    pub json: serde_json::Value,
+}
+
+impl Scene {
+    /// The model as a periodic system.
+    pub fn system(&self) -> &dyn PeriodicSystem {
+        match &self.model {
+            Model::GearPair(g) => g,
+            Model::Press(_, s) | Model::Ltp(s) => s,
+        }
+    }
+
+    /// Reads and validates a scene file.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file and field.
+    pub fn load(path: &str) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| SceneError::Json { file: path.to_string(), message: e.to_string() })?;
+        Self::from_value(value, path)
+    }
+
+    /// Validates a scene given as JSON (`file` is used in messages).
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file and field.
+    pub fn from_value(value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
+        let raw: RawScene = serde_json::from_value(value.clone())
+            .map_err(|e| SceneError::Json { file: file.to_string(), message: e.to_string() })?;
+        let v = Validator { file };
+        let _ = &raw.description;
+        let solver = v.solver(&raw.solver)?;
+        let mut notes = Vec::new();
+        let stem = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+        let name = raw.name.clone().unwrap_or_else(|| stem.to_string());
+        let present =
+            [("gear_pair", raw.gear_pair.is_some()), ("press", raw.press.is_some()), ("ltp", raw.ltp.is_some())];
+        for (key, is) in present {
+            if is && key != raw.model {
+                return Err(v.err(key, format!("given, but `model` is \"{}\"", raw.model)));
+            }
+        }
+        let missing =
+            |key: &str| v.err(key, format!("missing: `model` is \"{key}\" so the `{key}` object is required"));
+        let (model, output) = match raw.model.as_str() {
+            "gear_pair" => {
+                let g = raw.gear_pair.as_ref().ok_or_else(|| missing("gear_pair"))?;
+                let gp = v.gear_pair(g, solver.tolerance, &mut notes)?;
+                let out = v.gear_output(&raw.output, &gp)?;
+                (Model::GearPair(gp), out)
+            }
+            "press" => {
+                let p = raw.press.as_ref().ok_or_else(|| missing("press"))?;
+                let params = v.press(p)?;
+                let sys =
+                    params.system().map_err(|_| v.err("press.follower_mass_kg", "mass matrix is singular".into()))?;
+                let out = v.press_output(&raw.output, &params)?;
+                (Model::Press(params, sys), out)
+            }
+            "ltp" => {
+                let l = raw.ltp.as_ref().ok_or_else(|| missing("ltp"))?;
+                let sys = v.ltp(l)?;
+                let out = v.ltp_output(&raw.output, &sys, l.period_s)?;
+                (Model::Ltp(sys), out)
+            }
+            other => {
+                return Err(v.err("model", format!("unknown model \"{other}\" (expected gear_pair, press or ltp)")));
+            }
+        };
+        let mut scene = Self { name, file: file.to_string(), model, solver, output, notes, json: value };
+        let sys = scene.system();
+        let period = sys.period_s();
+        let note = format!(
+            "period {:.6} s ({:.4} base revolutions), highest coefficient harmonic {}",
+            period,
+            period * scene.output.base_hz,
+            sys.max_harmonic()
+        );
+        scene.notes.insert(0, note);
+        Ok(scene)
+    }
+}
+
+struct Validator<'a> {
+    file: &'a str,
+}
+
+impl Validator<'_> {
+    fn err(&self, field: &str, message: String) -> SceneError {
+        SceneError::Invalid { file: self.file.to_string(), field: field.to_string(), message }
+    }
+    fn positive(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(field, format!("must be a positive number, got {x}")))
+        }
+    }
+    fn non_negative(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() && x >= 0.0 { Ok(x) } else { Err(self.err(field, format!("must be >= 0, got {x}"))) }
+    }
+    fn finite(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() { Ok(x) } else { Err(self.err(field, format!("must be finite, got {x}"))) }
+    }
+
+    fn solver(&self, s: &RawSolver) -> Result<SolverOptions, SceneError> {
+        let mut o = SolverOptions::default();
+        if let Some(m) = &s.method {
+            o.method = match m.as_str() {
+                "rk4" => Method::Rk4,
+                "auto" => Method::Auto,
+                other => {
+                    return Err(self.err("solver.method", format!("unknown solver \"{other}\" (expected rk4 or auto)")));
+                }
+            };
+        }
+        if let Some(t) = s.tolerance {
+            if !(t.is_finite() && t > 0.0 && t < 1.0) {
+                return Err(self.err("solver.tolerance", format!("must be in (0, 1), got {t}")));
+            }
+            o.tolerance = t;
+        }
+        if let Some(n) = s.steps {
+            if n < 1 || n > o.max_steps as u64 {
+                return Err(self.err("solver.steps", format!("must be in 1..={}, got {n}", o.max_steps)));
+            }
+            o.steps = Some(n as usize);
+        }
+        Ok(o)
+    }
+
+    fn errors(&self, field: &str, list: &[RawHarmonic]) -> Result<FourierSeries, SceneError> {
+        let mut terms = Vec::new();
+        for (i, h) in list.iter().enumerate() {
+            let f = format!("{field}[{i}]");
+            if h.order == 0 || h.order > 100_000 {
+                return Err(self.err(&format!("{f}.order"), format!("must be in 1..=100000, got {}", h.order)));
+            }
+            self.non_negative(&format!("{f}.amplitude_m"), h.amplitude_m)?;
+            self.finite(&format!("{f}.phase_rad"), h.phase_rad)?;
+            terms.push((h.order as usize, h.amplitude_m, h.phase_rad));
+        }
+        Ok(FourierSeries::from_amplitude_phase(1.0, 0.0, &terms))
+    }
+
+    /// Local profile deviation on single teeth: raised-cosine bump of `depth_m` over `width_teeth` pitches
+    /// centred on the tooth's mesh cycle, as a Fourier series in the gear angle.
+    fn tooth_faults(
+        &self,
+        field: &str,
+        teeth: u32,
+        faults: &[RawToothFault],
+        tolerance: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<FourierSeries, SceneError> {
+        const N: usize = 8192;
+        if faults.is_empty() {
+            return Ok(FourierSeries::constant(0.0));
+        }
+        let mut samples = vec![0.0; N];
+        for (i, f) in faults.iter().enumerate() {
+            let fld = format!("{field}[{i}]");
+            if f.tooth < 1 || f.tooth > teeth {
+                return Err(self.err(&format!("{fld}.tooth"), format!("must be in 1..={teeth}, got {}", f.tooth)));
+            }
+            self.finite(&format!("{fld}.depth_m"), f.depth_m)?;
+            if !(f.width_teeth.is_finite() && f.width_teeth > 0.0 && f.width_teeth <= teeth as f64) {
+                return Err(
+                    self.err(&format!("{fld}.width_teeth"), format!("must be in (0, {teeth}], got {}", f.width_teeth))
+                );
+            }
+            let centre = (f.tooth as f64 - 0.5) / teeth as f64; // in revolutions
+            let width = f.width_teeth / teeth as f64;
+            for (j, s) in samples.iter_mut().enumerate() {
+                let mut d = j as f64 / N as f64 - centre;
+                d -= d.round();
+                if d.abs() < width / 2.0 {
+                    *s += f.depth_m * 0.5 * (1.0 + (2.0 * PI * d / width).cos());
+                }
+            }
+        }
+        let mut series = FourierSeries::from_samples(1.0, &samples, 2000);
+        let keep = tolerance.max(1e-7) * series.max_amplitude();
+        let before = series.harmonics();
+        let dropped = series.truncate_below(keep);
+        notes.push(format!(
+            "{field}: profile deviation as {} harmonics ({} of {} dropped below {:.1e} of the largest)",
+            series.harmonics(),
+            dropped,
+            before,
+            tolerance.max(1e-7)
+        ));
+        Ok(series)
+    }
+
+    fn gear(&self, field: &str, g: &RawGear) -> Result<(), SceneError> {
+        if g.teeth < 3 || g.teeth > 100_000 {
+            return Err(
+                self.err(&format!("{field}.teeth"), format!("must be an integer in 3..=100000, got {}", g.teeth))
+            );
+        }
+        self.positive(&format!("{field}.inertia_kg_m2"), g.inertia_kg_m2)?;
+        self.positive(&format!("{field}.base_radius_m"), g.base_radius_m)?;
+        Ok(())
+    }
+
+    fn mesh(&self, m: &RawMesh, tolerance: f64, notes: &mut Vec<String>) -> Result<MeshStiffness, SceneError> {
+        let f = "gear_pair.mesh_stiffness";
+        match m {
+            RawMesh::Fourier { mean_n_per_m, harmonics } => {
+                let mean = self.positive(&format!("{f}.fourier.mean_n_per_m"), *mean_n_per_m)?;
+                let mut terms = Vec::new();
+                let mut sum = 0.0;
+                for (i, h) in harmonics.iter().enumerate() {
+                    let a = self
+                        .non_negative(&format!("{f}.fourier.harmonics[{i}].amplitude_n_per_m"), h.amplitude_n_per_m)?;
+                    self.finite(&format!("{f}.fourier.harmonics[{i}].phase_rad"), h.phase_rad)?;
+                    sum += a;
+                    terms.push((i + 1, a, h.phase_rad));
+                }
+                if sum >= mean {
+                    return Err(self.err(
+                        &format!("{f}.fourier.harmonics"),
+                        format!("harmonic amplitudes add up to {sum:e} N/m, not below the mean {mean:e}: the stiffness could turn negative"),
+                    ));
+                }
+                Ok(MeshStiffness::Fourier(FourierSeries::from_amplitude_phase(1.0, mean, &terms)))
+            }
+            RawMesh::Rectangular { contact_ratio, pair_stiffness_n_per_m } => {
+                let eps = *contact_ratio;
+                if !(eps.is_finite() && (1.0..3.0).contains(&eps)) {
+                    return Err(
+                        self.err(&format!("{f}.rectangular.contact_ratio"), format!("must be in [1, 3), got {eps}"))
+                    );
+                }
+                let kp = self.positive(&format!("{f}.rectangular.pair_stiffness_n_per_m"), *pair_stiffness_n_per_m)?;
+                let (lo, frac) = (eps.floor(), eps - eps.floor());
+                let p = if frac == 0.0 {
+                    PiecewiseConstant { period_s: 1.0, starts: vec![0.0], values: vec![lo * kp] }
+                } else {
+                    PiecewiseConstant { period_s: 1.0, starts: vec![0.0, frac], values: vec![(lo + 1.0) * kp, lo * kp] }
+                };
+                notes.push(format!(
+                    "rectangular mesh stiffness: {} pairs for {:.3} of each mesh cycle",
+                    lo + 1.0,
+                    frac
+                ));
+                Ok(MeshStiffness::Piecewise(p))
+            }
+            RawMesh::Samples { values_n_per_m } => {
+                if values_n_per_m.len() < 3 {
+                    return Err(self.err(
+                        &format!("{f}.samples.values_n_per_m"),
+                        "needs at least 3 samples over one mesh cycle".into(),
+                    ));
+                }
+                for (i, x) in values_n_per_m.iter().enumerate() {
+                    self.positive(&format!("{f}.samples.values_n_per_m[{i}]"), *x)?;
+                }
+                let mut s = FourierSeries::from_samples(1.0, values_n_per_m, values_n_per_m.len() / 2);
+                let dropped = s.truncate_below(tolerance * s.mean);
+                notes.push(format!(
+                    "mesh stiffness from {} samples: {} harmonics kept, {} dropped below {:.1e} of the mean",
+                    values_n_per_m.len(),
+                    s.harmonics(),
+                    dropped,
+                    tolerance
+                ));
+                Ok(MeshStiffness::Fourier(s))
+            }
+        }
+    }
+
+    fn gear_pair(&self, g: &RawGearPair, tolerance: f64, notes: &mut Vec<String>) -> Result<GearPair, SceneError> {
+        let f = "gear_pair";
+        self.positive(&format!("{f}.speed_rpm"), g.speed_rpm)?;
+        self.non_negative(&format!("{f}.damping_ratio"), g.damping_ratio)?;
+        self.finite(&format!("{f}.static_deflection_m"), g.static_deflection_m)?;
+        self.gear(&format!("{f}.pinion"), &g.pinion)?;
+        self.gear(&format!("{f}.wheel"), &g.wheel)?;
+        let mesh = self.mesh(&g.mesh_stiffness, tolerance, notes)?;
+        let mut pinion_errors = self.errors(&format!("{f}.pinion.errors"), &g.pinion.errors)?;
+        let mut wheel_errors = self.errors(&format!("{f}.wheel.errors"), &g.wheel.errors)?;
+        let pf = self.tooth_faults(
+            &format!("{f}.pinion.tooth_faults"),
+            g.pinion.teeth,
+            &g.pinion.tooth_faults,
+            tolerance,
+            notes,
+        )?;
+        let wf = self.tooth_faults(
+            &format!("{f}.wheel.tooth_faults"),
+            g.wheel.teeth,
+            &g.wheel.tooth_faults,
+            tolerance,
+            notes,
+        )?;
+        pinion_errors = pinion_errors.plus(&pf);
+        wheel_errors = wheel_errors.plus(&wf);
+        let crack = match &g.crack {
+            None => None,
+            Some(c) => {
+                let (gear, teeth) = match c.gear.as_str() {
+                    "pinion" => (Gear::Pinion, g.pinion.teeth),
+                    "wheel" => (Gear::Wheel, g.wheel.teeth),
+                    other => {
+                        return Err(self.err(
+                            &format!("{f}.crack.gear"),
+                            format!("must be \"pinion\" or \"wheel\", got \"{other}\""),
+                        ));
+                    }
+                };
+                if c.tooth < 1 || c.tooth > teeth {
+                    return Err(
+                        self.err(&format!("{f}.crack.tooth"), format!("must be in 1..={teeth}, got {}", c.tooth))
+                    );
+                }
+                if !(c.stiffness_loss.is_finite() && c.stiffness_loss > 0.0 && c.stiffness_loss < 1.0) {
+                    return Err(self.err(
+                        &format!("{f}.crack.stiffness_loss"),
+                        format!("must be in (0, 1), got {}", c.stiffness_loss),
+                    ));
+                }
+                Some(Crack { gear, tooth: c.tooth as usize, loss: c.stiffness_loss })
+            }
+        };
+        let params = GearPairParams {
+            pinion_teeth: g.pinion.teeth as usize,
+            wheel_teeth: g.wheel.teeth as usize,
+            pinion_inertia_kg_m2: g.pinion.inertia_kg_m2,
+            wheel_inertia_kg_m2: g.wheel.inertia_kg_m2,
+            pinion_base_radius_m: g.pinion.base_radius_m,
+            wheel_base_radius_m: g.wheel.base_radius_m,
+            speed_rpm: g.speed_rpm,
+            damping_ratio: g.damping_ratio,
+            static_deflection_m: g.static_deflection_m,
+            mesh,
+            pinion_errors,
+            wheel_errors,
+            crack,
+        };
+        let gp = GearPair::new(params);
+        if gp.mesh_cycles_per_period() > 200_000 {
+            return Err(self.err(
+                &format!("{f}.wheel.teeth"),
+                format!(
+                    "the scene's period holds {} mesh cycles, more than 200000 would need absurd memory",
+                    gp.mesh_cycles_per_period()
+                ),
+            ));
+        }
+        notes.push(format!(
+            "gear pair: w0 = {:.1} 1/s ({:.1} Hz), mesh {:.1} Hz, m_red = {:.4} kg, period = {} pinion rev ({} mesh cycles)",
+            gp.natural_frequency_rad_s(),
+            gp.natural_frequency_rad_s() / (2.0 * PI),
+            gp.mesh_hz(),
+            gp.reduced_mass_kg(),
+            fmt_revs(gp.revolutions_per_period()),
+            gp.mesh_cycles_per_period()
+        ));
+        Ok(gp)
+    }
+
+    fn press(&self, p: &RawPress) -> Result<PressParams, SceneError> {
+        let f = "press";
+        let cos = p.cam_cos_m_per_rad.clone();
+        for (i, x) in cos.iter().chain(&p.cam_sin_m_per_rad).enumerate() {
+            self.finite(&format!("{f}.cam coefficient {i}"), *x)?;
+        }
+        if cos.is_empty() && p.cam_sin_m_per_rad.is_empty() {
+            return Err(self.err(&format!("{f}.cam_cos_m_per_rad"), "at least one cam coefficient is needed".into()));
+        }
+        Ok(PressParams {
+            speed_rpm: self.positive(&format!("{f}.speed_rpm"), p.speed_rpm)?,
+            k1_n_m_per_rad: self
+                .positive(&format!("{f}.torsional_stiffness_n_m_per_rad"), p.torsional_stiffness_n_m_per_rad)?,
+            k2_n_per_m: self.positive(&format!("{f}.follower_stiffness_n_per_m"), p.follower_stiffness_n_per_m)?,
+            c1_n_m_s_per_rad: self
+                .non_negative(&format!("{f}.torsional_damping_n_m_s_per_rad"), p.torsional_damping_n_m_s_per_rad)?,
+            c2_n_s_per_m: self
+                .non_negative(&format!("{f}.follower_damping_n_s_per_m"), p.follower_damping_n_s_per_m)?,
+            inertia_kg_m2: self.positive(&format!("{f}.cam_inertia_kg_m2"), p.cam_inertia_kg_m2)?,
+            mass_kg: self.positive(&format!("{f}.follower_mass_kg"), p.follower_mass_kg)?,
+            load_n: self.finite(&format!("{f}.load_n"), p.load_n)?,
+            cam_cos_m_per_rad: cos,
+            cam_sin_m_per_rad: p.cam_sin_m_per_rad.clone(),
+        })
+    }
+
+    fn entry(&self, field: &str, e: &RawEntry, period: f64) -> Result<Coefficient, SceneError> {
+        if let Some(st) = &e.steps {
+            if e.mean.is_some() || !e.cos.is_empty() || !e.sin.is_empty() {
+                return Err(self.err(field, "give either `steps` or `mean`/`cos`/`sin`, not both".into()));
+            }
+            if st.starts_s.is_empty() || st.starts_s.len() != st.values.len() {
+                return Err(self.err(
+                    &format!("{field}.steps"),
+                    "starts_s and values must be non-empty and of equal length".into(),
+                ));
+            }
+            if st.starts_s[0] != 0.0
+                || st.starts_s.windows(2).any(|w| w[1] <= w[0])
+                || st.starts_s.iter().any(|s| *s >= period || !s.is_finite())
+            {
+                return Err(self.err(
+                    &format!("{f}.steps.starts_s", f = field),
+                    "must start at 0, increase strictly and stay below period_s".into(),
+                ));
+            }
+            for (i, v) in st.values.iter().enumerate() {
+                self.finite(&format!("{field}.steps.values[{i}]"), *v)?;
+            }
+            return Ok(Coefficient::Piecewise(PiecewiseConstant {
+                period_s: period,
+                starts: st.starts_s.clone(),
+                values: st.values.clone(),
+            }));
+        }
+        let mean = self.finite(&format!("{field}.mean"), e.mean.unwrap_or(0.0))?;
+        for (i, v) in e.cos.iter().enumerate() {
+            self.finite(&format!("{field}.cos[{i}]"), *v)?;
+        }
+        for (i, v) in e.sin.iter().enumerate() {
+            self.finite(&format!("{field}.sin[{i}]"), *v)?;
+        }
+        Ok(Coefficient::Fourier(FourierSeries::new(2.0 * PI / period, mean, e.cos.clone(), e.sin.clone())))
+    }
+
+    fn matrix(
+        &self,
+        name: &str,
+        rows: &[Vec<RawEntry>],
+        n: usize,
+        period: f64,
+    ) -> Result<Vec<Coefficient>, SceneError> {
+        if rows.len() != n {
+            return Err(self.err(
+                &format!("ltp.{name}"),
+                format!("has {} rows, expected {n} (the length of `forcing`)", rows.len()),
+            ));
+        }
+        let mut out = Vec::with_capacity(n * n);
+        for (i, row) in rows.iter().enumerate() {
+            if row.len() != n {
+                return Err(self.err(&format!("ltp.{name}[{i}]"), format!("has {} entries, expected {n}", row.len())));
+            }
+            for (j, e) in row.iter().enumerate() {
+                out.push(self.entry(&format!("ltp.{name}[{i}][{j}]"), e, period)?);
+            }
+        }
+        Ok(out)
+    }
+
+    fn ltp(&self, l: &RawLtp) -> Result<SecondOrderSystem, SceneError> {
+        let period = self.positive("ltp.period_s", l.period_s)?;
+        let n = l.forcing.len();
+        if n == 0 || n > 64 {
+            return Err(
+                self.err("ltp.forcing", format!("must have 1..=64 entries (one per degree of freedom), got {n}"))
+            );
+        }
+        let mass = self.matrix("mass", &l.mass, n, period)?;
+        let damping = self.matrix("damping", &l.damping, n, period)?;
+        let stiffness = self.matrix("stiffness", &l.stiffness, n, period)?;
+        let forcing = l
+            .forcing
+            .iter()
+            .enumerate()
+            .map(|(i, e)| self.entry(&format!("ltp.forcing[{i}]"), e, period))
+            .collect::<Result<Vec<_>, _>>()?;
+        SecondOrderSystem::new(period, mass, damping, stiffness, forcing).map_err(|e| match e {
+            model::second_order::BuildError::SingularMass { t } => {
+                self.err("ltp.mass", format!("mass matrix is singular at t = {t:.6} s"))
+            }
+            model::second_order::BuildError::Size { what, expected, got } => {
+                self.err(&format!("ltp.{what}"), format!("has {got} entries, expected {expected}"))
+            }
+        })
+    }
+
+    fn common_output(
+        &self,
+        o: &RawOutput,
+        quantity: OutputQuantity,
+        base_hz: f64,
+        base_name: &str,
+        default_max_order: f64,
+        default_fs: f64,
+    ) -> Result<OutputOptions, SceneError> {
+        let max_order = match o.max_order {
+            Some(m) => self.positive("output.max_order", m)?,
+            None => default_max_order,
+        };
+        if max_order > 1e6 {
+            return Err(self.err("output.max_order", format!("must be at most 1e6, got {max_order}")));
+        }
+        let fs = match o.sample_rate_hz {
+            Some(fs) => self.positive("output.sample_rate_hz", fs)?,
+            None => default_fs,
+        };
+        if fs > 10e6 {
+            return Err(self.err("output.sample_rate_hz", format!("must be at most 10 MHz, got {fs}")));
+        }
+        let duration_s = match o.duration_s {
+            Some(d) => self.positive("output.duration_s", d)?,
+            None => 1.0,
+        };
+        let speed_modulation = match &o.speed_modulation {
+            None => None,
+            Some(m) => {
+                if !(m.depth.is_finite() && m.depth >= 0.0 && m.depth < 0.5) {
+                    return Err(
+                        self.err("output.speed_modulation.depth", format!("must be in [0, 0.5), got {}", m.depth))
+                    );
+                }
+                Some(SpeedModulation {
+                    depth: m.depth,
+                    frequency_hz: self.positive("output.speed_modulation.frequency_hz", m.frequency_hz)?,
+                })
+            }
+        };
+        let wav_format = match o.wav_format.as_deref() {
+            None | Some("f32") => WavFormat::F32,
+            Some("i16") => WavFormat::I16,
+            Some("i24") => WavFormat::I24,
+            Some(other) => {
+                return Err(self.err("output.wav_format", format!("must be f32, i16 or i24, got \"{other}\"")));
+            }
+        };
+        let full_scale = match o.full_scale {
+            Some(x) => Some(self.positive("output.full_scale", x)?),
+            None => None,
+        };
+        Ok(OutputOptions {
+            quantity,
+            base_hz,
+            base_name: base_name.to_string(),
+            max_order,
+            sample_rate_hz: fs,
+            duration_s,
+            noise_rms: self.non_negative("output.noise_rms", o.noise_rms.unwrap_or(0.0))?,
+            seed: o.seed.unwrap_or(1),
+            speed_modulation,
+            tacho: o.tacho.unwrap_or(false),
+            wav_format,
+            full_scale,
+            sample_rate_given: o.sample_rate_hz.is_some(),
+        })
+    }
+
+    fn gear_output(&self, o: &RawOutput, g: &GearPair) -> Result<OutputOptions, SceneError> {
+        let q = match o.quantity.as_deref() {
+            None | Some("velocity") => {
+                OutputQuantity::Linear { weights: vec![0.0, 1.0], unit: "m/s".into(), name: "dq/dt".into() }
+            }
+            Some("displacement") => {
+                OutputQuantity::Linear { weights: vec![1.0, 0.0], unit: "m".into(), name: "q".into() }
+            }
+            Some("acceleration") => {
+                OutputQuantity::Derivative { index: 1, unit: "m/s^2".into(), name: "d2q/dt2".into() }
+            }
+            Some(other) => {
+                return Err(self.err(
+                    "output.quantity",
+                    format!("must be velocity, displacement or acceleration for a gear pair, got \"{other}\""),
+                ));
+            }
+        };
+        let z1 = g.params().pinion_teeth as f64;
+        let mesh_h = match &g.params().mesh {
+            MeshStiffness::Fourier(s) => s.harmonics().max(1) as f64,
+            MeshStiffness::Piecewise(_) => 10.0,
+        };
+        let max_order = (mesh_h + 1.0) * z1;
+        // default sample rate: 2.56 x the highest listed frequency, rounded up to a multiple of 1 kHz
+        let fs = ((2.56 * max_order * g.pinion_hz()) / 1000.0).ceil() * 1000.0;
+        self.common_output(o, q, g.pinion_hz(), "pinion rotation", max_order, fs)
+    }
+
+    fn press_output(&self, o: &RawOutput, p: &PressParams) -> Result<OutputOptions, SceneError> {
+        let q = match o.quantity.as_deref() {
+            None | Some("q1") => {
+                OutputQuantity::Linear { weights: vec![1.0, 0.0, 0.0, 0.0], unit: "rad".into(), name: "q1".into() }
+            }
+            Some("q2") => {
+                OutputQuantity::Linear { weights: vec![0.0, 1.0, 0.0, 0.0], unit: "m".into(), name: "q2".into() }
+            }
+            Some("moment") => OutputQuantity::Linear {
+                weights: vec![p.k1_n_m_per_rad, 0.0, p.c1_n_m_s_per_rad, 0.0],
+                unit: "N m".into(),
+                name: "dynamic moment k1 q1 + c1 q1'".into(),
+            },
+            Some(other) => {
+                return Err(
+                    self.err("output.quantity", format!("must be q1, q2 or moment for the press, got \"{other}\""))
+                );
+            }
+        };
+        let k = p.cam_cos_m_per_rad.len().max(p.cam_sin_m_per_rad.len()) as f64;
+        let hz = p.omega_rad_s() / (2.0 * PI);
+        self.common_output(o, q, hz, "input shaft rotation", 4.0 * k, 1000.0)
+    }
+
+    fn ltp_output(&self, o: &RawOutput, sys: &SecondOrderSystem, period: f64) -> Result<OutputOptions, SceneError> {
+        let n = sys.dof();
+        let spec = o.quantity.clone().unwrap_or_else(|| "y1".into());
+        let bad = || self.err("output.quantity", format!("must be y<i> or v<i> with i in 1..={n}, got \"{spec}\""));
+        let (kind, idx) = spec.split_at(1.min(spec.len()));
+        let i: usize = idx.parse().map_err(|_| bad())?;
+        if i < 1 || i > n {
+            return Err(bad());
+        }
+        let mut w = vec![0.0; 2 * n];
+        match kind {
+            "y" => w[i - 1] = 1.0,
+            "v" => w[n + i - 1] = 1.0,
+            _ => return Err(bad()),
+        }
+        let q = OutputQuantity::Linear { weights: w, unit: String::new(), name: spec.clone() };
+        let base = 1.0 / period;
+        let max_order = (4 * sys.max_harmonic()).max(16) as f64;
+        self.common_output(o, q, base, "1/period", max_order, (8.0 * max_order * base).max(1.0))
+    }
+}
+
+fn fmt_revs(r: f64) -> String {
+    if (r - r.round()).abs() < 1e-9 { format!("{}", r.round()) } else { format!("{r:.4}") }
+}

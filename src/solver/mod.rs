@@ -1,0 +1,343 @@
+//! Periodic steady state and Floquet stability of a [`PeriodicSystem`].
+//!
+//! ```text
+//! Phi = monodromy matrix (Eq 8), rho_k = eig(Phi) Floquet multipliers (Eqs 9-10)
+//! lambda_k = ln(rho_k) / T Floquet exponents (Eq 11)
+//! asymptotically stable  <=>  |rho|max < 1
+//! T-periodic solution exists and is unique  <=>  no rho_k = 1;  (I - Phi) x0 = c_m   (Eq 21)
+//! ```
+//! The step count comes from the requested tolerance by step doubling (Richardson: for a fourth-order
+//! method the error of the finer result is about |x_m - x_2m| / 15), starting above the explicit
+//! stability limit h |lambda(P)|max < 2.78 of RK4.
+
+pub mod eigen;
+pub mod rk4;
+
+use crate::model::{PeriodicSystem, Side};
+use nalgebra::{Complex, DMatrix, DVector};
+
+/// Errors of the solver layer.
+#[derive(Debug, thiserror::Error)]
+pub enum SolverError {
+    /// A matrix or vector contained NaN or infinity.
+    #[error("non-finite values in {what}")]
+    NonFinite {
+        /// What was non-finite.
+        what: String,
+    },
+    /// The eigenvalue iteration did not converge.
+    #[error("eigenvalues of a {n}x{n} matrix did not converge (QR iteration limit reached)")]
+    EigenFailed {
+        /// Matrix size.
+        n: usize,
+    },
+    /// I - Phi is singular: a Floquet multiplier equals 1 and no unique periodic solution exists.
+    #[error("I - Phi is singular (a Floquet multiplier equals 1): no unique periodic solution")]
+    Singular,
+    /// The requested tolerance needs more steps than allowed.
+    #[error(
+        "tolerance {tolerance:e} not reached with {steps} steps (estimated error {estimate:e}); raise solver.tolerance or solver.steps"
+    )]
+    ToleranceNotReached {
+        /// Requested tolerance.
+        tolerance: f64,
+        /// Steps of the last attempt.
+        steps: usize,
+        /// Error estimate of the last attempt.
+        estimate: f64,
+    },
+    /// The requested method is not available for this system.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+/// Which solver to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The paper's RK4 product method (Eqs 15-21).
+    Rk4,
+    /// Cheapest available method meeting the tolerance.
+    Auto,
+}
+
+impl Method {
+    /// Name used in scenes and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Rk4 => "rk4",
+            Self::Auto => "auto",
+        }
+    }
+}
+
+/// Solver options.
+///
+/// Defaults: `method = Auto`, `tolerance = 1e-8`, `steps = None` (chosen from the tolerance),
+/// `max_steps = 4_000_000`.
+#[derive(Clone, Debug)]
+pub struct SolverOptions {
+    /// Method.
+    pub method: Method,
+    /// Relative accuracy asked of the multipliers and the periodic solution.
+    pub tolerance: f64,
+    /// Fixed step count for a step-based method.
+    pub steps: Option<usize>,
+    /// Upper bound on the steps the tolerance loop may use.
+    pub max_steps: usize,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        Self { method: Method::Auto, tolerance: 1e-8, steps: None, max_steps: 4_000_000 }
+    }
+}
+
+/// Floquet multipliers and what they say about stability.
+#[derive(Clone, Debug)]
+pub struct Floquet {
+    /// Multipliers rho_k, by decreasing modulus.
+    pub multipliers: Vec<Complex<f64>>,
+    /// Exponents lambda_k = ln(rho_k) / T in 1/s (principal logarithm; `None` for rho = 0).
+    pub exponents: Vec<Option<Complex<f64>>>,
+    /// |rho|max.
+    pub rho_max: f64,
+    /// |rho|max < 1.
+    pub stable: bool,
+}
+
+impl Floquet {
+    /// Multipliers of `phi` for a period `period_s`.
+    ///
+    /// # Errors
+    /// From [`eigen::eigenvalues`].
+    pub fn from_monodromy(phi: &DMatrix<f64>, period_s: f64) -> Result<Self, SolverError> {
+        let multipliers = eigen::eigenvalues(phi)?;
+        let rho_max = multipliers.iter().map(|r| r.norm()).fold(0.0, f64::max);
+        let exponents = multipliers.iter().map(|r| (r.norm() > 0.0).then(|| r.ln() / period_s)).collect();
+        Ok(Self { multipliers, exponents, rho_max, stable: rho_max < 1.0 })
+    }
+}
+
+/// The periodic solution over one period as node states of a step grid.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// Step grid.
+    pub grid: rk4::Grid,
+    /// States at the nodes, node-major.
+    pub states: Vec<f64>,
+}
+
+/// Periodic steady state with its Floquet analysis and accuracy report.
+#[derive(Clone, Debug)]
+pub struct SteadyState {
+    /// Method actually used.
+    pub method: &'static str,
+    /// Why that method (for `auto`).
+    pub reason: String,
+    /// Period T in s.
+    pub period_s: f64,
+    /// Steps (or harmonics) used.
+    pub resolution: usize,
+    /// Estimated relative error of multipliers and periodic solution.
+    pub error_estimate: f64,
+    /// Monodromy matrix.
+    pub monodromy: DMatrix<f64>,
+    /// Floquet analysis.
+    pub floquet: Floquet,
+    /// Periodic initial state x0.
+    pub x0: DVector<f64>,
+    /// 2-norm condition number of I - Phi.
+    pub cond_i_minus_phi: f64,
+    /// Smallest step count above the explicit RK4 stability limit.
+    pub stability_limit_steps: usize,
+    /// True when the error estimate meets the tolerance and I - Phi is well enough conditioned.
+    pub trusted: bool,
+    /// Plain-language warnings (unstable, ill-conditioned, below the stability limit, ...).
+    pub warnings: Vec<String>,
+    /// The solution over one period.
+    pub trajectory: Trajectory,
+}
+
+impl SteadyState {
+    /// Samples the state at `times` (s, any real; reduced modulo T) into `out` (n per time).
+    pub fn states_at(&self, sys: &dyn PeriodicSystem, times: &[f64], out: &mut Vec<f64>) {
+        let n = sys.dim();
+        let mut st = rk4::Stepper::new(sys);
+        let mut x = vec![0.0; n];
+        out.clear();
+        out.reserve(times.len() * n);
+        for &t in times {
+            let tau = t.rem_euclid(self.period_s);
+            rk4::state_at(&mut st, &self.trajectory.grid, &self.trajectory.states, tau, &mut x);
+            out.extend_from_slice(&x);
+        }
+    }
+}
+
+/// Largest |eigenvalue| of P(t) over 32 times per period and both sides of every breakpoint, in 1/s.
+pub fn max_rate(sys: &dyn PeriodicSystem) -> f64 {
+    let n = sys.dim();
+    let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    let t_end = sys.period_s();
+    let mut times: Vec<(f64, Side)> = (0..32).map(|i| (t_end * i as f64 / 32.0, Side::Right)).collect();
+    for b in sys.breakpoints() {
+        times.push((b, Side::Left));
+        times.push((b, Side::Right));
+    }
+    let mut best: f64 = 0.0;
+    for (t, side) in times {
+        sys.eval(t, side, &mut p, &mut f);
+        let r = eigen::eigenvalues(&p).map_or_else(|_| p.norm(), |ev| ev.iter().map(|e| e.norm()).fold(0.0, f64::max));
+        best = best.max(r);
+    }
+    best
+}
+
+/// RK4's stability interval along the imaginary and negative real axes is about 2.78.
+pub const RK4_STABILITY_LIMIT: f64 = 2.78;
+
+/// Periodic steady state and Floquet multipliers of `sys`.
+///
+/// # Errors
+/// [`SolverError`] when the monodromy is non-finite, its eigenvalues fail, I - Phi is exactly singular,
+/// or the tolerance cannot be reached within `max_steps`.
+pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadyState, SolverError> {
+    match opts.method {
+        Method::Rk4 => solve_rk4(sys, opts, "requested"),
+        Method::Auto => solve_rk4(sys, opts, "auto: rk4 product is the only method available"),
+    }
+}
+
+struct Attempt {
+    run: rk4::Rk4Run,
+    floquet: Floquet,
+    x0: DVector<f64>,
+    states: Vec<f64>,
+    cond: f64,
+}
+
+fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid) -> Result<Attempt, SolverError> {
+    let run = rk4::monodromy(sys, grid);
+    if run.monodromy.iter().chain(run.forcing.iter()).any(|v| !v.is_finite()) {
+        return Err(SolverError::NonFinite { what: format!("monodromy matrix after {} steps", grid.steps()) });
+    }
+    let floquet = Floquet::from_monodromy(&run.monodromy, sys.period_s())?;
+    let n = sys.dim();
+    let a = DMatrix::identity(n, n) - &run.monodromy;
+    let sv = a.clone().singular_values();
+    let (smax, smin) = (sv.max(), sv.min());
+    let cond = if smin > 0.0 { smax / smin } else { f64::INFINITY };
+    let x0 = a.lu().solve(&run.forcing).ok_or(SolverError::Singular)?;
+    if !cond.is_finite() || x0.iter().any(|v| !v.is_finite()) {
+        return Err(SolverError::Singular);
+    }
+    let states = rk4::trajectory(sys, grid, &x0);
+    Ok(Attempt { run, floquet, x0, states, cond })
+}
+
+/// Relative difference of two attempts, the second on the refined grid of the first.
+fn difference(coarse: &Attempt, fine: &Attempt, n: usize) -> f64 {
+    let mut worst: f64 = 0.0;
+    for c in 0..n {
+        let scale = fine.states.iter().skip(c).step_by(n).fold(0.0f64, |a, v| a.max(v.abs()));
+        let diff = (0..coarse.run.grid.nodes.len())
+            .map(|i| (coarse.states[i * n + c] - fine.states[2 * i * n + c]).abs())
+            .fold(0.0, f64::max);
+        if scale > 0.0 {
+            worst = worst.max(diff / scale);
+        }
+    }
+    let rho_scale = fine.floquet.rho_max.max(f64::MIN_POSITIVE);
+    for r in &coarse.floquet.multipliers {
+        let d = fine.floquet.multipliers.iter().map(|q| (q - r).norm()).fold(f64::INFINITY, f64::min);
+        worst = worst.max(d / rho_scale);
+    }
+    worst
+}
+
+fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Result<SteadyState, SolverError> {
+    let period = sys.period_s();
+    let breaks = sys.breakpoints();
+    let n = sys.dim();
+    let rate = max_rate(sys);
+    let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
+    let mut warnings = Vec::new();
+    let (grid, fine, estimate) = if let Some(steps) = opts.steps {
+        if steps < limit {
+            warnings.push(format!(
+                "{steps} steps is below the explicit RK4 stability limit of {limit} steps (h |lambda|max > {RK4_STABILITY_LIMIT}): the result is not trustworthy"
+            ));
+        }
+        let grid = rk4::Grid::new(period, &breaks, steps);
+        let coarse = attempt(sys, &grid)?;
+        let fine = attempt(sys, &grid.refined())?;
+        // error of the coarse result: |x_m - x_2m| (1 + 1/15)
+        let est = difference(&coarse, &fine, n) * 16.0 / 15.0;
+        (grid, coarse, est)
+    } else {
+        let mut m = (2 * limit).max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1));
+        loop {
+            let grid = rk4::Grid::new(period, &breaks, m);
+            let coarse = attempt(sys, &grid)?;
+            let fine_grid = grid.refined();
+            let fine = attempt(sys, &fine_grid)?;
+            let est = difference(&coarse, &fine, n) / 15.0;
+            if est <= opts.tolerance {
+                break (fine_grid, fine, est);
+            }
+            if fine_grid.steps() >= opts.max_steps {
+                return Err(SolverError::ToleranceNotReached {
+                    tolerance: opts.tolerance,
+                    steps: fine_grid.steps(),
+                    estimate: est,
+                });
+            }
+            let ratio = (est / opts.tolerance).powf(0.25) * 1.1;
+            let next = ((grid.steps() as f64) * ratio).ceil() as usize;
+            m = next.clamp(2 * grid.steps(), opts.max_steps / 2);
+        }
+    };
+    let roundoff = fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt();
+    let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
+    if roundoff > opts.tolerance {
+        warnings.push(format!(
+            "I - Phi is ill-conditioned (cond {:.3e}): rounding alone may cost {:.1e} relative error, above the tolerance",
+            fine.cond, roundoff
+        ));
+    }
+    if opts.steps.is_some() && estimate > opts.tolerance {
+        warnings.push(format!(
+            "with {} steps the estimated error {:.2e} is above the tolerance {:.1e}",
+            grid.steps(),
+            estimate,
+            opts.tolerance
+        ));
+        trusted = false;
+    }
+    if let Some(r) = fine.floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
+        if r < 1e-6 {
+            warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
+        }
+    }
+    if !fine.floquet.stable {
+        warnings.push(format!(
+            "unstable: |rho|max = {:.6} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
+            fine.floquet.rho_max
+        ));
+    }
+    Ok(SteadyState {
+        method: "rk4",
+        reason: reason.to_string(),
+        period_s: period,
+        resolution: grid.steps(),
+        error_estimate: estimate,
+        monodromy: fine.run.monodromy,
+        floquet: fine.floquet,
+        x0: fine.x0,
+        cond_i_minus_phi: fine.cond,
+        stability_limit_steps: limit,
+        trusted,
+        warnings,
+        trajectory: Trajectory { grid, states: fine.states },
+    })
+}
