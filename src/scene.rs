@@ -331,9 +331,12 @@ impl Scene {
     pub fn load(path: &str) -> Result<Self, SceneError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
+        // typed parse first, for messages with the field path and line/column
+        let mut de = serde_json::Deserializer::from_str(&text);
+        let raw: RawScene = serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(path, e))?;
         let value: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| SceneError::Json { file: path.to_string(), message: e.to_string() })?;
-        Self::from_value(value, path)
+        Self::from_raw(raw, value, path)
     }
 
     /// Validates a scene given as JSON (`file` is used in messages).
@@ -341,8 +344,11 @@ impl Scene {
     /// # Errors
     /// [`SceneError`] naming the file and field.
     pub fn from_value(value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
-        let raw: RawScene = serde_json::from_value(value.clone())
-            .map_err(|e| SceneError::Json { file: file.to_string(), message: e.to_string() })?;
+        let raw: RawScene = serde_path_to_error::deserialize(value.clone()).map_err(|e| json_error(file, e))?;
+        Self::from_raw(raw, value, file)
+    }
+
+    fn from_raw(raw: RawScene, value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
         let v = Validator { file };
         let _ = &raw.description;
         let solver = v.solver(&raw.solver)?;
@@ -395,6 +401,17 @@ impl Scene {
         scene.notes.insert(0, note);
         Ok(scene)
     }
+}
+
+fn json_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> SceneError {
+    let path = e.path().to_string();
+    let inner = e.into_inner();
+    let message = if path == "." || path == "?" || path.is_empty() {
+        inner.to_string()
+    } else {
+        format!("field `{path}`: {inner}")
+    };
+    SceneError::Json { file: file.to_string(), message }
 }
 
 struct Validator<'a> {

@@ -319,10 +319,18 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
             warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
         }
     }
-    if !fine.floquet.stable {
+    let mut floquet = fine.floquet;
+    if (floquet.rho_max - 1.0).abs() <= opts.tolerance.max(estimate) {
+        // on the unit circle within the accuracy: bounded at best, never asymptotically stable
+        floquet.stable = false;
+        warnings.push(format!(
+            "|rho|max = {:.12} equals 1 within the accuracy: marginally stable at best (not asymptotically stable)",
+            floquet.rho_max
+        ));
+    } else if !floquet.stable {
         warnings.push(format!(
             "unstable: |rho|max = {:.6} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
-            fine.floquet.rho_max
+            floquet.rho_max
         ));
     }
     Ok(SteadyState {
@@ -332,7 +340,7 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
         resolution: grid.steps(),
         error_estimate: estimate,
         monodromy: fine.run.monodromy,
-        floquet: fine.floquet,
+        floquet,
         x0: fine.x0,
         cond_i_minus_phi: fine.cond,
         stability_limit_steps: limit,
