@@ -18,12 +18,14 @@
 //! ```
 
 pub mod cli;
+pub mod io;
 pub mod model;
 pub mod pipeline;
 pub mod report;
 pub mod scene;
 pub mod signal;
 pub mod solver;
+pub mod synth;
 
 /// Top-level error: one variant per layer.
 #[derive(Debug, thiserror::Error)]
@@ -34,6 +36,9 @@ pub enum Error {
     /// Solver failure.
     #[error(transparent)]
     Solver(#[from] solver::SolverError),
+    /// Reading or writing data files.
+    #[error(transparent)]
+    Data(#[from] io::DataError),
     /// Signal analysis.
     #[error(transparent)]
     Signal(#[from] signal::SignalError),

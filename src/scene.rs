@@ -476,8 +476,10 @@ impl Validator<'_> {
         Ok(FourierSeries::from_amplitude_phase(1.0, 0.0, &terms))
     }
 
-    /// Local profile deviation on single teeth: raised-cosine bump of `depth_m` over `width_teeth` pitches
-    /// centred on the tooth's mesh cycle, as a Fourier series in the gear angle.
+    /// Local profile deviation on single teeth: a Gaussian bump of height `depth_m` (positive = material
+    /// missing, adds to e(t)) centred on the tooth's mesh cycle with 6 sigma = `width_teeth` pitches, as a
+    /// Fourier series in the gear angle. Its spectrum decays like exp(-(k sigma)^2 / 2), so few harmonics
+    /// meet the tolerance.
     fn tooth_faults(
         &self,
         field: &str,
@@ -507,9 +509,8 @@ impl Validator<'_> {
             for (j, s) in samples.iter_mut().enumerate() {
                 let mut d = j as f64 / N as f64 - centre;
                 d -= d.round();
-                if d.abs() < width / 2.0 {
-                    *s += f.depth_m * 0.5 * (1.0 + (2.0 * PI * d / width).cos());
-                }
+                let sigma = width / 6.0;
+                *s += f.depth_m * (-0.5 * (d / sigma).powi(2)).exp();
             }
         }
         let mut series = FourierSeries::from_samples(1.0, &samples, 2000);

@@ -21,6 +21,12 @@ enum Command {
     Simulate {
         /// Scene JSON file.
         scene: String,
+        /// Write the output quantity as a time signal (.wav or .csv) plus a sidecar OUT.json.
+        #[arg(short = 'o', long = "output", value_name = "OUT")]
+        output: Option<String>,
+        /// Write even when the sample rate is below twice the highest line requested (warns).
+        #[arg(long)]
+        allow_aliasing: bool,
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -46,7 +52,7 @@ pub fn parse_args() -> Cli {
 /// Any layer's error; the caller prints it on one line and exits with code 2.
 pub fn run(cli: Cli) -> Result<u8, Error> {
     match cli.command {
-        Command::Simulate { scene, json } => simulate(&scene, json),
+        Command::Simulate { scene, output, allow_aliasing, json } => simulate(&scene, output.as_deref(), allow_aliasing, json),
         Command::Stability { scene, json } => stability(&scene, json),
     }
 }
@@ -94,16 +100,36 @@ fn print_stability(s: &StabilitySummary) {
     }
 }
 
-fn simulate(path: &str, json: bool) -> Result<u8, Error> {
+fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) -> Result<u8, Error> {
     let scene = Scene::load(path)?;
+    if let Some(out) = output {
+        // refuse a bad request before any computation
+        crate::synth::check_request(&scene, std::path::Path::new(out), allow_aliasing, &mut Vec::new())?;
+    }
     let sim = pipeline::simulate(&scene)?;
-    let summary = SimulateSummary::new(&scene, &sim);
+    let mut summary = SimulateSummary::new(&scene, &sim);
     warn_all(&summary.stability.warnings);
     if !sim.steady.trusted {
         return Err(Error::Other(format!(
             "{path}: periodic solution not printed: it cannot meet solver.tolerance {:.1e} (estimated error {:.2e}, cond(I - Phi) {:.2e})",
             scene.solver.tolerance, sim.steady.error_estimate, sim.steady.cond_i_minus_phi
         )));
+    }
+    if let Some(out) = output {
+        let info = crate::synth::write_signal(&scene, &sim, std::path::Path::new(out), allow_aliasing)?;
+        warn_all(&info.warnings);
+        summary.signal_file = Some(info.file.clone());
+        if !json {
+            println!(
+                "wrote {} ({} channels, {} frames at {} Hz, {}) and {}.json",
+                info.file,
+                info.channels.len(),
+                info.frames,
+                info.sample_rate_hz,
+                info.format,
+                info.file
+            );
+        }
     }
     if json {
         println!("{}", to_json_line(&summary));

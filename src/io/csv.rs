@@ -1,0 +1,168 @@
+//! CSV (and tab/semicolon separated) signals: optional header row, an optional time column (named
+//! `time`, `t`, `time_s` or starting with `time`), comma, semicolon or tab delimiters (with `;`, a decimal
+//! comma is accepted), trailing empty rows tolerated. Read line by line: memory grows with the data
+//! actually present, never with a claimed size.
+
+use super::{AtomicFile, DataError, Recording};
+use std::io::{BufRead, BufWriter, Write};
+use std::path::Path;
+
+fn delimiter(line: &str) -> char {
+    let count = |c| line.matches(c).count();
+    [('\t', count('\t')), (';', count(';')), (',', count(','))].into_iter().max_by_key(|x| x.1).map_or(',', |x| x.0)
+}
+
+fn is_time_name(name: &str) -> bool {
+    let n = name.trim().trim_matches('"').to_ascii_lowercase();
+    n == "t" || n.starts_with("time")
+}
+
+/// Reads a delimited text signal. Channels are the non-time columns; the sample rate comes from a time
+/// column when there is one (which must be uniformly sampled).
+///
+/// # Errors
+/// Unreadable file, no data rows, a row with a different field count, a non-numeric or non-finite value
+/// (named with its line and column), or a non-uniform time column.
+pub fn read(path: &Path) -> Result<Recording, DataError> {
+    let file = std::fs::File::open(path).map_err(|e| DataError::io(path, format!("cannot read: {e}")))?;
+    let reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut delim = None;
+    let mut header: Option<Vec<String>> = None;
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut ncols = 0;
+    let mut field = String::new();
+    for (idx, line) in reader.lines().enumerate() {
+        let lineno = idx + 1;
+        let line = line.map_err(|e| DataError::format(path, format!("line {lineno}: {e}")))?;
+        let line = line.trim_end_matches('\r');
+        if line.trim().is_empty() {
+            continue;
+        }
+        let d = *delim.get_or_insert_with(|| delimiter(line));
+        let fields: Vec<&str> = line.split(d).collect();
+        if fields.iter().all(|f| f.trim().is_empty()) {
+            continue; // an empty row such as ",,,"
+        }
+        if columns.is_empty() && header.is_none() {
+            let numeric = fields.iter().all(|f| parse(f, d, &mut field).is_some());
+            ncols = fields.len();
+            columns = vec![Vec::new(); ncols];
+            if !numeric {
+                header = Some(fields.iter().map(|f| f.trim().trim_matches('"').to_string()).collect());
+                continue;
+            }
+        }
+        if fields.len() != ncols {
+            return Err(DataError::format(path, format!("line {lineno}: {} fields, expected {ncols}", fields.len())));
+        }
+        for (c, f) in fields.iter().enumerate() {
+            let v = parse(f, d, &mut field).ok_or_else(|| {
+                DataError::format(path, format!("line {lineno}, column {}: {:?} is not a number", c + 1, f.trim()))
+            })?;
+            if !v.is_finite() {
+                return Err(DataError::format(path, format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim())));
+            }
+            columns[c].push(v);
+        }
+    }
+    if columns.first().is_none_or(Vec::is_empty) {
+        let what = if header.is_some() { "header only, no data rows" } else { "no data rows" };
+        return Err(DataError::format(path, what));
+    }
+    let names = header.clone().unwrap_or_else(|| (1..=ncols).map(|i| format!("ch{i}")).collect());
+    let time_col = header.as_ref().and_then(|h| h.iter().position(|n| is_time_name(n)));
+    let mut sample_rate_hz = None;
+    if let Some(tc) = time_col {
+        sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);
+    }
+    let (names, channels) = names
+        .into_iter()
+        .zip(columns)
+        .enumerate()
+        .filter(|(i, _)| Some(*i) != time_col)
+        .map(|(_, p)| p)
+        .unzip();
+    Ok(Recording { channels, sample_rate_hz, names })
+}
+
+fn parse(f: &str, delim: char, buf: &mut String) -> Option<f64> {
+    let t = f.trim().trim_matches('"');
+    if t.is_empty() {
+        return None;
+    }
+    if delim == ';' && t.contains(',') {
+        buf.clear();
+        buf.push_str(&t.replace(',', "."));
+        return buf.parse().ok();
+    }
+    t.parse().ok()
+}
+
+fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
+    if t.len() < 2 {
+        return Err(DataError::format(path, "time column needs at least 2 rows to give a sample rate"));
+    }
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    if !(dt > 0.0) {
+        return Err(DataError::format(path, "time column does not increase"));
+    }
+    for (i, w) in t.windows(2).enumerate() {
+        if ((w[1] - w[0]) - dt).abs() > 0.01 * dt {
+            return Err(DataError::format(
+                path,
+                format!("time column is not uniformly sampled near data row {} (step {} s, mean {} s)", i + 2, w[1] - w[0], dt),
+            ));
+        }
+    }
+    Ok(1.0 / dt)
+}
+
+/// Streaming CSV writer (time column first) behind an [`AtomicFile`].
+pub struct CsvOut {
+    out: BufWriter<std::fs::File>,
+    guard: AtomicFile,
+    path: std::path::PathBuf,
+    channels: usize,
+    sample_rate_hz: f64,
+    frame: u64,
+}
+
+impl CsvOut {
+    /// Creates `path` with a header `time_s,<names...>`.
+    ///
+    /// # Errors
+    /// The file cannot be created.
+    pub fn create(path: &Path, names: &[String], sample_rate_hz: f64) -> Result<Self, DataError> {
+        let (guard, file) = AtomicFile::create(path)?;
+        let mut out = BufWriter::with_capacity(1 << 20, file);
+        writeln!(out, "time_s,{}", names.join(",")).map_err(|e| DataError::io(path, e))?;
+        Ok(Self { out, guard, path: path.to_path_buf(), channels: names.len(), sample_rate_hz, frame: 0 })
+    }
+
+    /// Appends interleaved frames.
+    ///
+    /// # Errors
+    /// Writing fails.
+    pub fn write(&mut self, interleaved: &[f64]) -> Result<(), DataError> {
+        for frame in interleaved.chunks(self.channels) {
+            let t = self.frame as f64 / self.sample_rate_hz;
+            write!(self.out, "{t:.9}").map_err(|e| DataError::io(&self.path, e))?;
+            for v in frame {
+                write!(self.out, ",{v:.9e}").map_err(|e| DataError::io(&self.path, e))?;
+            }
+            writeln!(self.out).map_err(|e| DataError::io(&self.path, e))?;
+            self.frame += 1;
+        }
+        Ok(())
+    }
+
+    /// Flushes and renames into place.
+    ///
+    /// # Errors
+    /// Flushing or renaming fails.
+    pub fn finish(mut self) -> Result<(), DataError> {
+        self.out.flush().map_err(|e| DataError::io(&self.path, e))?;
+        drop(self.out);
+        self.guard.commit()
+    }
+}

@@ -1,0 +1,121 @@
+//! Files <-> signals: WAV (hound) and CSV readers and writers, and atomic output.
+
+pub mod csv;
+pub mod wav;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Errors of the file layer.
+#[derive(Debug, thiserror::Error)]
+pub enum DataError {
+    /// OS-level failure.
+    #[error("{path}: {message}")]
+    Io {
+        /// File.
+        path: String,
+        /// What failed.
+        message: String,
+    },
+    /// Content that cannot be used, with where it is.
+    #[error("{path}: {message}")]
+    Format {
+        /// File.
+        path: String,
+        /// What is wrong and where (line, field).
+        message: String,
+    },
+}
+
+impl DataError {
+    pub(crate) fn io(path: &Path, e: impl std::fmt::Display) -> Self {
+        Self::Io { path: path.display().to_string(), message: e.to_string() }
+    }
+    pub(crate) fn format(path: &Path, message: impl Into<String>) -> Self {
+        Self::Format { path: path.display().to_string(), message: message.into() }
+    }
+}
+
+/// A file being written under a temporary name next to its destination; `commit` renames it into place,
+/// dropping it without `commit` removes it (no half-written output is ever left under the final name).
+pub struct AtomicFile {
+    tmp: PathBuf,
+    dest: PathBuf,
+    done: bool,
+}
+
+impl AtomicFile {
+    /// Reserves `dest`, writing to `dest.<pid>.tmp`.
+    ///
+    /// # Errors
+    /// The temporary file cannot be created (missing directory, no permission).
+    pub fn create(dest: &Path) -> Result<(Self, std::fs::File), DataError> {
+        let mut name = dest.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+        name.push(format!(".{}.tmp", std::process::id()));
+        let tmp = dest.with_file_name(name);
+        let file = std::fs::File::create(&tmp).map_err(|e| DataError::io(dest, format!("cannot write: {e}")))?;
+        Ok((Self { tmp, dest: dest.to_path_buf(), done: false }, file))
+    }
+
+    /// Path of the temporary file.
+    pub fn temp_path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Renames the finished temporary file to its destination.
+    ///
+    /// # Errors
+    /// The rename fails.
+    pub fn commit(mut self) -> Result<(), DataError> {
+        std::fs::rename(&self.tmp, &self.dest).map_err(|e| DataError::io(&self.dest, e))?;
+        self.done = true;
+        Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Writes `bytes` to `dest` atomically.
+///
+/// # Errors
+/// Creating, writing or renaming fails.
+pub fn write_atomic(dest: &Path, bytes: &[u8]) -> Result<(), DataError> {
+    let (guard, mut f) = AtomicFile::create(dest)?;
+    f.write_all(bytes).and_then(|_| f.sync_all()).map_err(|e| DataError::io(dest, e))?;
+    drop(f);
+    guard.commit()
+}
+
+/// Multi-channel signal read from a file, one `Vec` per channel.
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1)).
+    pub channels: Vec<Vec<f64>>,
+    /// Sample rate in Hz (`None` when a CSV has no time column and none was given).
+    pub sample_rate_hz: Option<f64>,
+    /// Channel names (CSV header or "ch1", ...).
+    pub names: Vec<String>,
+}
+
+/// Reads a WAV or CSV file by its extension.
+///
+/// # Errors
+/// [`DataError`] naming the file and what is wrong.
+pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
+    match extension(path).as_deref() {
+        Some("wav") => wav::read(path),
+        Some("csv") | Some("txt") | Some("tsv") => csv::read(path),
+        _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
+    }
+}
+
+/// Lower-case extension.
+pub fn extension(path: &Path) -> Option<String> {
+    path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase)
+}

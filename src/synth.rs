@@ -1,0 +1,353 @@
+//! Recording-like signals from a solved scene: the output quantity at the true sample instants, with
+//! optional slow speed fluctuation, white measurement noise and once-per-revolution tachometer channels.
+//!
+//! ```text
+//! speed(t) = nominal (1 + depth sin(2 pi f_m t))
+//! phase(t) = t + depth (1 - cos(2 pi f_m t)) / (2 pi f_m)      (s of nominal-speed time; angle / w_nominal)
+//! y(t_n)   = steady-state output at phase(t_n) mod T              (quasi-static in the speed fluctuation)
+//! ```
+//! For smooth systems with a linear output the periodic output is tabulated once (values and exact time
+//! derivatives, a power-of-two number of points per period fine enough for the tolerance) and evaluated by
+//! cubic Hermite interpolation; otherwise every sample is one partial RK4 step from the nearest grid node.
+
+use crate::Error;
+use crate::io::{DataError, csv::CsvOut, wav::WavOut, wav::WavSampleFormat};
+use crate::model::{OutputQuantity, Side};
+use crate::pipeline::Simulation;
+use crate::scene::{Model, Scene, WavFormat};
+use std::path::Path;
+
+/// What a written signal file holds (also written as the sidecar `OUT.json`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SignalInfo {
+    /// Written file.
+    pub file: String,
+    /// Scene name.
+    pub scene: String,
+    /// Scene file.
+    pub scene_file: String,
+    /// Sample rate in Hz.
+    pub sample_rate_hz: f64,
+    /// Frames (samples per channel).
+    pub frames: u64,
+    /// Duration in s.
+    pub duration_s: f64,
+    /// Channels in file order.
+    pub channels: Vec<ChannelInfo>,
+    /// "f32", "i16", "i24" (WAV) or "csv".
+    pub format: String,
+    /// Physical value of integer full scale (integer WAV only).
+    pub full_scale: Option<f64>,
+    /// Samples clipped at integer full scale.
+    pub clipped_samples: u64,
+    /// White measurement noise RMS (output unit).
+    pub noise_rms: f64,
+    /// Noise seed.
+    pub seed: u64,
+    /// Speed fluctuation depth and frequency, if any.
+    pub speed_modulation: Option<[f64; 2]>,
+    /// Base frequency of the orders in Hz (pinion rotation for the gear pair).
+    pub base_hz: f64,
+    /// Period of the steady state in s.
+    pub period_s: f64,
+    /// How samples were evaluated.
+    pub evaluation: String,
+    /// Warnings (aliasing allowed, clipping).
+    pub warnings: Vec<String>,
+}
+
+/// One channel of a written file.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ChannelInfo {
+    /// Name, e.g. "dq/dt" or "tacho pinion".
+    pub name: String,
+    /// Unit of the stored values (integer WAV: multiply the [-1, 1) value by `full_scale`).
+    pub unit: String,
+    /// Description.
+    pub description: String,
+}
+
+/// Refuses requests that would need more samples than this (about 8 GiB as f64).
+pub const MAX_TOTAL_SAMPLES: f64 = 1.0e9;
+
+struct Noise {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl Noise {
+    fn new(seed: u64) -> Self {
+        Self { state: seed ^ 0x9E37_79B9_7F4A_7C15, spare: None }
+    }
+    fn next_u64(&mut self) -> u64 {
+        // SplitMix64
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    /// Standard normal (Box-Muller).
+    fn gauss(&mut self) -> f64 {
+        if let Some(s) = self.spare.take() {
+            return s;
+        }
+        let (u, v) = (self.uniform(), self.uniform());
+        let r = (-2.0 * u.ln()).sqrt();
+        let (s, c) = (2.0 * std::f64::consts::PI * v).sin_cos();
+        self.spare = Some(r * s);
+        r * c
+    }
+}
+
+/// Periodic output tabulated with exact derivatives, evaluated by cubic Hermite interpolation.
+struct Table {
+    period_s: f64,
+    values: Vec<f64>,
+    slopes: Vec<f64>,
+}
+
+impl Table {
+    fn eval(&self, tau: f64) -> f64 {
+        let m = self.values.len();
+        let h = self.period_s / m as f64;
+        let x = tau / h;
+        let i = (x.floor() as usize).min(m - 1);
+        let s = x - i as f64;
+        let j = (i + 1) % m;
+        let (y0, y1, d0, d1) = (self.values[i], self.values[j], self.slopes[i] * h, self.slopes[j] * h);
+        let s2 = s * s;
+        let s3 = s2 * s;
+        (2.0 * s3 - 3.0 * s2 + 1.0) * y0 + (s3 - 2.0 * s2 + s) * d0 + (-2.0 * s3 + 3.0 * s2) * y1 + (s3 - s2) * d1
+    }
+}
+
+/// Output evaluator: a Hermite table for smooth systems with a linear output, else direct partial steps.
+enum Evaluator<'a> {
+    Table(Table),
+    Direct(&'a Scene, &'a Simulation),
+}
+
+impl Evaluator<'_> {
+    fn describe(&self) -> String {
+        match self {
+            Self::Table(t) => format!("cubic Hermite table of {} points per period with exact derivatives", t.values.len()),
+            Self::Direct(..) => "one partial RK4 step per sample from the nearest grid node".into(),
+        }
+    }
+}
+
+fn evaluator<'a>(scene: &'a Scene, sim: &'a Simulation) -> Evaluator<'a> {
+    let sys = scene.system();
+    let OutputQuantity::Linear { weights, .. } = &scene.output.quantity else { return Evaluator::Direct(scene, sim) };
+    if !sys.breakpoints().is_empty() {
+        return Evaluator::Direct(scene, sim);
+    }
+    // Hermite error ~ (h w)^4 / 384 relative to a harmonic of angular frequency w: make it below tolerance
+    let period = sim.steady.period_s;
+    let kmax = sys.max_harmonic().max((scene.output.max_order * period * scene.output.base_hz) as usize).max(1);
+    let per_harmonic = 2.0 * std::f64::consts::PI * (384.0 * scene.solver.tolerance).powf(-0.25);
+    let m = ((kmax as f64 * per_harmonic).ceil() as usize).max(1024).next_power_of_two().min(1 << 22);
+    let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
+    let n = sys.dim();
+    let mut states = Vec::new();
+    sim.steady.states_at(sys, &times, &mut states);
+    let (mut p, mut f) = (nalgebra::DMatrix::zeros(n, n), nalgebra::DVector::zeros(n));
+    let mut values = Vec::with_capacity(m);
+    let mut slopes = Vec::with_capacity(m);
+    for (i, &t) in times.iter().enumerate() {
+        let x = &states[i * n..(i + 1) * n];
+        sys.eval(t, Side::Right, &mut p, &mut f);
+        values.push(weights.iter().zip(x).map(|(w, v)| w * v).sum());
+        let xdot = |r: usize| f[r] + (0..n).map(|c| p[(r, c)] * x[c]).sum::<f64>();
+        slopes.push(weights.iter().enumerate().map(|(r, w)| if *w == 0.0 { 0.0 } else { w * xdot(r) }).sum());
+    }
+    Evaluator::Table(Table { period_s: period, values, slopes })
+}
+
+/// Tachometer shafts of a scene: (name, revolutions of that shaft per base revolution).
+fn tacho_shafts(scene: &Scene) -> Vec<(String, f64)> {
+    match &scene.model {
+        Model::GearPair(g) => vec![
+            ("tacho pinion".into(), 1.0),
+            ("tacho wheel".into(), g.params().pinion_teeth as f64 / g.params().wheel_teeth as f64),
+        ],
+        Model::Press(..) => vec![("tacho input shaft".into(), 1.0)],
+        Model::Ltp(_) => vec![("tacho period".into(), 1.0)],
+    }
+}
+
+/// Checks a write request before anything is computed or allocated.
+///
+/// # Errors
+/// Unknown extension, aliasing (unless allowed), absurd size.
+pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: &mut Vec<String>) -> Result<(), Error> {
+    let ext = crate::io::extension(out);
+    if !matches!(ext.as_deref(), Some("wav") | Some("csv")) {
+        return Err(Error::Other(format!("-o {}: unknown extension: expected .wav or .csv", out.display())));
+    }
+    let o = &scene.output;
+    let highest = o.max_order * o.base_hz * (1.0 + o.speed_modulation.map_or(0.0, |m| m.depth));
+    if o.sample_rate_hz < 2.0 * highest {
+        let msg = format!(
+            "{}: field `output.sample_rate_hz`: {} Hz is below twice the highest line requested ({:.1} Hz = order {} of {:.3} Hz): the signal would alias",
+            scene.file, o.sample_rate_hz, highest, o.max_order, o.base_hz
+        );
+        if !allow_aliasing {
+            return Err(Error::Other(format!("{msg}; lower output.max_order or pass --allow-aliasing")));
+        }
+        warnings.push(msg);
+    }
+    let channels = 1 + if o.tacho { tacho_shafts(scene).len() } else { 0 };
+    let total = o.sample_rate_hz * o.duration_s * channels as f64;
+    if total > MAX_TOTAL_SAMPLES {
+        return Err(Error::Other(format!(
+            "{}: field `output.duration_s`: {:.3e} samples ({} channels) exceed the limit of {:.0e}; shorten the duration or lower the sample rate",
+            scene.file, total, channels, MAX_TOTAL_SAMPLES
+        )));
+    }
+    if o.sample_rate_hz.round() != o.sample_rate_hz && ext.as_deref() == Some("wav") {
+        return Err(Error::Other(format!("{}: field `output.sample_rate_hz`: WAV needs a whole number of Hz, got {}", scene.file, o.sample_rate_hz)));
+    }
+    Ok(())
+}
+
+enum Sink {
+    Wav(WavOut),
+    Csv(CsvOut),
+}
+
+/// Writes the scene's output signal to `out` (.wav or .csv) and a sidecar `out.json`; returns what was written.
+///
+/// # Errors
+/// See [`check_request`]; I/O failures. No partial file is left behind.
+pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing: bool) -> Result<SignalInfo, Error> {
+    let mut warnings = Vec::new();
+    check_request(scene, out, allow_aliasing, &mut warnings)?;
+    let o = &scene.output;
+    let fs = o.sample_rate_hz;
+    let frames = (fs * o.duration_s).round() as u64;
+    let eval = evaluator(scene, sim);
+    let shafts = if o.tacho { tacho_shafts(scene) } else { Vec::new() };
+    let q = &o.quantity;
+    let mut channels = vec![ChannelInfo { name: q.name().into(), unit: q.unit().into(), description: format!("{} of scene {}", q.name(), scene.name) }];
+    let is_wav = crate::io::extension(out).as_deref() == Some("wav");
+    let (format, full_scale) = match (is_wav, o.wav_format) {
+        (false, _) => ("csv".to_string(), None),
+        (true, WavFormat::F32) => ("f32".to_string(), None),
+        (true, f) => {
+            let peak = sim.period_samples.iter().fold(0.0f64, |a, v| a.max(v.abs())) + 4.0 * o.noise_rms;
+            let fsc = o.full_scale.unwrap_or_else(|| nice_ceiling(1.25 * peak));
+            (if f == WavFormat::I16 { "i16" } else { "i24" }.to_string(), Some(fsc))
+        }
+    };
+    let pulse = full_scale.map_or(1.0, |f| 0.5 * f);
+    for (name, _) in &shafts {
+        channels.push(ChannelInfo {
+            name: name.clone(),
+            unit: "pulse".into(),
+            description: format!("once per revolution: {pulse} for the first 5 % of each revolution, else 0; rising edge at angle 0"),
+        });
+    }
+    let nch = channels.len();
+    let mut sink = if is_wav {
+        let fmt = match full_scale {
+            None => WavSampleFormat::Float32,
+            Some(fsc) => WavSampleFormat::Int { bits: if format == "i16" { 16 } else { 24 }, full_scale: fsc },
+        };
+        Sink::Wav(WavOut::create(out, nch as u16, fs as u32, fmt)?)
+    } else {
+        let names: Vec<String> = channels.iter().map(|c| if c.unit.is_empty() { c.name.clone() } else { format!("{} [{}]", c.name, c.unit) }).collect();
+        Sink::Csv(CsvOut::create(out, &names, fs)?)
+    };
+    let period = sim.steady.period_s;
+    let mut noise = Noise::new(o.seed);
+    const CHUNK: usize = 8192;
+    let mut buf = Vec::with_capacity(CHUNK * nch);
+    let mut times = Vec::with_capacity(CHUNK);
+    let mut start = 0u64;
+    while start < frames {
+        let len = CHUNK.min((frames - start) as usize);
+        times.clear();
+        for i in 0..len {
+            let t = (start + i as u64) as f64 / fs;
+            times.push(phase(t, o.speed_modulation.map(|m| (m.depth, m.frequency_hz))));
+        }
+        let values = match &eval {
+            Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(tau.rem_euclid(period))).collect(),
+            Evaluator::Direct(sc, si) => crate::pipeline::output_at(sc, &si.steady, &times),
+        };
+        buf.clear();
+        for (i, v) in values.iter().enumerate() {
+            let noisy = if o.noise_rms > 0.0 { v + o.noise_rms * noise.gauss() } else { *v };
+            buf.push(noisy);
+            for (_, ratio) in &shafts {
+                let rev = times[i] * o.base_hz * ratio;
+                buf.push(if rev - rev.floor() < 0.05 { pulse } else { 0.0 });
+            }
+        }
+        match &mut sink {
+            Sink::Wav(w) => w.write(&buf)?,
+            Sink::Csv(c) => c.write(&buf)?,
+        }
+        start += len as u64;
+    }
+    let clipped = match sink {
+        Sink::Wav(w) => w.finish()?,
+        Sink::Csv(c) => {
+            c.finish()?;
+            0
+        }
+    };
+    if clipped > 0 {
+        warnings.push(format!("{clipped} samples clipped at integer full scale {:?}; raise output.full_scale", full_scale));
+    }
+    let info = SignalInfo {
+        file: out.display().to_string(),
+        scene: scene.name.clone(),
+        scene_file: scene.file.clone(),
+        sample_rate_hz: fs,
+        frames,
+        duration_s: frames as f64 / fs,
+        channels,
+        format,
+        full_scale,
+        clipped_samples: clipped,
+        noise_rms: o.noise_rms,
+        seed: o.seed,
+        speed_modulation: o.speed_modulation.map(|m| [m.depth, m.frequency_hz]),
+        base_hz: o.base_hz,
+        period_s: period,
+        evaluation: eval.describe(),
+        warnings,
+    };
+    let mut side = out.as_os_str().to_os_string();
+    side.push(".json");
+    let text = serde_json::to_string_pretty(&info).map_err(|e| Error::Other(e.to_string()))?;
+    crate::io::write_atomic(Path::new(&side), text.as_bytes()).map_err(|e: DataError| Error::Other(e.to_string()))?;
+    Ok(info)
+}
+
+/// Nominal-speed time equivalent of the shaft angle at time t (see the module docs).
+pub fn phase(t: f64, modulation: Option<(f64, f64)>) -> f64 {
+    match modulation {
+        None => t,
+        Some((depth, fm)) => {
+            let w = 2.0 * std::f64::consts::PI * fm;
+            t + depth * (1.0 - (w * t).cos()) / w
+        }
+    }
+}
+
+fn nice_ceiling(x: f64) -> f64 {
+    if !(x > 0.0) {
+        return 1.0;
+    }
+    let p = 10f64.powf(x.log10().floor());
+    let m = x / p;
+    let step = [1.0, 2.0, 2.5, 5.0, 10.0].into_iter().find(|s| *s >= m).unwrap_or(10.0);
+    step * p
+}
