@@ -488,11 +488,13 @@ impl Validator<'_> {
         tolerance: f64,
         notes: &mut Vec<String>,
     ) -> Result<FourierSeries, SceneError> {
-        const N: usize = 8192;
         if faults.is_empty() {
             return Ok(FourierSeries::constant(0.0));
         }
-        let mut samples = vec![0.0; N];
+        // periodised Gaussian of height d, centre c, width sigma (rad):
+        //   g(theta) = d sigma / sqrt(2 pi) [1 + 2 sum_k exp(-k^2 sigma^2 / 2) cos(k (theta - c))]
+        let keep = tolerance.max(1e-7);
+        let mut terms: Vec<(f64, f64, f64)> = Vec::new(); // (d sigma / sqrt(2 pi), sigma, centre)
         for (i, f) in faults.iter().enumerate() {
             let fld = format!("{field}[{i}]");
             if f.tooth < 1 || f.tooth > teeth {
@@ -504,25 +506,26 @@ impl Validator<'_> {
                     self.err(&format!("{fld}.width_teeth"), format!("must be in (0, {teeth}], got {}", f.width_teeth))
                 );
             }
-            let centre = (f.tooth as f64 - 0.5) / teeth as f64; // in revolutions
-            let width = f.width_teeth / teeth as f64;
-            for (j, s) in samples.iter_mut().enumerate() {
-                let mut d = j as f64 / N as f64 - centre;
-                d -= d.round();
-                let sigma = width / 6.0;
-                *s += f.depth_m * (-0.5 * (d / sigma).powi(2)).exp();
+            let centre = 2.0 * PI * (f.tooth as f64 - 0.5) / teeth as f64;
+            let sigma = 2.0 * PI * f.width_teeth / teeth as f64 / 6.0;
+            terms.push((f.depth_m * sigma / (2.0 * PI).sqrt(), sigma, centre));
+        }
+        let sigma_min = terms.iter().map(|t| t.1).fold(f64::INFINITY, f64::min);
+        let h = ((2.0 * (1.0 / keep).ln()).sqrt() / sigma_min).ceil() as usize;
+        let mut series = FourierSeries::new(1.0, terms.iter().map(|t| t.0).sum(), vec![0.0; h], vec![0.0; h]);
+        for (a, sigma, c) in &terms {
+            for k in 1..=h {
+                let amp = 2.0 * a * (-0.5 * (k as f64 * sigma).powi(2)).exp();
+                series.cos[k - 1] += amp * (k as f64 * c).cos();
+                series.sin[k - 1] += amp * (k as f64 * c).sin();
             }
         }
-        let mut series = FourierSeries::from_samples(1.0, &samples, 2000);
-        let keep = tolerance.max(1e-7) * series.max_amplitude();
-        let before = series.harmonics();
-        let dropped = series.truncate_below(keep);
+        let dropped = series.truncate_below(keep * series.max_amplitude());
         notes.push(format!(
-            "{field}: profile deviation as {} harmonics ({} of {} dropped below {:.1e} of the largest)",
+            "{field}: Gaussian profile deviation as {} harmonics (terms below {:.1e} of the largest dropped, {} more)",
             series.harmonics(),
-            dropped,
-            before,
-            tolerance.max(1e-7)
+            keep,
+            dropped
         ));
         Ok(series)
     }

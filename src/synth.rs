@@ -134,7 +134,9 @@ enum Evaluator<'a> {
 impl Evaluator<'_> {
     fn describe(&self) -> String {
         match self {
-            Self::Table(t) => format!("cubic Hermite table of {} points per period with exact derivatives", t.values.len()),
+            Self::Table(t) => {
+                format!("cubic Hermite table of {} points per period with exact derivatives", t.values.len())
+            }
             Self::Direct(..) => "one partial RK4 step per sample from the nearest grid node".into(),
         }
     }
@@ -210,7 +212,10 @@ pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: 
         )));
     }
     if o.sample_rate_hz.round() != o.sample_rate_hz && ext.as_deref() == Some("wav") {
-        return Err(Error::Other(format!("{}: field `output.sample_rate_hz`: WAV needs a whole number of Hz, got {}", scene.file, o.sample_rate_hz)));
+        return Err(Error::Other(format!(
+            "{}: field `output.sample_rate_hz`: WAV needs a whole number of Hz, got {}",
+            scene.file, o.sample_rate_hz
+        )));
     }
     Ok(())
 }
@@ -233,7 +238,11 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
     let eval = evaluator(scene, sim);
     let shafts = if o.tacho { tacho_shafts(scene) } else { Vec::new() };
     let q = &o.quantity;
-    let mut channels = vec![ChannelInfo { name: q.name().into(), unit: q.unit().into(), description: format!("{} of scene {}", q.name(), scene.name) }];
+    let mut channels = vec![ChannelInfo {
+        name: q.name().into(),
+        unit: q.unit().into(),
+        description: format!("{} of scene {}", q.name(), scene.name),
+    }];
     let is_wav = crate::io::extension(out).as_deref() == Some("wav");
     let (format, full_scale) = match (is_wav, o.wav_format) {
         (false, _) => ("csv".to_string(), None),
@@ -249,7 +258,9 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         channels.push(ChannelInfo {
             name: name.clone(),
             unit: "pulse".into(),
-            description: format!("once per revolution: {pulse} for the first 5 % of each revolution, else 0; rising edge at angle 0"),
+            description: format!(
+                "once per revolution: {pulse} for the first 5 % of each revolution, else 0; rising edge at angle 0"
+            ),
         });
     }
     let nch = channels.len();
@@ -260,7 +271,10 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         };
         Sink::Wav(WavOut::create(out, nch as u16, fs as u32, fmt)?)
     } else {
-        let names: Vec<String> = channels.iter().map(|c| if c.unit.is_empty() { c.name.clone() } else { format!("{} [{}]", c.name, c.unit) }).collect();
+        let names: Vec<String> = channels
+            .iter()
+            .map(|c| if c.unit.is_empty() { c.name.clone() } else { format!("{} [{}]", c.name, c.unit) })
+            .collect();
         Sink::Csv(CsvOut::create(out, &names, fs)?)
     };
     let period = sim.steady.period_s;
@@ -303,7 +317,8 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         }
     };
     if clipped > 0 {
-        warnings.push(format!("{clipped} samples clipped at integer full scale {:?}; raise output.full_scale", full_scale));
+        warnings
+            .push(format!("{clipped} samples clipped at integer full scale {:?}; raise output.full_scale", full_scale));
     }
     let info = SignalInfo {
         file: out.display().to_string(),
@@ -343,7 +358,7 @@ pub fn phase(t: f64, modulation: Option<(f64, f64)>) -> f64 {
 }
 
 fn nice_ceiling(x: f64) -> f64 {
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return 1.0;
     }
     let p = 10f64.powf(x.log10().floor());

@@ -52,7 +52,9 @@ pub fn parse_args() -> Cli {
 /// Any layer's error; the caller prints it on one line and exits with code 2.
 pub fn run(cli: Cli) -> Result<u8, Error> {
     match cli.command {
-        Command::Simulate { scene, output, allow_aliasing, json } => simulate(&scene, output.as_deref(), allow_aliasing, json),
+        Command::Simulate { scene, output, allow_aliasing, json } => {
+            simulate(&scene, output.as_deref(), allow_aliasing, json)
+        }
         Command::Stability { scene, json } => stability(&scene, json),
     }
 }

@@ -60,7 +60,10 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
                 DataError::format(path, format!("line {lineno}, column {}: {:?} is not a number", c + 1, f.trim()))
             })?;
             if !v.is_finite() {
-                return Err(DataError::format(path, format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim())));
+                return Err(DataError::format(
+                    path,
+                    format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim()),
+                ));
             }
             columns[c].push(v);
         }
@@ -75,13 +78,8 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     if let Some(tc) = time_col {
         sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);
     }
-    let (names, channels) = names
-        .into_iter()
-        .zip(columns)
-        .enumerate()
-        .filter(|(i, _)| Some(*i) != time_col)
-        .map(|(_, p)| p)
-        .unzip();
+    let (names, channels) =
+        names.into_iter().zip(columns).enumerate().filter(|(i, _)| Some(*i) != time_col).map(|(_, p)| p).unzip();
     Ok(Recording { channels, sample_rate_hz, names })
 }
 
@@ -103,14 +101,19 @@ fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
         return Err(DataError::format(path, "time column needs at least 2 rows to give a sample rate"));
     }
     let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    if !(dt > 0.0) {
+    if dt.is_nan() || dt <= 0.0 {
         return Err(DataError::format(path, "time column does not increase"));
     }
     for (i, w) in t.windows(2).enumerate() {
         if ((w[1] - w[0]) - dt).abs() > 0.01 * dt {
             return Err(DataError::format(
                 path,
-                format!("time column is not uniformly sampled near data row {} (step {} s, mean {} s)", i + 2, w[1] - w[0], dt),
+                format!(
+                    "time column is not uniformly sampled near data row {} (step {} s, mean {} s)",
+                    i + 2,
+                    w[1] - w[0],
+                    dt
+                ),
             ));
         }
     }

@@ -9,7 +9,7 @@ use std::path::Path;
 pub enum WavSampleFormat {
     /// 32-bit IEEE float, values as given.
     Float32,
-    /// Integer with `bits` (16 or 24); `full_scale` maps to the largest integer.
+    /// Integer with `bits` (16 or 24): sample = round(value / full_scale * 2^(bits-1)), clamped.
     Int {
         /// 16 or 24.
         bits: u16,
@@ -35,15 +35,21 @@ impl WavOut {
     pub fn create(path: &Path, channels: u16, sample_rate_hz: u32, format: WavSampleFormat) -> Result<Self, DataError> {
         let (guard, file) = AtomicFile::create(path)?;
         let spec = match format {
-            WavSampleFormat::Float32 => {
-                hound::WavSpec { channels, sample_rate: sample_rate_hz, bits_per_sample: 32, sample_format: hound::SampleFormat::Float }
-            }
-            WavSampleFormat::Int { bits, .. } => {
-                hound::WavSpec { channels, sample_rate: sample_rate_hz, bits_per_sample: bits, sample_format: hound::SampleFormat::Int }
-            }
+            WavSampleFormat::Float32 => hound::WavSpec {
+                channels,
+                sample_rate: sample_rate_hz,
+                bits_per_sample: 32,
+                sample_format: hound::SampleFormat::Float,
+            },
+            WavSampleFormat::Int { bits, .. } => hound::WavSpec {
+                channels,
+                sample_rate: sample_rate_hz,
+                bits_per_sample: bits,
+                sample_format: hound::SampleFormat::Int,
+            },
         };
-        let writer =
-            hound::WavWriter::new(std::io::BufWriter::with_capacity(1 << 20, file), spec).map_err(|e| DataError::io(path, e))?;
+        let writer = hound::WavWriter::new(std::io::BufWriter::with_capacity(1 << 20, file), spec)
+            .map_err(|e| DataError::io(path, e))?;
         Ok(Self { writer, guard, format, path: path.to_path_buf(), clipped: 0 })
     }
 
@@ -60,13 +66,14 @@ impl WavOut {
                 }
             }
             WavSampleFormat::Int { bits, full_scale } => {
-                let max = ((1i64 << (bits - 1)) - 1) as f64;
+                // sample = round(v / full_scale * 2^(bits-1)), the scale `read` divides by
+                let scale = (1i64 << (bits - 1)) as f64;
                 for &v in interleaved {
-                    let x = (v / full_scale * max).round();
-                    if x.abs() > max {
+                    let x = (v / full_scale * scale).round();
+                    if x > scale - 1.0 || x < -scale {
                         self.clipped += 1;
                     }
-                    self.writer.write_sample(x.clamp(-max - 1.0, max) as i32).map_err(err)?;
+                    self.writer.write_sample(x.clamp(-scale, scale - 1.0) as i32).map_err(err)?;
                 }
             }
         }
@@ -91,7 +98,8 @@ impl WavOut {
 /// Unreadable, malformed or truncated files, named with hound's reason.
 pub fn read(path: &Path) -> Result<Recording, DataError> {
     let file_len = std::fs::metadata(path).map_err(|e| DataError::io(path, e))?.len();
-    let mut reader = hound::WavReader::open(path).map_err(|e| DataError::format(path, format!("not a readable WAV file: {e}")))?;
+    let mut reader =
+        hound::WavReader::open(path).map_err(|e| DataError::format(path, format!("not a readable WAV file: {e}")))?;
     let spec = reader.spec();
     let nch = spec.channels as usize;
     let bytes_per_sample = spec.bits_per_sample.div_ceil(8).max(1) as u64;

@@ -134,8 +134,8 @@ impl<'a> Stepper<'a> {
         }
         // K4
         self.stage(2, h, &stage_in, s);
-        for i in 0..len {
-            w[i] += (self.acc[i] + self.k[i]) / 6.0;
+        for ((wi, a), k) in w.iter_mut().zip(&self.acc).zip(&self.k) {
+            *wi += (a + k) / 6.0;
         }
         self.tmp = stage_in;
     }

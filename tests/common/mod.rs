@@ -1,5 +1,6 @@
 //! Shared helpers for integration tests: running the real binary, temporary files, reference maths.
 #![allow(dead_code)]
+#![allow(clippy::needless_range_loop)] // matrix maths reads best with indices
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
