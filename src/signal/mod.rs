@@ -1,7 +1,10 @@
 //! Signals and their analysis: spectra, windows, TSA, indicators, sidebands, comparison.
 //! Knows nothing of ODEs or gears' equations of motion: it sees sample arrays, rates and orders.
 
+pub mod indicators;
 pub mod spectrum;
+pub mod speed;
+pub mod tsa;
 
 /// Errors of the signal layer.
 #[derive(Debug, thiserror::Error)]
@@ -28,4 +31,23 @@ pub struct Signal {
     pub samples: Vec<f64>,
     /// Sample rate in Hz.
     pub sample_rate_hz: f64,
+}
+
+/// A one-sided spectrum with its frequency axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spectrum {
+    /// Bin frequencies in Hz.
+    pub freqs_hz: Vec<f64>,
+    /// Values (amplitude in the signal unit, or PSD in unit^2/Hz).
+    pub values: Vec<f64>,
+}
+
+impl Spectrum {
+    /// Largest value within `width_hz` of `f_hz` and the frequency where it is (`None` outside the axis).
+    pub fn peak_near(&self, f_hz: f64, width_hz: f64) -> Option<(f64, f64)> {
+        let df = self.freqs_hz.get(1).map_or(1.0, |f1| f1 - self.freqs_hz[0]);
+        let lo = self.freqs_hz.partition_point(|&f| f < f_hz - width_hz.max(df));
+        let hi = self.freqs_hz.partition_point(|&f| f <= f_hz + width_hz.max(df));
+        (lo..hi).map(|i| (self.freqs_hz[i], self.values[i])).max_by(|a, b| a.1.total_cmp(&b.1))
+    }
 }

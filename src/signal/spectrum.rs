@@ -1,42 +1,259 @@
-//! Discrete Fourier transforms of real data (realfft / rustfft live only here).
+//! Discrete Fourier transforms of real data (realfft / rustfft live only here) and the spectra built on
+//! them.
 //!
 //! Conventions: one-sided spectra have N/2 + 1 bins at k fs / N. "Amplitude" means the peak amplitude of
-//! the sinusoid at that bin: |X_0| / N for k = 0, 2 |X_k| / N otherwise (|X_{N/2}| / N at Nyquist for even
-//! N), divided by the window's coherent gain (mean of the window) when a window is applied.
+//! a sinusoid: |X_0| / N for k = 0, 2 |X_k| / N otherwise (|X_{N/2}| / N at Nyquist for even N), divided by
+//! the window's coherent gain (its mean) when a window is applied. A PSD is one-sided, in unit^2/Hz,
+//! normalised by fs * sum(w^2) (scipy's `welch(..., scaling="density")`), so its integral is the variance.
 
+use super::{SignalError, Spectrum};
 use realfft::RealFftPlanner;
+use realfft::num_complex::Complex;
+use std::sync::Arc;
+
+/// Reusable FFT context: plans are cached per length, scratch buffers kept between calls.
+pub struct Fft {
+    planner: RealFftPlanner<f64>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl Default for Fft {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Fft {
+    /// A fresh context.
+    pub fn new() -> Self {
+        Self { planner: RealFftPlanner::new(), scratch: Vec::new() }
+    }
+
+    fn forward_plan(&mut self, n: usize) -> Arc<dyn realfft::RealToComplex<f64>> {
+        self.planner.plan_fft_forward(n)
+    }
+
+    /// Unnormalised forward transform of `input` (overwritten) into `out` (len N/2 + 1).
+    pub fn forward(&mut self, input: &mut [f64], out: &mut Vec<(f64, f64)>) {
+        let n = input.len();
+        let plan = self.forward_plan(n);
+        let mut spec = plan.make_output_vec();
+        if self.scratch.len() < plan.get_scratch_len() {
+            self.scratch.resize(plan.get_scratch_len(), Complex::new(0.0, 0.0));
+        }
+        plan.process_with_scratch(input, &mut spec, &mut self.scratch[..plan.get_scratch_len()])
+            .expect("sizes from the plan");
+        out.clear();
+        out.extend(spec.iter().map(|c| (c.re, c.im)));
+    }
+
+    /// Inverse of [`forward`](Self::forward) including the 1/N factor: `spec` (len N/2 + 1) -> N samples.
+    pub fn inverse(&mut self, spec: &[(f64, f64)], n: usize) -> Vec<f64> {
+        let plan = self.planner.plan_fft_inverse(n);
+        let mut input: Vec<Complex<f64>> = spec.iter().map(|&(r, i)| Complex::new(r, i)).collect();
+        // a real signal's DC and Nyquist bins are real
+        input[0].im = 0.0;
+        if n % 2 == 0 {
+            input[n / 2].im = 0.0;
+        }
+        let mut out = plan.make_output_vec();
+        if self.scratch.len() < plan.get_scratch_len() {
+            self.scratch.resize(plan.get_scratch_len(), Complex::new(0.0, 0.0));
+        }
+        plan.process_with_scratch(&mut input, &mut out, &mut self.scratch[..plan.get_scratch_len()])
+            .expect("sizes from the plan");
+        let scale = 1.0 / n as f64;
+        out.iter_mut().for_each(|v| *v *= scale);
+        out
+    }
+}
 
 /// Amplitudes of harmonics 0..=N/2 of one period sampled at N equally spaced points (no window: the
 /// record is exactly one period, so every harmonic falls on a bin).
 pub fn periodic_amplitudes(samples: &[f64]) -> Vec<f64> {
+    let mut fft = Fft::new();
+    periodic_amplitudes_with(&mut fft, samples)
+}
+
+/// [`periodic_amplitudes`] with a reusable FFT context.
+pub fn periodic_amplitudes_with(fft: &mut Fft, samples: &[f64]) -> Vec<f64> {
     let n = samples.len();
     if n == 0 {
         return Vec::new();
     }
-    let mut planner = RealFftPlanner::<f64>::new();
-    let r2c = planner.plan_fft_forward(n);
     let mut input = samples.to_vec();
-    let mut out = r2c.make_output_vec();
-    r2c.process(&mut input, &mut out).expect("buffer sizes come from the plan");
-    out.iter()
+    let mut out = Vec::new();
+    fft.forward(&mut input, &mut out);
+    out.iter().enumerate().map(|(k, c)| bin_scale(k, n) * c.0.hypot(c.1) / n as f64).collect()
+}
+
+fn bin_scale(k: usize, n: usize) -> f64 {
+    if k == 0 || (n % 2 == 0 && k == n / 2) { 1.0 } else { 2.0 }
+}
+
+/// Periodic Hann window of length n: w_i = 0.5 (1 - cos(2 pi i / n)).
+pub fn hann(n: usize) -> Vec<f64> {
+    (0..n).map(|i| 0.5 * (1.0 - (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())).collect()
+}
+
+/// Options of [`amplitude_spectrum`]. Defaults: `segment = 65536` (or the whole record when shorter),
+/// `overlap = 0.5`.
+#[derive(Clone, Copy, Debug)]
+pub struct AmplitudeOptions {
+    /// Segment length (samples).
+    pub segment: usize,
+    /// Fractional overlap of segments in [0, 1).
+    pub overlap: f64,
+}
+
+impl Default for AmplitudeOptions {
+    fn default() -> Self {
+        Self { segment: 65536, overlap: 0.5 }
+    }
+}
+
+/// One-sided amplitude spectrum: Hann window, amplitude-corrected (a sine on a bin reads its peak
+/// amplitude), averaged in power over overlapping segments (mean removed per segment).
+///
+/// # Errors
+/// Fewer than 8 samples.
+pub fn amplitude_spectrum(fft: &mut Fft, x: &[f64], fs: f64, o: AmplitudeOptions) -> Result<Spectrum, SignalError> {
+    let (power, n) = averaged_power(fft, x, o.segment, o.overlap, "amplitude spectrum")?;
+    let w = hann(n);
+    let gain = w.iter().sum::<f64>() / n as f64;
+    let values = power.iter().enumerate().map(|(k, p)| bin_scale(k, n) * p.sqrt() / (n as f64 * gain)).collect();
+    Ok(Spectrum { freqs_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(), values })
+}
+
+/// Welch PSD: Hann segments of `nperseg` (or the record length when shorter), 50 % overlap, mean removed
+/// per segment, one-sided density in unit^2/Hz.
+///
+/// # Errors
+/// Fewer than 8 samples.
+pub fn welch_psd(fft: &mut Fft, x: &[f64], fs: f64, nperseg: usize) -> Result<Spectrum, SignalError> {
+    let (power, n) = averaged_power(fft, x, nperseg, 0.5, "Welch PSD")?;
+    let w2: f64 = hann(n).iter().map(|v| v * v).sum();
+    let values = power
+        .iter()
         .enumerate()
-        .map(|(k, c)| {
-            let scale = if k == 0 || (n % 2 == 0 && k == n / 2) { 1.0 } else { 2.0 };
-            scale * c.norm() / n as f64
-        })
-        .collect()
+        .map(|(k, p)| if k == 0 || (n % 2 == 0 && k == n / 2) { *p } else { 2.0 * p } / (fs * w2))
+        .collect();
+    Ok(Spectrum { freqs_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(), values })
+}
+
+/// Mean |X_k|^2 of Hann-windowed, mean-removed segments; returns it and the segment length used.
+fn averaged_power(
+    fft: &mut Fft,
+    x: &[f64],
+    segment: usize,
+    overlap: f64,
+    what: &str,
+) -> Result<(Vec<f64>, usize), SignalError> {
+    if x.len() < 8 {
+        return Err(SignalError::TooShort { what: what.into(), needed: 8, got: x.len() });
+    }
+    let n = segment.min(x.len()).max(8);
+    let step = ((n as f64 * (1.0 - overlap)).round() as usize).max(1);
+    let w = hann(n);
+    let mut acc = vec![0.0; n / 2 + 1];
+    let mut buf = vec![0.0; n];
+    let mut out = Vec::new();
+    let mut count = 0usize;
+    let mut start = 0;
+    while start + n <= x.len() {
+        let seg = &x[start..start + n];
+        let mean = seg.iter().sum::<f64>() / n as f64;
+        for ((b, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
+            *b = (v - mean) * wi;
+        }
+        fft.forward(&mut buf, &mut out);
+        for (a, c) in acc.iter_mut().zip(&out) {
+            *a += c.0 * c.0 + c.1 * c.1;
+        }
+        count += 1;
+        start += step;
+    }
+    acc.iter_mut().for_each(|a| *a /= count as f64);
+    Ok((acc, n))
+}
+
+/// Zoom spectrum: the Hann-windowed amplitude spectrum of the whole record (resolution fs / N), returned
+/// only for `f_lo_hz..=f_hi_hz`. Memory: one record-length buffer.
+///
+/// # Errors
+/// Fewer than 8 samples or an empty band.
+pub fn zoom_spectrum(fft: &mut Fft, x: &[f64], fs: f64, f_lo_hz: f64, f_hi_hz: f64) -> Result<Spectrum, SignalError> {
+    if f_hi_hz <= f_lo_hz {
+        return Err(SignalError::Invalid(format!("zoom band {f_lo_hz}..{f_hi_hz} Hz is empty")));
+    }
+    let full = amplitude_spectrum(fft, x, fs, AmplitudeOptions { segment: x.len(), overlap: 0.0 })?;
+    let (freqs_hz, values) = full
+        .freqs_hz
+        .iter()
+        .zip(&full.values)
+        .filter(|(f, _)| **f >= f_lo_hz && **f <= f_hi_hz)
+        .map(|(f, v)| (*f, *v))
+        .unzip();
+    Ok(Spectrum { freqs_hz, values })
+}
+
+/// Circular-free autocorrelation r_k / r_0 for lags 0..=max_lag (zero-padded FFT, unbiased: divided by
+/// the overlap length N - k).
+pub fn autocorrelation(fft: &mut Fft, x: &[f64], max_lag: usize) -> Vec<f64> {
+    let n = x.len();
+    let m = (2 * n).next_power_of_two();
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf = vec![0.0; m];
+    for (b, v) in buf.iter_mut().zip(x) {
+        *b = v - mean;
+    }
+    let mut spec = Vec::new();
+    fft.forward(&mut buf, &mut spec);
+    let power: Vec<(f64, f64)> = spec.iter().map(|c| (c.0 * c.0 + c.1 * c.1, 0.0)).collect();
+    let r = fft.inverse(&power, m);
+    let r0 = r[0].max(f64::MIN_POSITIVE);
+    (0..=max_lag.min(n - 1)).map(|k| r[k] / r0 * n as f64 / (n - k) as f64).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
+
+    /// O(N^2) DFT oracle.
+    fn naive_dft(x: &[f64]) -> Vec<(f64, f64)> {
+        let n = x.len();
+        (0..=n / 2)
+            .map(|k| {
+                x.iter().enumerate().fold((0.0, 0.0), |(re, im), (j, v)| {
+                    let a = -2.0 * PI * (k * j % n) as f64 / n as f64;
+                    (re + v * a.cos(), im + v * a.sin())
+                })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn forward_and_inverse_work() {
+        let x: Vec<f64> = (0..48).map(|i| ((i * 7 % 11) as f64 - 5.0) * 0.3 + (i as f64 * 0.4).sin()).collect();
+        let mut fft = Fft::new();
+        let mut out = Vec::new();
+        fft.forward(&mut x.clone(), &mut out);
+        for (a, b) in out.iter().zip(naive_dft(&x)) {
+            assert!((a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12);
+        }
+        let back = fft.inverse(&out, x.len());
+        for (a, b) in back.iter().zip(&x) {
+            assert!((a - b).abs() < 1e-13);
+        }
+    }
 
     #[test]
     fn periodic_amplitudes_works() {
         let n = 64;
         let x: Vec<f64> = (0..n)
             .map(|i| {
-                let t = i as f64 / n as f64 * 2.0 * std::f64::consts::PI;
+                let t = i as f64 / n as f64 * 2.0 * PI;
                 0.5 + 2.0 * (3.0 * t + 0.3).cos() + 0.25 * (7.0 * t).sin()
             })
             .collect();
@@ -46,5 +263,48 @@ mod tests {
         assert!((a[3] - 2.0).abs() < 1e-13);
         assert!((a[7] - 0.25).abs() < 1e-13);
         assert!(a[5] < 1e-13);
+    }
+
+    #[test]
+    fn amplitude_spectrum_recovers_sines_on_bins() {
+        // 1024-sample segments at 1024 Hz: 1 Hz bins; sines on bins 50 and 200 with amplitudes 1.5, 0.01
+        let fs = 1024.0;
+        let x: Vec<f64> = (0..8192)
+            .map(|i| {
+                1.5 * (2.0 * PI * 50.0 * i as f64 / fs + 0.4).sin() + 0.01 * (2.0 * PI * 200.0 * i as f64 / fs).cos()
+            })
+            .collect();
+        let s = amplitude_spectrum(&mut Fft::new(), &x, fs, AmplitudeOptions { segment: 1024, overlap: 0.5 }).unwrap();
+        assert!((s.freqs_hz[50] - 50.0).abs() < 1e-12);
+        assert!((s.values[50] - 1.5).abs() < 1.5e-6, "{}", s.values[50]);
+        assert!((s.values[200] - 0.01).abs() < 1e-8, "{}", s.values[200]);
+    }
+
+    #[test]
+    fn welch_psd_integrates_to_variance() {
+        // white-ish deterministic sequence: the PSD integral equals the variance (Parseval, Hann-normalised)
+        let mut state = 12345u64;
+        let x: Vec<f64> = (0..65536)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let fs = 1000.0;
+        let s = welch_psd(&mut Fft::new(), &x, fs, 1024).unwrap();
+        let df = s.freqs_hz[1];
+        let integral: f64 = s.values.iter().sum::<f64>() * df;
+        let var = 1.0 / 12.0; // uniform on [-0.5, 0.5)
+        assert!((integral / var - 1.0).abs() < 0.02, "{integral}");
+    }
+
+    #[test]
+    fn autocorrelation_finds_period() {
+        let x: Vec<f64> =
+            (0..4000).map(|i| (2.0 * PI * i as f64 / 37.0).sin() + 0.3 * (2.0 * PI * i as f64 / 18.5).cos()).collect();
+        let r = autocorrelation(&mut Fft::new(), &x, 100);
+        let peak = (20..60).max_by(|a, b| r[*a].total_cmp(&r[*b])).unwrap();
+        assert_eq!(peak, 37);
+        assert!((r[0] - 1.0).abs() < 1e-12);
     }
 }

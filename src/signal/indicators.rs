@@ -1,0 +1,138 @@
+//! Condition indicators with the definitions of `reference/diagnostics.md` (N samples, overbar = mean):
+//!
+//! ```text
+//! RMS      = sqrt(1/N sum x_i^2)                                   (on the TSA)
+//! kurtosis = N sum (x_i - xbar)^4 / (sum (x_i - xbar)^2)^2           (non-excess; 3 for Gaussian)
+//! crest    = max |x_i| / RMS
+//! FM0      = (max x - min x) of the TSA / sum_n P_n,  P_n = amplitude of mesh harmonic n
+//! FM4      = N   sum (d_i - dbar)^4 / (sum (d_i - dbar)^2)^2         (difference signal d)
+//! M6A      = N^2 sum (d_i - dbar)^6 / (sum (d_i - dbar)^2)^3
+//! M8A      = N^3 sum (d_i - dbar)^8 / (sum (d_i - dbar)^2)^4
+//! NA4(M)   = N sum_i (r_iM - rbar_M)^4 / [ (1/M) sum_{j=1..M} sum_i (r_ij - rbar_j)^2 ]^2  (residual r)
+//! NA4*     = the same with the denominator taken from a healthy baseline only
+//! ER       = RMS(d) / RMS(y_r)                                        (regular signal y_r)
+//! SI       = (A(f_m - f_r) + A(f_m + f_r)) / 2
+//! SLF      = (A(f_m - f_r) + A(f_m + f_r)) / RMS(TSA)
+//! SER      = sum_{i=1..6} (A(f_m + i f_r) + A(f_m - i f_r)) / A(f_m)
+//! ```
+
+/// Root mean square (about zero, not the mean).
+pub fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// Sum of (x - mean)^2.
+pub fn sum_sq_dev(x: &[f64]) -> f64 {
+    let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    x.iter().map(|v| (v - m) * (v - m)).sum()
+}
+
+/// Normalised central moment N^(k/2 - 1) sum (x - xbar)^k / (sum (x - xbar)^2)^(k/2), k even:
+/// k = 4 is kurtosis / FM4, k = 6 is M6A, k = 8 is M8A.
+pub fn normalized_moment(x: &[f64], k: i32) -> f64 {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let (mut s2, mut sk) = (0.0, 0.0);
+    for v in x {
+        let d = v - m;
+        s2 += d * d;
+        sk += d.powi(k);
+    }
+    n.powi(k / 2 - 1) * sk / s2.powi(k / 2)
+}
+
+/// Non-excess kurtosis (3 for Gaussian).
+pub fn kurtosis(x: &[f64]) -> f64 {
+    normalized_moment(x, 4)
+}
+
+/// max |x| / RMS.
+pub fn crest_factor(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |a, v| a.max(v.abs())) / rms(x)
+}
+
+/// FM0 = peak-to-peak of the TSA / sum of the mesh-harmonic amplitudes.
+pub fn fm0(tsa: &[f64], mesh_amplitudes: &[f64]) -> f64 {
+    let (lo, hi) = tsa.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    (hi - lo) / mesh_amplitudes.iter().sum::<f64>()
+}
+
+/// NA4 of the last record: `current` residual and the sums of squared deviations of all records so far
+/// (including the current one), in time order.
+pub fn na4(current: &[f64], sums_sq_so_far: &[f64]) -> f64 {
+    let n = current.len() as f64;
+    let m = current.iter().sum::<f64>() / n;
+    let s4: f64 = current.iter().map(|v| (v - m).powi(4)).sum();
+    let mean_ss = sums_sq_so_far.iter().sum::<f64>() / sums_sq_so_far.len() as f64;
+    n * s4 / (mean_ss * mean_ss)
+}
+
+/// ER = RMS(difference) / RMS(regular), both about their means.
+pub fn energy_ratio(difference: &[f64], regular: &[f64]) -> f64 {
+    (sum_sq_dev(difference) / sum_sq_dev(regular)).sqrt()
+}
+
+/// SER: six sideband pairs at spacing `spacing` bins around `mesh` in an amplitude spectrum (bins beyond
+/// the spectrum count as zero), divided by the mesh amplitude.
+pub fn sideband_energy_ratio(amplitudes: &[f64], mesh: usize, spacing: usize) -> f64 {
+    let get = |i: isize| if i >= 0 { amplitudes.get(i as usize).copied().unwrap_or(0.0) } else { 0.0 };
+    let sum: f64 =
+        (1..=6).map(|i| get((mesh + i * spacing) as isize) + get(mesh as isize - (i * spacing) as isize)).sum();
+    sum / amplitudes[mesh]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moments_work_on_hand_computed_arrays() {
+        // x = [1, 2, 3, 4, 10]: mean 4, deviations -3 -2 -1 0 6
+        let x = [1.0, 2.0, 3.0, 4.0, 10.0];
+        let (s2, s4, s6, s8) = (
+            9.0 + 4.0 + 1.0 + 36.0,
+            81.0 + 16.0 + 1.0 + 1296.0,
+            729.0 + 64.0 + 1.0 + 46656.0,
+            6561.0 + 256.0 + 1.0 + 1679616.0,
+        );
+        assert!((kurtosis(&x) - 5.0 * s4 / (s2 * s2)).abs() < 1e-12);
+        assert!((normalized_moment(&x, 6) - 25.0 * s6 / (s2 * s2 * s2)).abs() < 1e-12);
+        assert!((normalized_moment(&x, 8) - 125.0 * s8 / (s2 * s2 * s2 * s2)).abs() < 1e-12);
+        assert!((rms(&x) - (130.0f64 / 5.0).sqrt()).abs() < 1e-12);
+        assert!((crest_factor(&x) - 10.0 / (26.0f64).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn gaussian_difference_gives_3_15_105() {
+        // Box-Muller from a fixed LCG: FM4 ~ 3, M6A ~ 15, M8A ~ 105 (Gaussian moments 3, 15, 105)
+        let mut s = 7u64;
+        let mut u = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let x: Vec<f64> =
+            (0..400_000).map(|_| (-2.0 * u().ln()).sqrt() * (2.0 * std::f64::consts::PI * u()).cos()).collect();
+        // sampling error of the k-th moment estimate shrinks as 1/sqrt(N); the 8th moment is the noisiest
+        assert!((kurtosis(&x) - 3.0).abs() < 0.05);
+        assert!((normalized_moment(&x, 6) - 15.0).abs() < 0.6);
+        assert!((normalized_moment(&x, 8) - 105.0).abs() < 8.0);
+    }
+
+    #[test]
+    fn fm0_na4_er_ser_work() {
+        assert!((fm0(&[1.0, -3.0, 2.0], &[1.0, 1.5]) - 5.0 / 2.5).abs() < 1e-15);
+        // NA4 with one record is the kurtosis; with a quieter earlier record the denominator shrinks
+        let r = [1.0, -1.0, 2.0, -2.0];
+        assert!((na4(&r, &[sum_sq_dev(&r)]) - kurtosis(&r)).abs() < 1e-12);
+        let ss = sum_sq_dev(&r); // 10
+        assert!((na4(&r, &[2.5, ss]) - 4.0 * 34.0 / (6.25 * 6.25)).abs() < 1e-12);
+        assert!((energy_ratio(&[1.0, -1.0], &[2.0, -2.0]) - 0.5).abs() < 1e-15);
+        let mut a = vec![0.0; 40];
+        a[20] = 2.0;
+        a[19] = 0.5;
+        a[21] = 0.3;
+        a[14] = 0.2; // i = 6 below
+        a[27] = 0.9; // i = 7 above: outside the six pairs
+        assert!((sideband_energy_ratio(&a, 20, 1) - 1.0 / 2.0).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,147 @@
+//! Shaft speed: from tachometer pulses, or estimated from the signal's repetition period.
+
+use super::SignalError;
+use super::spectrum::{Fft, autocorrelation};
+
+/// Rising crossings of the mid level (min + max) / 2, as fractional sample indices (linear
+/// interpolation between the two samples around each crossing).
+///
+/// # Errors
+/// A constant channel or fewer than two pulses.
+pub fn tacho_pulses(x: &[f64]) -> Result<Vec<f64>, SignalError> {
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if !(hi > lo) {
+        return Err(SignalError::Invalid("tachometer channel is constant: no pulses".into()));
+    }
+    let mid = 0.5 * (lo + hi);
+    let pulses: Vec<f64> = x
+        .windows(2)
+        .enumerate()
+        .filter(|(_, w)| w[0] < mid && w[1] >= mid)
+        .map(|(i, w)| i as f64 + (mid - w[0]) / (w[1] - w[0]))
+        .collect();
+    if pulses.len() < 2 {
+        return Err(SignalError::Invalid(format!(
+            "tachometer channel has {} pulse(s); at least 2 are needed",
+            pulses.len()
+        )));
+    }
+    Ok(pulses)
+}
+
+/// A repetition period estimated from the signal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PeriodEstimate {
+    /// Period in samples (fractional).
+    pub period_samples: f64,
+    /// Normalised autocorrelation at that lag (0..1): how strongly the signal repeats.
+    pub confidence: f64,
+}
+
+/// Repetition period of the summed normalised autocorrelation of `channels`, between `min_lag` and
+/// `max_lag` samples: the shortest strong peak (at least 75 % of the highest, and the largest value within
+/// +-10 % of its own lag), refined to a fraction of a
+/// sample from the peak near the largest multiple of it that fits in half the record.
+///
+/// # Errors
+/// No peak in the range (signal not periodic there).
+pub fn estimate_period(
+    fft: &mut Fft,
+    channels: &[&[f64]],
+    min_lag: usize,
+    max_lag: usize,
+) -> Result<PeriodEstimate, SignalError> {
+    let n = channels.iter().map(|c| c.len()).min().unwrap_or(0);
+    let lag_max = (n / 2).max(max_lag.min(n.saturating_sub(2)));
+    let mut sum = vec![0.0; lag_max + 1];
+    for c in channels {
+        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
+            *s += r / channels.len() as f64;
+        }
+    }
+    // a candidate must dominate +-10 % of its lag: ripple from the mesh on a shaft-period lobe is not a period
+    let dominant = |i: usize| {
+        let w = (i / 10).max(2);
+        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(lag_max));
+        sum[lo..=hi].iter().all(|&v| v <= sum[i])
+    };
+    let peaks: Vec<usize> = (min_lag.max(2)..max_lag.min(lag_max - 1))
+        .filter(|&i| sum[i] > sum[i - 1] && sum[i] >= sum[i + 1] && sum[i] > 0.0 && dominant(i))
+        .collect();
+    let best = peaks.iter().map(|&i| sum[i]).fold(0.0, f64::max);
+    let Some(&p0) = peaks.iter().find(|&&i| sum[i] >= 0.75 * best) else {
+        return Err(SignalError::Invalid(format!(
+            "no repetition period found between {min_lag} and {max_lag} samples: give --rpm or --shaft-hz"
+        )));
+    };
+    Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0] })
+}
+
+/// Refines a period from the autocorrelation peaks near its multiples 2, 4, 8, ... (parabolic vertex).
+pub fn refine(r: &[f64], p0: f64) -> f64 {
+    let mut p = p0;
+    let mut m = 1.0;
+    while 2.0 * m * p < (r.len() - 2) as f64 {
+        m *= 2.0;
+        let centre = (m * p).round() as usize;
+        // the previous estimate is good to about a sample over m/2 periods: search a few samples, and never
+        // as far as a neighbouring multiple of the period
+        let w = (3 + (m * 0.002 * p) as usize).min((p / 4.0) as usize).max(1);
+        let lo = centre.saturating_sub(w).max(1);
+        let hi = (centre + w).min(r.len() - 2);
+        let Some(i) = (lo..=hi).max_by(|a, b| r[*a].total_cmp(&r[*b])) else { break };
+        let (y0, y1, y2) = (r[i - 1], r[i], r[i + 1]);
+        let den = y0 - 2.0 * y1 + y2;
+        let d = if den < 0.0 { 0.5 * (y0 - y2) / den } else { 0.0 };
+        p = (i as f64 + d) / m;
+    }
+    p
+}
+
+/// Refines a known approximate period `near` (for example a baseline's) within +-`tolerance` relative.
+///
+/// # Errors
+/// No peak in the window.
+pub fn refine_near(
+    fft: &mut Fft,
+    channels: &[&[f64]],
+    near: f64,
+    tolerance: f64,
+) -> Result<PeriodEstimate, SignalError> {
+    let lo = (near * (1.0 - tolerance)).floor() as usize;
+    let hi = (near * (1.0 + tolerance)).ceil() as usize + 1;
+    let est = estimate_period(fft, channels, lo, hi)?;
+    Ok(est)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn tacho_pulses_works() {
+        let x: Vec<f64> = (0..1000).map(|i| if (i as f64 / 100.3).fract() < 0.1 { 5.0 } else { 0.0 }).collect();
+        let p = tacho_pulses(&x).unwrap();
+        assert_eq!(p.len(), 9);
+        for (k, w) in p.windows(2).enumerate() {
+            assert!((w[1] - w[0] - 100.3).abs() < 1.0, "{k}");
+        }
+        assert!(tacho_pulses(&[1.0; 10]).is_err());
+    }
+
+    #[test]
+    fn estimate_period_finds_fractional_period() {
+        let period = 123.37;
+        let x: Vec<f64> = (0..40_000)
+            .map(|i| {
+                let th = 2.0 * PI * i as f64 / period;
+                th.cos() + 0.6 * (17.0 * th).sin() + 0.3 * (18.0 * th).cos()
+            })
+            .collect();
+        let e = estimate_period(&mut Fft::new(), &[&x], 20, 1000).unwrap();
+        // refined from the peak near lag 128 p: error ~ 1 / 128 sample
+        assert!((e.period_samples - period).abs() < 0.02, "{}", e.period_samples);
+        assert!(e.confidence > 0.9);
+    }
+}
