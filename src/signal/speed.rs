@@ -10,7 +10,7 @@ use super::spectrum::{Fft, autocorrelation};
 /// A constant channel or fewer than two pulses.
 pub fn tacho_pulses(x: &[f64]) -> Result<Vec<f64>, SignalError> {
     let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    if !(hi > lo) {
+    if hi.is_nan() || hi <= lo {
         return Err(SignalError::Invalid("tachometer channel is constant: no pulses".into()));
     }
     let mid = 0.5 * (lo + hi);
