@@ -18,6 +18,7 @@
 //! ```
 
 pub mod cli;
+pub mod diagnose;
 pub mod io;
 pub mod model;
 pub mod pipeline;

@@ -85,14 +85,14 @@ fn wav_with_noise_and_tacho_and_sidecar() {
     assert_eq!(a.channels.len(), 3);
     assert_eq!(a.sample_rate_hz, Some(10_000.0));
     let n = a.channels[0].len() as f64;
-    let diff: Vec<f64> = a.channels[0].iter().zip(&b.channels[0]).map(|(x, y)| y - x).collect();
+    let diff: Vec<f64> = a.channels[0].iter().zip(&b.channels[0]).map(|(x, y)| f64::from(y - x)).collect();
     let mean = diff.iter().sum::<f64>() / n;
     let rms = (diff.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / n).sqrt();
     // 20000 samples: the RMS estimate of white noise has relative standard error 1/sqrt(2N) = 0.5 %; 3 %
     assert!(rel(rms, 1e-3) < 0.03, "noise rms {rms}");
     assert!(mean.abs() < 4.0 * 1e-3 / n.sqrt(), "noise mean {mean}");
     // tacho: one rising edge per pinion revolution (60 in 2 s) and per wheel revolution (60 * 14/39)
-    let edges = |c: &[f64]| c.windows(2).filter(|w| w[0] < 0.5 && w[1] >= 0.5).count() + usize::from(c[0] >= 0.5);
+    let edges = |c: &[f32]| c.windows(2).filter(|w| w[0] < 0.5 && w[1] >= 0.5).count() + usize::from(c[0] >= 0.5);
     assert_eq!(edges(&a.channels[1]), 60);
     assert_eq!(edges(&a.channels[2]), (60.0f64 * 14.0 / 39.0).ceil() as usize);
     let side = read_json(&format!("{clean}.json"));
@@ -118,7 +118,7 @@ fn integer_wav_states_its_scale() {
     let (_, cols) = read_csv_columns(&csv);
     for (x, y) in w.channels[0].iter().zip(&cols[1]) {
         // 16-bit quantisation: half a step of 0.05 / 32767
-        assert!((x * 0.05 - y).abs() <= 0.5 * 0.05 / 32768.0 + 1e-12);
+        assert!((f64::from(*x) * 0.05 - y).abs() <= 0.5 * 0.05 / 32768.0 + 1e-12);
     }
 }
 

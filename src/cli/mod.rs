@@ -31,6 +31,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
+    Diagnose(DiagnoseArgs),
     /// Monodromy matrix and Floquet multipliers of a scene.
     Stability {
         /// Scene JSON file.
@@ -39,6 +41,68 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(clap::Args, Debug)]
+struct DiagnoseArgs {
+    /// Recordings (.wav or .csv), in time order (NA4 uses that order).
+    #[arg(required = true)]
+    recordings: Vec<String>,
+    /// Analyse only this channel (1-based); default: all but the tachometer.
+    #[arg(long)]
+    channel: Option<usize>,
+    /// Sample rate in Hz (overrides the file; needed for a CSV without a time column).
+    #[arg(long)]
+    fs: Option<f64>,
+    /// The sample rate is not known: analyse in orders of the estimated shaft period only.
+    #[arg(long)]
+    fs_unknown: bool,
+    /// Pinion (input) shaft speed in rpm.
+    #[arg(long, conflicts_with = "shaft_hz")]
+    rpm: Option<f64>,
+    /// Pinion (input) shaft speed in Hz.
+    #[arg(long)]
+    shaft_hz: Option<f64>,
+    /// Teeth of pinion and wheel, e.g. 14,39.
+    #[arg(long, value_name = "ZP,ZW")]
+    teeth: Option<String>,
+    /// Tachometer channel (1-based) on the pinion shaft.
+    #[arg(long)]
+    tacho_channel: Option<usize>,
+    /// Tachometer pulses per revolution.
+    #[arg(long, default_value_t = 1)]
+    pulses_per_rev: usize,
+    /// Healthy recording of the same machine to judge against.
+    #[arg(long)]
+    baseline: Option<String>,
+    /// Scene to simulate at the recording's speed and compare with.
+    #[arg(long)]
+    scene: Option<String>,
+    /// What the recording measures (for --scene).
+    #[arg(long, value_enum, default_value = "velocity")]
+    quantity: QuantityArg,
+    /// Exit with code 1 when any recording is at least this bad.
+    #[arg(long, value_enum)]
+    fail_on: Option<FailOn>,
+    /// Write PNG images and the JSON summary into this directory.
+    #[arg(long)]
+    report: Option<String>,
+    /// One JSON object per recording, one per line.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum QuantityArg {
+    Acceleration,
+    Velocity,
+    Displacement,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum FailOn {
+    Faulty,
+    Suspect,
 }
 
 /// Parses the process arguments (clap prints usage errors itself and exits with code 2).
@@ -56,6 +120,7 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
             simulate(&scene, output.as_deref(), allow_aliasing, json)
         }
         Command::Stability { scene, json } => stability(&scene, json),
+        Command::Diagnose(args) => diagnose(&args),
     }
 }
 
@@ -151,4 +216,167 @@ fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) 
         }
     }
     Ok(0)
+}
+
+fn parse_teeth(s: &str) -> Result<(usize, usize), Error> {
+    let bad = || Error::Other(format!("--teeth {s}: expected two whole numbers of teeth >= 3, like 14,39"));
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let (a, b): (usize, usize) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+    if a < 3 || b < 3 {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+fn scene_teeth(path: &str) -> Result<Option<(usize, usize)>, Error> {
+    let scene = Scene::load(path)?;
+    Ok(match &scene.model {
+        crate::scene::Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
+        _ => None,
+    })
+}
+
+fn diagnose(a: &DiagnoseArgs) -> Result<u8, Error> {
+    use crate::diagnose as dg;
+    use rayon::prelude::*;
+    let shaft_hz = match (a.rpm, a.shaft_hz) {
+        (Some(r), _) if !(r.is_finite() && r > 0.0) => {
+            return Err(Error::Other(format!("--rpm: must be positive, got {r}")));
+        }
+        (Some(r), _) => Some(r / 60.0),
+        (_, Some(h)) if !(h.is_finite() && h > 0.0) => {
+            return Err(Error::Other(format!("--shaft-hz: must be positive, got {h}")));
+        }
+        (_, h) => h,
+    };
+    let mut teeth = a.teeth.as_deref().map(parse_teeth).transpose()?;
+    if teeth.is_none() {
+        if let Some(sc) = &a.scene {
+            teeth = scene_teeth(sc)?;
+        }
+    }
+    let opts = dg::Options {
+        channel: a.channel,
+        fs_hz: a.fs,
+        fs_unknown: a.fs_unknown,
+        shaft_hz,
+        teeth,
+        tacho_channel: a.tacho_channel,
+        pulses_per_rev: a.pulses_per_rev,
+        quantity: match a.quantity {
+            QuantityArg::Acceleration => dg::Quantity::Acceleration,
+            QuantityArg::Velocity => dg::Quantity::Velocity,
+            QuantityArg::Displacement => dg::Quantity::Displacement,
+        },
+        ..Default::default()
+    };
+    let baseline = match &a.baseline {
+        Some(b) => Some(dg::diagnose(std::path::Path::new(b), &opts, None)?),
+        None => None,
+    };
+    let geometry = baseline.as_ref().map(|b| dg::Geometry {
+        period_samples: (b.speed_source == "estimated").then_some(b.shaft_period_samples),
+        mesh_order: (b.teeth_source == "estimated").then_some(b.mesh_order),
+    });
+    let results: Vec<Result<dg::Diagnosis, Error>> =
+        a.recordings.par_iter().map(|r| dg::diagnose(std::path::Path::new(r), &opts, geometry.as_ref())).collect();
+    let mut done = Vec::with_capacity(results.len());
+    for r in results {
+        done.push(r?);
+    }
+    dg::ensemble_na4(&mut done);
+    for d in &mut done {
+        dg::judge(d, baseline.as_ref());
+        if let Some(sc) = &a.scene {
+            dg::compare(d, sc, opts.quantity)?;
+        }
+    }
+    if let Some(dir) = &a.report {
+        for d in &done {
+            let files = crate::report::diagnose_report(d, std::path::Path::new(dir))?;
+            if !a.json {
+                println!("report: {}", files.join(", "));
+            }
+        }
+    }
+    for d in &done {
+        if a.json {
+            println!("{}", to_json_line(d));
+        } else {
+            print_diagnosis(d);
+        }
+    }
+    let rank = |s: &str| match s {
+        "faulty" => 2,
+        "suspect" => 1,
+        _ => 0,
+    };
+    let worst = done.iter().map(|d| rank(&d.verdict.state)).max().unwrap_or(0);
+    Ok(match a.fail_on {
+        Some(FailOn::Faulty) if worst >= 2 => 1,
+        Some(FailOn::Suspect) if worst >= 1 => 1,
+        _ => 0,
+    })
+}
+
+fn print_diagnosis(d: &crate::diagnose::Diagnosis) {
+    println!("file             {}", d.file);
+    match d.sample_rate_hz {
+        Some(fs) => println!("sample rate      {fs} Hz, {} samples, channels {:?}", d.samples, d.channels),
+        None => println!("sample rate      unknown (orders only), {} samples, channels {:?}", d.samples, d.channels),
+    }
+    let shafts: Vec<String> = d
+        .shaft_hz
+        .iter()
+        .map(|(k, v)| match v {
+            Some(f) => format!("{k} {f:.4} Hz"),
+            None => format!("{k} period {:.3} samples", d.shaft_period_samples),
+        })
+        .collect();
+    println!("speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence);
+    match d.mesh_hz {
+        Some(f) => println!("mesh             {f:.3} Hz = order {} ({})", d.mesh_order, d.teeth_source),
+        None => println!("mesh             order {} ({})", d.mesh_order, d.teeth_source),
+    }
+    println!("VERDICT          {} (gear: {})", d.verdict.state.to_uppercase(), d.verdict.gear);
+    for r in &d.verdict.reasons {
+        println!("  - {r}");
+    }
+    println!("indicators (TSA of each gear's shaft; FM4/M6A/M8A on the difference signal, NA4 on the residual):");
+    let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest_factor"];
+    println!("  {:<10} {:>3} {}", "gear", "ch", keys.iter().map(|k| format!("{k:>10}")).collect::<String>());
+    for g in &d.gears {
+        let vals: String =
+            keys.iter().map(|k| format!("{:>10.4}", g.indicators.get(*k).copied().unwrap_or(f64::NAN))).collect();
+        println!("  {:<10} {:>3} {vals}", g.gear.chars().take(10).collect::<String>(), g.channel);
+    }
+    println!("mesh harmonics (channel {}):", d.channels[0]);
+    for h in &d.mesh_harmonics {
+        let f = h.frequency_hz.map_or("-".into(), |f| format!("{f:.2} Hz"));
+        let mut sb = h.sidebands.clone();
+        sb.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
+        let top: Vec<String> =
+            sb.iter().take(4).map(|s| format!("{:+} {} {:.3e}", s.offset, s.shaft, s.amplitude)).collect();
+        println!("  {}x mesh  {f:>12}  {:.4e}   strongest sidebands: {}", h.k, h.amplitude, top.join("; "));
+    }
+    if let Some(c) = &d.comparison {
+        println!(
+            "model comparison ({} at {:.1} rpm): distance {:.2} dB over {} lines, scale at mesh {:.3e}",
+            c.scene,
+            c.model_speed_rpm,
+            c.distance_db,
+            c.lines.len(),
+            c.scale_at_mesh
+        );
+        for m in &c.model_misses {
+            println!("  model misses      {m}");
+        }
+        for m in &c.model_overpredicts {
+            println!("  model overpredicts {m}");
+        }
+    }
+    for w in &d.warnings {
+        println!("warning          {w}");
+    }
+    println!();
 }

@@ -95,8 +95,9 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> Result<(), DataError> {
 /// Multi-channel signal read from a file, one `Vec` per channel.
 #[derive(Clone, Debug)]
 pub struct Recording {
-    /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1)).
-    pub channels: Vec<Vec<f64>>,
+    /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1)), kept
+    /// as f32 so that a long multi-channel recording needs about the memory of its file.
+    pub channels: Vec<Vec<f32>>,
     /// Sample rate in Hz (`None` when a CSV has no time column and none was given).
     pub sample_rate_hz: Option<f64>,
     /// Channel names (CSV header or "ch1", ...).

@@ -106,18 +106,18 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     let claimed = reader.duration() as u64;
     let possible = file_len / (bytes_per_sample * nch as u64);
     let frames = claimed.min(possible) as usize;
-    let mut channels: Vec<Vec<f64>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
+    let mut channels: Vec<Vec<f32>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
     let truncated = |e: hound::Error, i: usize| DataError::format(path, format!("data ends early at sample {i}: {e}"));
     match spec.sample_format {
         hound::SampleFormat::Float => {
             for (i, s) in reader.samples::<f32>().enumerate() {
-                channels[i % nch].push(f64::from(s.map_err(|e| truncated(e, i))?));
+                channels[i % nch].push(s.map_err(|e| truncated(e, i))?);
             }
         }
         hound::SampleFormat::Int => {
             let scale = 1.0 / (1u64 << (spec.bits_per_sample - 1)) as f64;
             for (i, s) in reader.samples::<i32>().enumerate() {
-                channels[i % nch].push(f64::from(s.map_err(|e| truncated(e, i))?) * scale);
+                channels[i % nch].push((f64::from(s.map_err(|e| truncated(e, i))?) * scale) as f32);
             }
         }
     }

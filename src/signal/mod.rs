@@ -24,6 +24,24 @@ pub enum SignalError {
     Invalid(String),
 }
 
+/// A sample type the analysis accepts (f32 storage halves the memory of long recordings).
+pub trait Sample: Copy + Send + Sync {
+    /// As f64.
+    fn f(self) -> f64;
+}
+
+impl Sample for f32 {
+    fn f(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+impl Sample for f64 {
+    fn f(self) -> f64 {
+        self
+    }
+}
+
 /// A uniformly sampled real signal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Signal {

@@ -6,7 +6,7 @@
 //! the window's coherent gain (its mean) when a window is applied. A PSD is one-sided, in unit^2/Hz,
 //! normalised by fs * sum(w^2) (scipy's `welch(..., scaling="density")`), so its integral is the variance.
 
-use super::{SignalError, Spectrum};
+use super::{Sample, SignalError, Spectrum};
 use realfft::RealFftPlanner;
 use realfft::num_complex::Complex;
 use std::sync::Arc;
@@ -117,7 +117,12 @@ impl Default for AmplitudeOptions {
 ///
 /// # Errors
 /// Fewer than 8 samples.
-pub fn amplitude_spectrum(fft: &mut Fft, x: &[f64], fs: f64, o: AmplitudeOptions) -> Result<Spectrum, SignalError> {
+pub fn amplitude_spectrum<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    fs: f64,
+    o: AmplitudeOptions,
+) -> Result<Spectrum, SignalError> {
     let (power, n) = averaged_power(fft, x, o.segment, o.overlap, "amplitude spectrum")?;
     let w = hann(n);
     let gain = w.iter().sum::<f64>() / n as f64;
@@ -130,7 +135,7 @@ pub fn amplitude_spectrum(fft: &mut Fft, x: &[f64], fs: f64, o: AmplitudeOptions
 ///
 /// # Errors
 /// Fewer than 8 samples.
-pub fn welch_psd(fft: &mut Fft, x: &[f64], fs: f64, nperseg: usize) -> Result<Spectrum, SignalError> {
+pub fn welch_psd<T: Sample>(fft: &mut Fft, x: &[T], fs: f64, nperseg: usize) -> Result<Spectrum, SignalError> {
     let (power, n) = averaged_power(fft, x, nperseg, 0.5, "Welch PSD")?;
     let w2: f64 = hann(n).iter().map(|v| v * v).sum();
     let values = power
@@ -142,9 +147,9 @@ pub fn welch_psd(fft: &mut Fft, x: &[f64], fs: f64, nperseg: usize) -> Result<Sp
 }
 
 /// Mean |X_k|^2 of Hann-windowed, mean-removed segments; returns it and the segment length used.
-fn averaged_power(
+fn averaged_power<T: Sample>(
     fft: &mut Fft,
-    x: &[f64],
+    x: &[T],
     segment: usize,
     overlap: f64,
     what: &str,
@@ -162,9 +167,9 @@ fn averaged_power(
     let mut start = 0;
     while start + n <= x.len() {
         let seg = &x[start..start + n];
-        let mean = seg.iter().sum::<f64>() / n as f64;
+        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / n as f64;
         for ((b, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
-            *b = (v - mean) * wi;
+            *b = (v.f() - mean) * wi;
         }
         fft.forward(&mut buf, &mut out);
         for (a, c) in acc.iter_mut().zip(&out) {
@@ -182,7 +187,13 @@ fn averaged_power(
 ///
 /// # Errors
 /// Fewer than 8 samples or an empty band.
-pub fn zoom_spectrum(fft: &mut Fft, x: &[f64], fs: f64, f_lo_hz: f64, f_hi_hz: f64) -> Result<Spectrum, SignalError> {
+pub fn zoom_spectrum<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    fs: f64,
+    f_lo_hz: f64,
+    f_hi_hz: f64,
+) -> Result<Spectrum, SignalError> {
     if f_hi_hz <= f_lo_hz {
         return Err(SignalError::Invalid(format!("zoom band {f_lo_hz}..{f_hi_hz} Hz is empty")));
     }
@@ -199,13 +210,13 @@ pub fn zoom_spectrum(fft: &mut Fft, x: &[f64], fs: f64, f_lo_hz: f64, f_hi_hz: f
 
 /// Circular-free autocorrelation r_k / r_0 for lags 0..=max_lag (zero-padded FFT, unbiased: divided by
 /// the overlap length N - k).
-pub fn autocorrelation(fft: &mut Fft, x: &[f64], max_lag: usize) -> Vec<f64> {
+pub fn autocorrelation<T: Sample>(fft: &mut Fft, x: &[T], max_lag: usize) -> Vec<f64> {
     let n = x.len();
     let m = (2 * n).next_power_of_two();
-    let mean = x.iter().sum::<f64>() / n as f64;
+    let mean = x.iter().map(|v| v.f()).sum::<f64>() / n as f64;
     let mut buf = vec![0.0; m];
     for (b, v) in buf.iter_mut().zip(x) {
-        *b = v - mean;
+        *b = v.f() - mean;
     }
     let mut spec = Vec::new();
     fft.forward(&mut buf, &mut spec);

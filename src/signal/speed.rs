@@ -1,15 +1,15 @@
 //! Shaft speed: from tachometer pulses, or estimated from the signal's repetition period.
 
-use super::SignalError;
 use super::spectrum::{Fft, autocorrelation};
+use super::{Sample, SignalError};
 
 /// Rising crossings of the mid level (min + max) / 2, as fractional sample indices (linear
 /// interpolation between the two samples around each crossing).
 ///
 /// # Errors
 /// A constant channel or fewer than two pulses.
-pub fn tacho_pulses(x: &[f64]) -> Result<Vec<f64>, SignalError> {
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+pub fn tacho_pulses<T: Sample>(x: &[T]) -> Result<Vec<f64>, SignalError> {
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v.f()), b.max(v.f())));
     if hi.is_nan() || hi <= lo {
         return Err(SignalError::Invalid("tachometer channel is constant: no pulses".into()));
     }
@@ -17,8 +17,8 @@ pub fn tacho_pulses(x: &[f64]) -> Result<Vec<f64>, SignalError> {
     let pulses: Vec<f64> = x
         .windows(2)
         .enumerate()
-        .filter(|(_, w)| w[0] < mid && w[1] >= mid)
-        .map(|(i, w)| i as f64 + (mid - w[0]) / (w[1] - w[0]))
+        .filter(|(_, w)| w[0].f() < mid && w[1].f() >= mid)
+        .map(|(i, w)| i as f64 + (mid - w[0].f()) / (w[1].f() - w[0].f()))
         .collect();
     if pulses.len() < 2 {
         return Err(SignalError::Invalid(format!(
@@ -40,14 +40,15 @@ pub struct PeriodEstimate {
 
 /// Repetition period of the summed normalised autocorrelation of `channels`, between `min_lag` and
 /// `max_lag` samples: the shortest strong peak (at least 75 % of the highest, and the largest value within
-/// +-10 % of its own lag), refined to a fraction of a
+/// +-10 % of its own lag); a strong peak at 8 times that lag or more replaces it when it stands clearly above
+/// the neighbouring multiples (the short lag was then the tooth-mesh period); refined to a fraction of a
 /// sample from the peak near the largest multiple of it that fits in half the record.
 ///
 /// # Errors
 /// No peak in the range (signal not periodic there).
-pub fn estimate_period(
+pub fn estimate_period<T: Sample>(
     fft: &mut Fft,
-    channels: &[&[f64]],
+    channels: &[&[T]],
     min_lag: usize,
     max_lag: usize,
 ) -> Result<PeriodEstimate, SignalError> {
@@ -68,11 +69,25 @@ pub fn estimate_period(
     let peaks: Vec<usize> = (min_lag.max(2)..max_lag.min(lag_max - 1))
         .filter(|&i| sum[i] > sum[i - 1] && sum[i] >= sum[i + 1] && sum[i] > 0.0 && dominant(i))
         .collect();
-    let best = peaks.iter().map(|&i| sum[i]).fold(0.0, f64::max);
-    let Some(&p0) = peaks.iter().find(|&&i| sum[i] >= 0.75 * best) else {
+    let strong_from = |from: usize| -> Option<usize> {
+        let best = peaks.iter().filter(|&&i| i >= from).map(|&i| sum[i]).fold(0.0, f64::max);
+        peaks.iter().copied().find(|&i| i >= from && sum[i] >= 0.75 * best)
+    };
+    let Some(shortest) = strong_from(0) else {
         return Err(SignalError::Invalid(format!(
             "no repetition period found between {min_lag} and {max_lag} samples: give --rpm or --shaft-hz"
         )));
+    };
+    // The shortest strong lag may be the tooth-mesh period. A shaft carries at least 8 teeth, so a strong
+    // peak at 8 times that lag or beyond is the shaft period when it stands 25 % above the neighbouring
+    // multiples of the short lag (a truly periodic signal has equal peaks at all multiples instead).
+    let local_max = |centre: usize| {
+        let w = (shortest / 4).max(2);
+        sum[centre.saturating_sub(w).max(1)..=(centre + w).min(lag_max)].iter().copied().fold(f64::MIN, f64::max)
+    };
+    let p0 = match strong_from(8 * shortest) {
+        Some(p) if sum[p] >= 1.25 * local_max(p - shortest).max(local_max(p + shortest)) => p,
+        _ => shortest,
     };
     Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0] })
 }
@@ -102,9 +117,9 @@ pub fn refine(r: &[f64], p0: f64) -> f64 {
 ///
 /// # Errors
 /// No peak in the window.
-pub fn refine_near(
+pub fn refine_near<T: Sample>(
     fft: &mut Fft,
-    channels: &[&[f64]],
+    channels: &[&[T]],
     near: f64,
     tolerance: f64,
 ) -> Result<PeriodEstimate, SignalError> {
@@ -127,7 +142,7 @@ mod tests {
         for (k, w) in p.windows(2).enumerate() {
             assert!((w[1] - w[0] - 100.3).abs() < 1.0, "{k}");
         }
-        assert!(tacho_pulses(&[1.0; 10]).is_err());
+        assert!(tacho_pulses(&[1.0f64; 10]).is_err());
     }
 
     #[test]

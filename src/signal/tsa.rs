@@ -6,8 +6,8 @@
 //! Kaiser-windowed sinc (band-limited, flat to ~1e-3 up to 0.35 cycles/sample); the angle comes from
 //! revolution start times (a tachometer) or a constant period, linearly in between.
 
-use super::SignalError;
 use super::spectrum::Fft;
+use super::{Sample, SignalError};
 
 /// Where each revolution of the reference shaft starts, as fractional sample indices.
 #[derive(Clone, Debug, PartialEq)]
@@ -107,7 +107,7 @@ impl Interpolator {
     }
 
     /// Value of `x` at fractional index `s` (samples beyond the ends repeat the end values).
-    pub fn at(&self, x: &[f64], s: f64) -> f64 {
+    pub fn at<T: Sample>(&self, x: &[T], s: f64) -> f64 {
         let n = x.len() as isize;
         let i = s.floor();
         let frac = s - i;
@@ -115,9 +115,9 @@ impl Interpolator {
         let first = i as isize - (HALF as isize - 1);
         if first >= 0 && first + 2 * HALF as isize <= n {
             let seg = &x[first as usize..first as usize + 2 * HALF];
-            seg.iter().zip(taps).map(|(a, b)| a * b).sum()
+            seg.iter().zip(taps).map(|(a, b)| a.f() * b).sum()
         } else {
-            taps.iter().enumerate().map(|(j, t)| t * x[(first + j as isize).clamp(0, n - 1) as usize]).sum()
+            taps.iter().enumerate().map(|(j, t)| t * x[(first + j as isize).clamp(0, n - 1) as usize].f()).sum()
         }
     }
 }
@@ -136,7 +136,7 @@ pub struct Tsa {
 ///
 /// # Errors
 /// [`SignalError::TooShort`] naming the revolutions needed.
-pub fn tsa(x: &[f64], map: &AngleMap, ratio: f64, points: usize, min_revs: usize) -> Result<Tsa, SignalError> {
+pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_revs: usize) -> Result<Tsa, SignalError> {
     let revs = (map.revolutions() as f64 * ratio + 1e-9).floor() as usize;
     if revs < min_revs {
         let per_rev = map.mean_period_samples() / ratio;
