@@ -299,7 +299,8 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     let tacho = o.tacho_channel.map(|c| check_index("--tacho-channel", c)).transpose()?;
     let channels: Vec<usize> = match o.channel {
         Some(c) => vec![check_index("--channel", c)?],
-        None => (1..=nch).filter(|c| Some(*c) != tacho).collect(),
+        // channels named as tachometers (gearvib's sidecar) are never vibration channels
+        None => (1..=nch).filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho")).collect(),
     };
     if channels.is_empty() {
         return Err(bad(path, "no channel left to analyse besides the tachometer"));

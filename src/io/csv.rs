@@ -28,7 +28,7 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     let reader = std::io::BufReader::with_capacity(1 << 16, file);
     let mut delim = None;
     let mut header: Option<Vec<String>> = None;
-    let mut columns: Vec<Vec<f32>> = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
     let mut ncols = 0;
     let mut field = String::new();
     for (idx, line) in reader.lines().enumerate() {
@@ -65,7 +65,7 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
                     format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim()),
                 ));
             }
-            columns[c].push(v as f32);
+            columns[c].push(v);
         }
     }
     if columns.first().is_none_or(Vec::is_empty) {
@@ -78,8 +78,14 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     if let Some(tc) = time_col {
         sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);
     }
-    let (names, channels) =
-        names.into_iter().zip(columns).enumerate().filter(|(i, _)| Some(*i) != time_col).map(|(_, p)| p).unzip();
+    // channels are kept as f32 (see `Recording`); each f64 column is dropped as soon as it is converted
+    let (names, channels) = names
+        .into_iter()
+        .zip(columns)
+        .enumerate()
+        .filter(|(i, _)| Some(*i) != time_col)
+        .map(|(_, (name, col))| (name, col.into_iter().map(|v| v as f32).collect()))
+        .unzip();
     Ok(Recording { channels, sample_rate_hz, names })
 }
 
@@ -96,16 +102,16 @@ fn parse(f: &str, delim: char, buf: &mut String) -> Option<f64> {
     t.parse().ok()
 }
 
-fn rate_from_time(path: &Path, t: &[f32]) -> Result<f64, DataError> {
+fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
     if t.len() < 2 {
         return Err(DataError::format(path, "time column needs at least 2 rows to give a sample rate"));
     }
-    let dt = f64::from(t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
     if dt.is_nan() || dt <= 0.0 {
         return Err(DataError::format(path, "time column does not increase"));
     }
     for (i, w) in t.windows(2).enumerate() {
-        if (f64::from(w[1] - w[0]) - dt).abs() > 0.01 * dt {
+        if ((w[1] - w[0]) - dt).abs() > 0.01 * dt {
             return Err(DataError::format(
                 path,
                 format!(

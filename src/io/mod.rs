@@ -110,7 +110,11 @@ pub struct Recording {
 /// [`DataError`] naming the file and what is wrong.
 pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
     match extension(path).as_deref() {
-        Some("wav") => wav::read(path),
+        Some("wav") => {
+            let mut rec = wav::read(path)?;
+            apply_sidecar_scale(path, &mut rec);
+            Ok(rec)
+        }
         Some("csv") | Some("txt") | Some("tsv") => csv::read(path),
         _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
     }
@@ -119,4 +123,25 @@ pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
 /// Lower-case extension.
 pub fn extension(path: &Path) -> Option<String> {
     path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase)
+}
+
+/// An integer WAV written by gearvib stores value / full_scale; its sidecar `FILE.json` states
+/// `full_scale`, which restores physical units. Files without a readable sidecar are left as read.
+fn apply_sidecar_scale(path: &Path, rec: &mut Recording) {
+    let mut side = path.as_os_str().to_os_string();
+    side.push(".json");
+    let Ok(text) = std::fs::read_to_string(&side) else { return };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else { return };
+    if let Some(fs) = v.get("full_scale").and_then(serde_json::Value::as_f64).filter(|f| f.is_finite() && *f > 0.0) {
+        for c in &mut rec.channels {
+            c.iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
+        }
+    }
+    if let Some(chs) = v.get("channels").and_then(serde_json::Value::as_array) {
+        for (name, c) in rec.names.iter_mut().zip(chs) {
+            if let Some(n) = c.get("name").and_then(serde_json::Value::as_str) {
+                *name = n.to_string();
+            }
+        }
+    }
 }

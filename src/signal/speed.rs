@@ -85,8 +85,21 @@ pub fn estimate_period<T: Sample>(
         let w = (shortest / 4).max(2);
         sum[centre.saturating_sub(w).max(1)..=(centre + w).min(lag_max)].iter().copied().fold(f64::MIN, f64::max)
     };
+    let stands_out = |p: usize| sum[p] >= 1.25 * local_max(p - shortest).max(local_max(p + shortest));
     let p0 = match strong_from(8 * shortest) {
-        Some(p) if sum[p] >= 1.25 * local_max(p - shortest).max(local_max(p + shortest)) => p,
+        Some(p) if stands_out(p) => {
+            // a whole fraction p / k that still repeats strongly and stands out is the shaft itself
+            (2..=6)
+                .rev()
+                .filter_map(|k| {
+                    let q = (p as f64 / k as f64).round() as usize;
+                    let w = (q / 50).max(2);
+                    let q = (q.saturating_sub(w)..=q + w).max_by(|a, b| sum[*a].total_cmp(&sum[*b]))?;
+                    (q >= 8 * shortest && sum[q] >= 0.6 * sum[p] && stands_out(q)).then_some(q)
+                })
+                .next()
+                .unwrap_or(p)
+        }
         _ => shortest,
     };
     Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0] })
