@@ -13,7 +13,8 @@ use crate::io::{self, Recording};
 use crate::signal::indicators as ind;
 use crate::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
 use crate::signal::tsa::{self, AngleMap, Decomposition};
-use crate::signal::{Sample, Spectrum, speed};
+use crate::signal::{Spectrum, speed};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -256,8 +257,13 @@ fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>)
         return Err(bad(path, format!("channel {idx} is constant ({lo}): nothing to analyse")));
     }
     // clipping: runs of 3+ samples stuck at the extreme value
+    let level = lo.abs().max(hi.abs()) * 0.9999;
     let peak = lo.abs().max(hi.abs());
-    let stuck = x.windows(3).filter(|w| w.iter().all(|v| v.abs() >= peak * 0.9999)).count();
+    let (mut run, mut stuck) = (0usize, 0usize);
+    for v in x {
+        run = if v.abs() >= level { run + 1 } else { 0 };
+        stuck += usize::from(run >= 3);
+    }
     if stuck as f64 > 1e-4 * x.len() as f64 {
         warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
     }
@@ -306,8 +312,15 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         return Err(bad(path, "no channel left to analyse besides the tachometer"));
     }
     let mut warnings = Vec::new();
-    for &c in &channels {
-        check_channel(path, c, &rec.channels[c - 1], &mut warnings)?;
+    let checks: Vec<Result<Vec<String>, Error>> = channels
+        .par_iter()
+        .map(|&c| {
+            let mut w = Vec::new();
+            check_channel(path, c, &rec.channels[c - 1], &mut w).map(|_| w)
+        })
+        .collect();
+    for c in checks {
+        warnings.extend(c?);
     }
     let mut fft = Fft::new();
     // ---- speed
@@ -338,14 +351,16 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         Some((zp, zw)) => vec![("pinion".into(), 1.0, Some(zp)), ("wheel".into(), zp as f64 / zw as f64, Some(zw))],
         None => vec![("shaft of the estimated period".into(), 1.0, geometry.and_then(|g| g.mesh_order))],
     };
-    let mut tsas = Vec::new();
-    for &c in &channels {
-        for (gi, (_, ratio, _)) in gears.iter().enumerate() {
-            let t =
-                tsa::tsa(&rec.channels[c - 1], &map, *ratio, points, o.min_revolutions).map_err(|e| bad(path, e))?;
-            tsas.push((c, gi, t));
-        }
-    }
+    // one TSA per channel and gear, in parallel
+    let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
+    let tsas = jobs
+        .par_iter()
+        .map(|&(c, gi)| {
+            tsa::tsa(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions)
+                .map(|t| (c, gi, t))
+                .map_err(|e| bad(path, e))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
     let mut teeth_source = if o.teeth.is_some() { "given" } else { "baseline" }.to_string();
     let mut gear_results = Vec::new();
     let mut mesh_orders = Vec::new();
@@ -371,20 +386,24 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     }
     // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now)
     let shaft_hz = fs.map(|fs| fs / period);
-    let mut spectra = Vec::new();
-    if let Some(fs) = fs {
-        for &c in &channels {
-            let x = &rec.channels[c - 1];
-            let amp = amplitude_spectrum(&mut fft, x, fs, AmplitudeOptions::default()).map_err(|e| bad(path, e))?;
-            let psd = welch_psd(&mut fft, x, fs, 4096).map_err(|e| bad(path, e))?;
-            spectra.push((c, amp, psd));
-        }
-    }
+    let spectra = match fs {
+        Some(fs) => channels
+            .par_iter()
+            .map(|&c| {
+                let mut fft = Fft::new();
+                let x = &rec.channels[c - 1];
+                let amp = amplitude_spectrum(&mut fft, x, fs, AmplitudeOptions::default()).map_err(|e| bad(path, e))?;
+                let psd = welch_psd(&mut fft, x, fs, 4096).map_err(|e| bad(path, e))?;
+                Ok((c, amp, psd))
+            })
+            .collect::<Result<Vec<_>, Error>>()?,
+        None => Vec::new(),
+    };
     let raw = channels
-        .iter()
+        .par_iter()
         .map(|&c| {
-            let x: Vec<f64> = rec.channels[c - 1].iter().map(|v| v.f()).collect();
-            BTreeMap::from([("rms".to_string(), ind::rms(&x)), ("kurtosis".to_string(), ind::kurtosis(&x))])
+            let x = &rec.channels[c - 1];
+            BTreeMap::from([("rms".to_string(), ind::rms(x)), ("kurtosis".to_string(), ind::kurtosis(x))])
         })
         .collect();
     let mut shafts = BTreeMap::new();

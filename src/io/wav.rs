@@ -107,6 +107,14 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     let possible = file_len / (bytes_per_sample * nch as u64);
     let frames = claimed.min(possible) as usize;
     let mut channels: Vec<Vec<f32>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
+    let plain = matches!(
+        (spec.sample_format, spec.bits_per_sample),
+        (hound::SampleFormat::Float, 32) | (hound::SampleFormat::Int, 16)
+    );
+    if plain && spec.bits_per_sample == 8 * bytes_per_sample as u16 {
+        // fast path: the data chunk is little-endian f32 or i16, read in bulk
+        return read_plain(path, reader, spec, claimed, channels);
+    }
     let truncated = |e: hound::Error, i: usize| DataError::format(path, format!("data ends early at sample {i}: {e}"));
     match spec.sample_format {
         hound::SampleFormat::Float => {
@@ -120,6 +128,80 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
                 channels[i % nch].push((f64::from(s.map_err(|e| truncated(e, i))?) * scale) as f32);
             }
         }
+    }
+    let len = channels.iter().map(Vec::len).min().unwrap_or(0);
+    for c in &mut channels {
+        c.truncate(len);
+    }
+    let names = (1..=nch).map(|i| format!("ch{i}")).collect();
+    Ok(Recording { channels, sample_rate_hz: Some(f64::from(spec.sample_rate)), names })
+}
+
+fn read_plain(
+    path: &Path,
+    reader: hound::WavReader<std::io::BufReader<std::fs::File>>,
+    spec: hound::WavSpec,
+    claimed_frames: u64,
+    mut channels: Vec<Vec<f32>>,
+) -> Result<Recording, DataError> {
+    use std::io::Read;
+    let nch = spec.channels as usize;
+    let width = (spec.bits_per_sample / 8) as usize;
+    let total = claimed_frames as usize * nch * width;
+    let mut inner = reader.into_inner();
+    let mut buf = vec![0u8; (1 << 16) * width * nch];
+    let (mut done, mut slot) = (0usize, 0usize);
+    while done < total {
+        let want = buf.len().min(total - done);
+        let got = inner.read(&mut buf[..want]).map_err(|e| DataError::io(path, e))?;
+        if got == 0 {
+            return Err(DataError::format(path, format!("data ends early at sample {}: file truncated", done / width)));
+        }
+        let whole = got - got % width;
+        let decode = |b: &[u8]| {
+            if width == 4 {
+                f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+            } else {
+                f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0
+            }
+        };
+        let mut bytes = &buf[..whole];
+        // finish a frame left open by the previous read, then whole frames channel by channel
+        while slot != 0 && !bytes.is_empty() {
+            channels[slot].push(decode(&bytes[..width]));
+            slot = (slot + 1) % nch;
+            bytes = &bytes[width..];
+        }
+        let frame = width * nch;
+        let full = bytes.len() / frame * frame;
+        for f in bytes[..full].chunks_exact(frame) {
+            for (c, b) in channels.iter_mut().zip(f.chunks_exact(width)) {
+                c.push(decode(b));
+            }
+        }
+        for b in bytes[full..].chunks_exact(width) {
+            channels[slot].push(decode(b));
+            slot = (slot + 1) % nch;
+        }
+        if whole != got {
+            // keep the partial sample for the next read
+            let rest = got - whole;
+            buf.copy_within(whole..got, 0);
+            let more = inner.read(&mut buf[rest..width]).map_err(|e| DataError::io(path, e))?;
+            if more < width - rest {
+                return Err(DataError::format(path, "data ends in the middle of a sample: file truncated"));
+            }
+            let b = &buf[..width];
+            let v = if width == 4 {
+                f32::from_le_bytes([b[0], b[1], b[2], b[3]])
+            } else {
+                f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0
+            };
+            channels[slot].push(v);
+            slot = (slot + 1) % nch;
+            done += width;
+        }
+        done += whole;
     }
     let len = channels.iter().map(Vec::len).min().unwrap_or(0);
     for c in &mut channels {

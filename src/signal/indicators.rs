@@ -16,9 +16,11 @@
 //! SER      = sum_{i=1..6} (A(f_m + i f_r) + A(f_m - i f_r)) / A(f_m)
 //! ```
 
+use super::Sample;
+
 /// Root mean square (about zero, not the mean).
-pub fn rms(x: &[f64]) -> f64 {
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+pub fn rms<T: Sample>(x: &[T]) -> f64 {
+    (x.iter().map(|v| v.f() * v.f()).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
 /// Sum of (x - mean)^2.
@@ -29,12 +31,12 @@ pub fn sum_sq_dev(x: &[f64]) -> f64 {
 
 /// Normalised central moment N^(k/2 - 1) sum (x - xbar)^k / (sum (x - xbar)^2)^(k/2), k even:
 /// k = 4 is kurtosis / FM4, k = 6 is M6A, k = 8 is M8A.
-pub fn normalized_moment(x: &[f64], k: i32) -> f64 {
+pub fn normalized_moment<T: Sample>(x: &[T], k: i32) -> f64 {
     let n = x.len() as f64;
-    let m = x.iter().sum::<f64>() / n;
+    let m = x.iter().map(|v| v.f()).sum::<f64>() / n;
     let (mut s2, mut sk) = (0.0, 0.0);
     for v in x {
-        let d = v - m;
+        let d = v.f() - m;
         s2 += d * d;
         sk += d.powi(k);
     }
@@ -42,7 +44,7 @@ pub fn normalized_moment(x: &[f64], k: i32) -> f64 {
 }
 
 /// Non-excess kurtosis (3 for Gaussian).
-pub fn kurtosis(x: &[f64]) -> f64 {
+pub fn kurtosis<T: Sample>(x: &[T]) -> f64 {
     normalized_moment(x, 4)
 }
 

@@ -28,17 +28,35 @@ pub enum SignalError {
 pub trait Sample: Copy + Send + Sync {
     /// As f64.
     fn f(self) -> f64;
+    /// sum_k x[k] taps[k] over 16 samples, in eight independent lanes (so the compiler vectorises it).
+    fn dot16(x: &[Self], taps: &[f32; 16]) -> f64;
 }
 
 impl Sample for f32 {
     fn f(self) -> f64 {
         f64::from(self)
     }
+    #[inline]
+    fn dot16(x: &[f32], taps: &[f32; 16]) -> f64 {
+        let mut acc = [0f32; 8];
+        for k in 0..8 {
+            acc[k] = x[k] * taps[k] + x[k + 8] * taps[k + 8];
+        }
+        f64::from(acc.iter().sum::<f32>())
+    }
 }
 
 impl Sample for f64 {
     fn f(self) -> f64 {
         self
+    }
+    #[inline]
+    fn dot16(x: &[f64], taps: &[f32; 16]) -> f64 {
+        let mut acc = [0f64; 8];
+        for k in 0..8 {
+            acc[k] = x[k] * f64::from(taps[k]) + x[k + 8] * f64::from(taps[k + 8]);
+        }
+        acc.iter().sum()
     }
 }
 
