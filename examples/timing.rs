@@ -1,25 +1,36 @@
-//! Ad-hoc phase timing used while tuning (not part of the test suite).
-use gearvib::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
-use gearvib::signal::tsa::{AngleMap, tsa};
+//! Ad-hoc solve timing used while tuning (the user-facing tool is `gearvib bench`).
+use gearvib::scene::Scene;
+use gearvib::solver::{Method, SolverOptions, solve};
 fn main() {
-    let path = std::env::args().nth(1).unwrap_or_else(|| "/tmp/big.wav".into());
+    let scene = Scene::load("data/scenes/paper-gear-fig8a.json").unwrap();
+    for (m, tol) in [(Method::Rk4, 1e-6), (Method::Rk4, 1e-8), (Method::Hill, 1e-8), (Method::Hill, 1e-10)] {
+        let o = SolverOptions { method: m, tolerance: tol, ..Default::default() };
+        let mut times = Vec::new();
+        for _ in 0..21 {
+            let t = std::time::Instant::now();
+            let ss = solve(scene.system(), &o).unwrap();
+            times.push(t.elapsed().as_secs_f64());
+            std::hint::black_box(ss);
+        }
+        times.sort_by(f64::total_cmp);
+        println!("{:?} tol {tol:e}: median {:.3} ms", m, times[10] * 1e3);
+    }
+
+    let form = gearvib::model::PeriodicSystem::fourier_form(scene.system()).unwrap();
     let t = std::time::Instant::now();
-    let rec = gearvib::io::read_recording(std::path::Path::new(&path)).unwrap();
-    println!("read {:.3} s", t.elapsed().as_secs_f64());
-    let x = &rec.channels[0];
-    let fs = rec.sample_rate_hz.unwrap();
-    let mut fft = Fft::new();
-    let t = std::time::Instant::now();
-    let _ = amplitude_spectrum(&mut fft, x, fs, AmplitudeOptions::default()).unwrap();
-    println!("amplitude spectrum {:.3} s", t.elapsed().as_secs_f64());
-    let t = std::time::Instant::now();
-    let _ = welch_psd(&mut fft, x, fs, 4096).unwrap();
-    println!("welch {:.3} s", t.elapsed().as_secs_f64());
-    let map = AngleMap::constant(fs / 30.0, 0.0, x.len());
-    let t = std::time::Instant::now();
-    let _ = tsa(x, &map, 1.0, 2048, 8).unwrap();
-    println!("tsa pinion {:.3} s", t.elapsed().as_secs_f64());
-    let t = std::time::Instant::now();
-    let _ = tsa(x, &map, 14.0 / 39.0, 8192, 8).unwrap();
-    println!("tsa wheel {:.3} s", t.elapsed().as_secs_f64());
+    for _ in 0..20 {
+        std::hint::black_box(
+            gearvib::solver::hill::solve(
+                &form,
+                gearvib::model::PeriodicSystem::max_harmonic(scene.system()),
+                1e-10,
+                1 << 20,
+            )
+            .unwrap(),
+        );
+    }
+    println!("hill::solve alone at 1e-10: {:.3} ms", t.elapsed().as_secs_f64() / 20.0 * 1e3);
 }
+
+#[allow(dead_code)]
+fn unused() {}

@@ -441,9 +441,12 @@ impl Validator<'_> {
         if let Some(m) = &s.method {
             o.method = match m.as_str() {
                 "rk4" => Method::Rk4,
+                "hill" => Method::Hill,
                 "auto" => Method::Auto,
                 other => {
-                    return Err(self.err("solver.method", format!("unknown solver \"{other}\" (expected rk4 or auto)")));
+                    return Err(
+                        self.err("solver.method", format!("unknown solver \"{other}\" (expected rk4, hill or auto)"))
+                    );
                 }
             };
         }

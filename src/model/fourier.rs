@@ -73,6 +73,9 @@ impl FourierSeries {
 
     /// Value s(t).
     pub fn eval(&self, t: f64) -> f64 {
+        if self.cos.is_empty() {
+            return self.mean;
+        }
         let (s1, c1) = (self.omega_rad_s * t).sin_cos();
         let (mut ck, mut sk) = (1.0, 0.0);
         let mut v = self.mean;
@@ -87,6 +90,9 @@ impl FourierSeries {
 
     /// Value and first three time derivatives `[s, s', s'', s''']` at t.
     pub fn eval_derivatives(&self, t: f64) -> [f64; 4] {
+        if self.cos.is_empty() {
+            return [self.mean, 0.0, 0.0, 0.0];
+        }
         let w = self.omega_rad_s;
         let (s1, c1) = (w * t).sin_cos();
         let (mut ck, mut sk) = (1.0, 0.0);

@@ -264,6 +264,13 @@ impl PeriodicSystem for GearPair {
         f[0] = 0.0;
         f[1] = (self.k0 * self.params.static_deflection_m - (kz - self.k0) * e - self.c_z * ed) / m;
     }
+    fn eval_matrix(&self, t: f64, side: Side, p: &mut DMatrix<f64>) {
+        let m = self.m_red;
+        p[(0, 0)] = 0.0;
+        p[(0, 1)] = 1.0;
+        p[(1, 0)] = -self.stiffness(t, side) / m;
+        p[(1, 1)] = -self.c_z / m;
+    }
     fn breakpoints(&self) -> Vec<f64> {
         self.breakpoints.clone()
     }
@@ -293,6 +300,14 @@ impl PeriodicSystem for GearPair {
             stiffness: vec![kz],
             forcing: vec![forcing],
         })
+    }
+    fn homogeneous_period_s(&self) -> f64 {
+        // P(t) holds only k_z(t): one mesh cycle, or the cracked gear's revolution
+        match &self.params.crack {
+            None => self.mesh_period_s(),
+            Some(c) if c.gear == Gear::Pinion => self.pinion_period_s(),
+            Some(_) => 1.0 / self.wheel_hz(),
+        }
     }
     fn max_harmonic(&self) -> usize {
         let revs = self.revolutions_per_period();

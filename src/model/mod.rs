@@ -41,6 +41,11 @@ pub trait PeriodicSystem: Sync {
     fn period_s(&self) -> f64;
     /// Writes P(t) (n x n) and f(t) (n) at time t (s), taking the `side` limit at a breakpoint.
     fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>);
+    /// Writes P(t) only (for homogeneous companions); the default evaluates f too and discards it.
+    fn eval_matrix(&self, t: f64, side: Side, p: &mut DMatrix<f64>) {
+        let mut f = DVector::zeros(self.dim());
+        self.eval(t, side, p, &mut f);
+    }
     /// Times in (0, T) where P or f jump, sorted; empty for smooth coefficients.
     fn breakpoints(&self) -> Vec<f64> {
         Vec::new()
@@ -52,6 +57,11 @@ pub trait PeriodicSystem: Sync {
     }
     /// Highest harmonic of 1/T in the coefficients (a lower bound on the resolution a solver needs).
     fn max_harmonic(&self) -> usize;
+    /// Period of P(t) alone in s (the period divided by a whole number): the monodromy over T is the
+    /// monodromy over this period raised to T / this. Defaults to the full period.
+    fn homogeneous_period_s(&self) -> f64 {
+        self.period_s()
+    }
 }
 
 /// Second-order system whose entries are Fourier series of one common base frequency 2 pi / T.

@@ -11,6 +11,7 @@
 //! stability limit h |lambda(P)|max < 2.78 of RK4.
 
 pub mod eigen;
+pub mod hill;
 pub mod rk4;
 
 use crate::model::{PeriodicSystem, Side};
@@ -56,6 +57,8 @@ pub enum SolverError {
 pub enum Method {
     /// The paper's RK4 product method (Eqs 15-21).
     Rk4,
+    /// Harmonic balance (Hill's method) with a companion RK4 monodromy for the multipliers.
+    Hill,
     /// Cheapest available method meeting the tolerance.
     Auto,
 }
@@ -65,6 +68,7 @@ impl Method {
     pub fn name(self) -> &'static str {
         match self {
             Self::Rk4 => "rk4",
+            Self::Hill => "hill",
             Self::Auto => "auto",
         }
     }
@@ -118,13 +122,18 @@ impl Floquet {
     }
 }
 
-/// The periodic solution over one period as node states of a step grid.
+/// The periodic solution over one period.
 #[derive(Clone, Debug)]
-pub struct Trajectory {
-    /// Step grid.
-    pub grid: rk4::Grid,
-    /// States at the nodes, node-major.
-    pub states: Vec<f64>,
+pub enum Trajectory {
+    /// Node states of a step grid (node-major).
+    Grid {
+        /// Step grid.
+        grid: rk4::Grid,
+        /// States at the nodes.
+        states: Vec<f64>,
+    },
+    /// Fourier coefficients from harmonic balance.
+    Fourier(hill::HillSolution),
 }
 
 /// Periodic steady state with its Floquet analysis and accuracy report.
@@ -168,7 +177,10 @@ impl SteadyState {
         out.reserve(times.len() * n);
         for &t in times {
             let tau = t.rem_euclid(self.period_s);
-            rk4::state_at(&mut st, &self.trajectory.grid, &self.trajectory.states, tau, &mut x);
+            match &self.trajectory {
+                Trajectory::Grid { grid, states } => rk4::state_at(&mut st, grid, states, tau, &mut x),
+                Trajectory::Fourier(h) => h.state(tau, &mut x),
+            }
             out.extend_from_slice(&x);
         }
     }
@@ -204,7 +216,21 @@ pub const RK4_STABILITY_LIMIT: f64 = 2.78;
 pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadyState, SolverError> {
     match opts.method {
         Method::Rk4 => solve_rk4(sys, opts, "requested"),
-        Method::Auto => solve_rk4(sys, opts, "auto: rk4 product is the only method available"),
+        Method::Hill => solve_hill(sys, opts, "requested".into()),
+        Method::Auto => match sys.fourier_form() {
+            Some(_) if opts.steps.is_none() => solve_hill(
+                sys,
+                opts,
+                "auto: smooth Fourier coefficients, so harmonic balance is spectrally accurate and needs no time steps"
+                    .into(),
+            ),
+            Some(_) => solve_rk4(sys, opts, "auto: solver.steps fixes a step count, so the step-based rk4 product"),
+            None => solve_rk4(
+                sys,
+                opts,
+                "auto: coefficients jump, so the rk4 product with steps on the jumps (harmonic balance would converge only algebraically)",
+            ),
+        },
     }
 }
 
@@ -346,6 +372,167 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
         stability_limit_steps: limit,
         trusted,
         warnings,
-        trajectory: Trajectory { grid, states: fine.states },
+        trajectory: Trajectory::Grid { grid, states: fine.states },
+    })
+}
+
+/// P(t) over its own period with no forcing: the companion system whose monodromy gives the multipliers.
+struct Homogeneous<'a> {
+    sys: &'a dyn PeriodicSystem,
+    period_s: f64,
+}
+
+impl PeriodicSystem for Homogeneous<'_> {
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+    fn period_s(&self) -> f64 {
+        self.period_s
+    }
+    fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+        self.sys.eval_matrix(t, side, p);
+        f.fill(0.0);
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.sys.breakpoints().into_iter().filter(|&b| b < self.period_s * (1.0 - 1e-12)).collect()
+    }
+    fn max_harmonic(&self) -> usize {
+        let k = (self.sys.period_s() / self.period_s).round().max(1.0) as usize;
+        self.sys.max_harmonic() / k
+    }
+}
+
+/// Monodromy over the full period from the companion over the homogeneous period: Phi = Phi_h^k. The
+/// companion's tolerance is divided by k because relative multiplier errors grow k-fold.
+fn companion_monodromy(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
+    let th = sys.homogeneous_period_s();
+    let k = (sys.period_s() / th).round().max(1.0) as usize;
+    let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
+    let (phi_h, est, steps) = romberg_monodromy(&hom, opts.tolerance / k as f64, opts.max_steps)?;
+    let mut phi = DMatrix::identity(sys.dim(), sys.dim());
+    for _ in 0..k {
+        phi = &phi_h * phi;
+    }
+    Ok((phi, est * k as f64, steps))
+}
+
+/// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
+/// h^4, h^5, ...): R1 = (16 Phi_2m - Phi_m) / 15 is fifth order, R2 = (32 R1(2m) - R1(m)) / 31 sixth order,
+/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate, relative to |Phi|, meets `tol`.
+fn romberg_monodromy(
+    sys: &dyn PeriodicSystem,
+    tol: f64,
+    max_steps: usize,
+) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
+    let period = sys.period_s();
+    let breaks = sys.breakpoints();
+    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
+    let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {
+        let r = rk4::monodromy(sys, &rk4::Grid::new(period, &breaks, steps));
+        if r.monodromy.iter().any(|v| !v.is_finite()) {
+            return Err(SolverError::NonFinite { what: format!("companion monodromy after {steps} steps") });
+        }
+        Ok(r.monodromy)
+    };
+    let (mut a, mut b) = (run(m)?, run(2 * m)?);
+    let mut previous: Option<DMatrix<f64>> = None;
+    let mut total = 3 * m;
+    loop {
+        let c = run(4 * m)?;
+        total += 4 * m;
+        let r1a = (&b * 16.0 - &a) / 15.0;
+        let r1b = (&c * 16.0 - &b) / 15.0;
+        let r2 = (&r1b * 32.0 - &r1a) / 31.0;
+        let scale = r2.amax().max(f64::MIN_POSITIVE);
+        // sixth order: the error of R2(m) is about |R2(m) - R2(m/2)| / (2^6 - 1); before a second R2 exists,
+        // the fifth-order |R2 - R1(2m)| bounds it
+        let est = match &previous {
+            Some(p) => (&r2 - p).amax() / scale / 63.0,
+            None => (&r2 - &r1b).amax() / scale,
+        };
+        if est <= tol {
+            return Ok((r2, est, total));
+        }
+        if 4 * m >= max_steps {
+            return Err(SolverError::ToleranceNotReached { tolerance: tol, steps: 4 * m, estimate: est });
+        }
+        m *= 2;
+        (a, b) = (b, c);
+        previous = Some(r2);
+    }
+}
+
+fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) -> Result<SteadyState, SolverError> {
+    let form = sys.fourier_form().ok_or_else(|| {
+        SolverError::Unsupported(
+            "harmonic balance needs Fourier-series coefficients; this scene has jumps (use rk4 or auto)".into(),
+        )
+    })?;
+    let (sol, est) = hill::solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?;
+    let (monodromy, phi_err, companion_steps) = companion_monodromy(sys, opts)?;
+    let period = sys.period_s();
+    let floquet = Floquet::from_monodromy(&monodromy, period)?;
+    let n = sys.dim();
+    let a = DMatrix::identity(n, n) - &monodromy;
+    let sv = a.singular_values();
+    let cond = if sv.min() > 0.0 { sv.max() / sv.min() } else { f64::INFINITY };
+    let mut x0 = DVector::zeros(n);
+    sol.state(0.0, x0.as_mut_slice());
+    let mut warnings = Vec::new();
+    let estimate = est.max(phi_err);
+    let mut trusted = estimate <= opts.tolerance;
+    // harmonic balance solves (I - Phi)-like systems in the frequency domain: near a multiplier of 1 the
+    // Hill matrix is nearly singular in the same way
+    let roundoff = cond * f64::EPSILON * 100.0;
+    if roundoff > opts.tolerance {
+        trusted = false;
+        warnings.push(format!(
+            "I - Phi is ill-conditioned (cond {cond:.3e}): a multiplier is near +1 and rounding may cost {roundoff:.1e} relative error"
+        ));
+    }
+    let mut floquet = floquet;
+    if (floquet.rho_max - 1.0).abs() <= opts.tolerance.max(phi_err) {
+        floquet.stable = false;
+        warnings.push(format!(
+            "|rho|max = {:.12} equals 1 within the accuracy: marginally stable at best",
+            floquet.rho_max
+        ));
+    } else if !floquet.stable {
+        warnings.push(format!(
+            "unstable: |rho|max = {:.6} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
+            floquet.rho_max
+        ));
+    }
+    if let Some(r) = floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
+        if r < 1e-6 {
+            warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
+        }
+    }
+    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    Ok(SteadyState {
+        method: "hill",
+        reason: format!(
+            "{reason}; {} harmonics in {} independent classes (coupling stride {}), multipliers from an rk4 companion of {} steps over {:.6} s",
+            sol.harmonics,
+            sol.stride.min(2 * sol.harmonics + 1),
+            sol.stride,
+            companion_steps,
+            sys.homogeneous_period_s()
+        ),
+        period_s: period,
+        resolution: sol.harmonics,
+        error_estimate: estimate,
+        monodromy,
+        floquet,
+        x0,
+        cond_i_minus_phi: cond,
+        stability_limit_steps: limit,
+        trusted,
+        warnings,
+        trajectory: Trajectory::Fourier(sol),
     })
 }
