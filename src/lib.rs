@@ -17,6 +17,7 @@
 //! assert!(ss.floquet.stable);
 //! ```
 
+pub mod bench;
 pub mod cli;
 pub mod diagnose;
 pub mod io;

@@ -33,6 +33,17 @@ enum Command {
     },
     /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
     Diagnose(DiagnoseArgs),
+    /// Speed against error of every solver on the paper's scenes and the hard cases.
+    Bench {
+        /// Scenes (default: the paper's cases and the hard cases in data/scenes).
+        scenes: Vec<String>,
+        /// Write the table (JSON) and work-precision PNGs into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Monodromy matrix and Floquet multipliers of a scene.
     Stability {
         /// Scene JSON file.
@@ -121,6 +132,7 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
         }
         Command::Stability { scene, json } => stability(&scene, json),
         Command::Diagnose(args) => diagnose(&args),
+        Command::Bench { scenes, report, json } => bench(&scenes, report.as_deref(), json),
     }
 }
 
@@ -379,4 +391,63 @@ fn print_diagnosis(d: &crate::diagnose::Diagnosis) {
         println!("warning          {w}");
     }
     println!();
+}
+
+/// A spinner on stderr when it is a terminal, nothing otherwise.
+fn spinner() -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    std::io::stderr().is_terminal().then(|| {
+        let pb = indicatif::ProgressBar::new_spinner();
+        pb.enable_steady_tick(std::time::Duration::from_millis(120));
+        pb
+    })
+}
+
+fn bench(scenes: &[String], report: Option<&str>, json: bool) -> Result<u8, Error> {
+    let paths: Vec<String> = if scenes.is_empty() {
+        crate::bench::DEFAULT_SCENES.iter().map(|s| s.to_string()).collect()
+    } else {
+        scenes.to_vec()
+    };
+    let loaded = paths.iter().map(|p| Scene::load(p)).collect::<Result<Vec<_>, _>>()?;
+    let pb = spinner();
+    let progress = |m: &str| {
+        if let Some(pb) = &pb {
+            pb.set_message(m.to_string());
+        }
+    };
+    let mut all = crate::bench::BenchReport { results: Vec::new(), references: Vec::new() };
+    for scene in &loaded {
+        let (r, reference) = crate::bench::bench_scene(scene, &progress)?;
+        all.results.extend(r);
+        all.references.push(reference);
+    }
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    if let Some(dir) = report {
+        let dir = std::path::Path::new(dir);
+        std::fs::create_dir_all(dir).map_err(|e| Error::Other(format!("{}: {e}", dir.display())))?;
+        crate::io::write_atomic(&dir.join("bench.json"), to_json_line(&all).as_bytes())?;
+        for scene in &loaded {
+            let png = dir.join(format!("bench-{}.png", scene.name));
+            crate::report::plot::render_png(&png, 1200, 800, &[crate::bench::chart(&scene.name, &all.results)])
+                .map_err(|e| Error::Other(e.to_string()))?;
+            if !json {
+                println!("wrote {}", png.display());
+            }
+        }
+    }
+    if json {
+        println!("{}", to_json_line(&all));
+        return Ok(0);
+    }
+    println!("{:<36} {:<22} {:>10} {:>12} {:>12}", "scene", "method", "resolution", "time [s]", "error");
+    for r in &all.results {
+        println!("{:<36} {:<22} {:>10} {:>12.3e} {:>12.3e}", r.scene, r.method, r.resolution, r.time_s, r.error);
+    }
+    for r in &all.references {
+        println!("reference {}: rk4 points against {}; hill points against {}", r.scene, r.for_rk4, r.for_hill);
+    }
+    Ok(0)
 }

@@ -1,5 +1,6 @@
 //! Reports: JSON summaries (serde) and PNG images (plotters).
 
+pub mod plot;
 pub mod summary;
 
 /// Errors of the report layer.

@@ -1,0 +1,271 @@
+//! Speed against error: every solver over a range of resolutions on a scene, timed (median of repeats)
+//! and compared with a converged reference computed by a different solver.
+//!
+//! Error = max over state components of max_t |x(t) - x_ref(t)| / max_t |x_ref(t)|, on 512 equally spaced
+//! times of one period. Time = median wall time of producing the periodic solution at that resolution
+//! (rk4: monodromy product, (I - Phi) x0 = c_m and the node states; hill: the Fourier solve).
+
+use crate::Error;
+use crate::model::PeriodicSystem;
+use crate::scene::Scene;
+use crate::solver::{self, Method, SolverOptions, hill, rk4};
+use nalgebra::{DMatrix, DVector};
+use std::time::Instant;
+
+/// One measured point.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BenchResult {
+    /// Scene name.
+    pub scene: String,
+    /// "rk4", "hill" or "auto@tol".
+    pub method: String,
+    /// Steps (rk4) or harmonics (hill).
+    pub resolution: usize,
+    /// Median wall time of one solve, s.
+    pub time_s: f64,
+    /// Relative error of the periodic solution against the reference.
+    pub error: f64,
+}
+
+/// What the errors of one scene are measured against.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Reference {
+    /// Scene name.
+    pub scene: String,
+    /// Reference for rk4 points.
+    pub for_rk4: String,
+    /// Reference for hill points.
+    pub for_hill: String,
+}
+
+/// A whole benchmark run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BenchReport {
+    /// Measured points.
+    pub results: Vec<BenchResult>,
+    /// References used.
+    pub references: Vec<Reference>,
+}
+
+const SAMPLES: usize = 512;
+
+fn sample_times(period: f64) -> Vec<f64> {
+    (0..SAMPLES).map(|i| period * i as f64 / SAMPLES as f64).collect()
+}
+
+fn rel_error(x: &[f64], reference: &[f64], n: usize) -> f64 {
+    let mut worst: f64 = 0.0;
+    for c in 0..n {
+        let scale = reference.iter().skip(c).step_by(n).fold(0.0f64, |a, v| a.max(v.abs()));
+        let diff = x.iter().zip(reference).skip(c).step_by(n).fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        if scale > 0.0 {
+            worst = worst.max(diff / scale);
+        }
+    }
+    worst
+}
+
+/// Median wall time of `f` over repeats (at least 3, until 0.1 s or 15 repeats).
+fn median_time<T>(mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut times = Vec::new();
+    let mut last;
+    let start = Instant::now();
+    loop {
+        let t = Instant::now();
+        last = f();
+        times.push(t.elapsed().as_secs_f64());
+        if times.len() >= 15 || (times.len() >= 3 && start.elapsed().as_secs_f64() > 0.1) {
+            break;
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    (times[times.len() / 2], last)
+}
+
+fn rk4_states(sys: &dyn PeriodicSystem, steps: usize, times: &[f64]) -> Option<Vec<f64>> {
+    let grid = rk4::Grid::new(sys.period_s(), &sys.breakpoints(), steps);
+    let run = rk4::monodromy(sys, &grid);
+    let n = sys.dim();
+    let x0: DVector<f64> = (DMatrix::identity(n, n) - &run.monodromy).lu().solve(&run.forcing)?;
+    let states = rk4::trajectory(sys, &grid, &x0);
+    let mut st = rk4::Stepper::new(sys);
+    let mut out = Vec::with_capacity(times.len() * n);
+    let mut x = vec![0.0; n];
+    for &t in times {
+        rk4::state_at(&mut st, &grid, &states, t, &mut x);
+        out.extend_from_slice(&x);
+    }
+    out.iter().all(|v| v.is_finite()).then_some(out)
+}
+
+fn hill_states(sol: &hill::HillSolution, n: usize, times: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(times.len() * n);
+    let mut x = vec![0.0; n];
+    for &t in times {
+        sol.state(t, &mut x);
+        out.extend_from_slice(&x);
+    }
+    out
+}
+
+/// Benchmarks one scene.
+///
+/// # Errors
+/// The references cannot be computed.
+pub fn bench_scene(scene: &Scene, progress: &dyn Fn(&str)) -> Result<(Vec<BenchResult>, Reference), Error> {
+    let sys = scene.system();
+    let n = sys.dim();
+    let times = sample_times(sys.period_s());
+    let form = sys.fourier_form();
+    let name = scene.name.clone();
+    // references: each method is judged against the other, converged far beyond the bench range
+    progress(&format!("{name}: references"));
+    let tight = SolverOptions { method: Method::Rk4, tolerance: 1e-11, ..Default::default() };
+    let rk4_ref = solver::solve(sys, &tight).ok();
+    let hill_ref = match &form {
+        Some(f) => Some(hill::solve(f, sys.max_harmonic(), 1e-13, 1 << 20)?.0),
+        None => None,
+    };
+    let mut ref_for_rk4 = "rk4 at 16x the finest step count (no second method for coefficients with jumps)".to_string();
+    let reference_for_rk4: Vec<f64> = match &hill_ref {
+        Some(h) => {
+            ref_for_rk4 = format!("hill, {} harmonics, tolerance 1e-13", h.harmonics);
+            hill_states(h, n, &times)
+        }
+        None => Vec::new(),
+    };
+    let reference_for_hill: Option<Vec<f64>> = rk4_ref.as_ref().map(|r| {
+        let mut out = Vec::new();
+        r.states_at(sys, &times, &mut out);
+        out
+    });
+    let mut results = Vec::new();
+    // rk4 ladder: from twice the stability limit, doubling, while a solve takes under 0.3 s
+    let limit = (sys.period_s() * solver::max_rate(sys) / solver::RK4_STABILITY_LIMIT).ceil() as usize;
+    let m0 = (2 * limit).max(32).max(2 * (sys.breakpoints().len() + 1));
+    let mut ladder = Vec::new();
+    let mut m = m0;
+    for _ in 0..9 {
+        ladder.push(m);
+        m *= 2;
+    }
+    let reference_for_rk4 = if reference_for_rk4.is_empty() {
+        let finest = 16 * ladder[ladder.len() - 1].min(1 << 18);
+        rk4_states(sys, finest, &times).ok_or_else(|| Error::Other(format!("{name}: rk4 reference failed")))?
+    } else {
+        reference_for_rk4
+    };
+    for &m in &ladder {
+        progress(&format!("{name}: rk4 {m} steps"));
+        let (t, states) = median_time(|| rk4_states(sys, m, &times));
+        if let Some(s) = states {
+            results.push(BenchResult {
+                scene: name.clone(),
+                method: "rk4".into(),
+                resolution: m,
+                time_s: t,
+                error: rel_error(&s, &reference_for_rk4, n),
+            });
+        }
+        if t > 0.3 {
+            break;
+        }
+    }
+    if let (Some(f), Some(reference)) = (&form, &reference_for_hill) {
+        let hmax = sys.max_harmonic().max(4);
+        let mut h = hmax;
+        for _ in 0..10 {
+            progress(&format!("{name}: hill {h} harmonics"));
+            let (t, sol) = median_time(|| hill::solve_order(f, h));
+            if let Ok(sol) = sol {
+                results.push(BenchResult {
+                    scene: name.clone(),
+                    method: "hill".into(),
+                    resolution: h,
+                    time_s: t,
+                    error: rel_error(&hill_states(&sol, n, &times), reference, n),
+                });
+            }
+            h = (h * 5).div_ceil(4);
+        }
+    }
+    // auto at a few tolerances: the full solve (multipliers and error estimate included)
+    for tol in [1e-6, 1e-8, 1e-10] {
+        progress(&format!("{name}: auto at {tol:e}"));
+        let o = SolverOptions { method: Method::Auto, tolerance: tol, ..Default::default() };
+        let (t, ss) = median_time(|| solver::solve(sys, &o));
+        if let Ok(ss) = ss {
+            let mut out = Vec::new();
+            ss.states_at(sys, &times, &mut out);
+            let reference = if ss.method == "hill" {
+                reference_for_hill.as_ref().unwrap_or(&reference_for_rk4)
+            } else {
+                &reference_for_rk4
+            };
+            results.push(BenchResult {
+                scene: name.clone(),
+                method: format!("auto@{tol:e}->{}", ss.method),
+                resolution: ss.resolution,
+                time_s: t,
+                error: rel_error(&out, reference, n),
+            });
+        }
+    }
+    let for_hill = match &rk4_ref {
+        Some(r) => format!("rk4, tolerance 1e-11 ({} steps)", r.resolution),
+        None => "none".into(),
+    };
+    Ok((results, Reference { scene: name, for_rk4: ref_for_rk4, for_hill }))
+}
+
+/// The default scenes: the paper's cases and the hard cases shipped in `data/scenes/`.
+pub const DEFAULT_SCENES: [&str; 5] = [
+    "data/scenes/paper-gear-fig8a.json",
+    "data/scenes/paper-press-case1.json",
+    "data/scenes/hard-gear-light-damping.json",
+    "data/scenes/gear-z14z39-rectangular-stiffness.json",
+    "data/scenes/gear-z14z39-wheel-eccentricity.json",
+];
+
+/// Work-precision chart of one scene's results (log-log error against time).
+pub fn chart(scene: &str, results: &[BenchResult]) -> crate::report::plot::Chart {
+    use crate::report::plot::{Chart, Series, Style};
+    let mut series = Vec::new();
+    for (i, m) in ["rk4", "hill"].iter().enumerate() {
+        let pts: Vec<(f64, f64)> = results
+            .iter()
+            .filter(|r| r.scene == scene && r.method == *m)
+            .map(|r| (r.time_s, r.error.max(1e-16)))
+            .collect();
+        if !pts.is_empty() {
+            let label = if *m == "rk4" {
+                "rk4 product (paper), steps doubling"
+            } else {
+                "harmonic balance (Hill), harmonics x1.25"
+            };
+            series.push(Series { name: label.into(), points: pts, style: Style::LinePoints, color: i });
+        }
+    }
+    let auto: Vec<(f64, f64)> = results
+        .iter()
+        .filter(|r| r.scene == scene && r.method.starts_with("auto"))
+        .map(|r| (r.time_s, r.error.max(1e-16)))
+        .collect();
+    if !auto.is_empty() {
+        series.push(Series {
+            name: "auto at tolerance 1e-6, 1e-8, 1e-10 (full solve)".into(),
+            points: auto,
+            style: Style::Points,
+            color: 3,
+        });
+    }
+    Chart {
+        title: format!("Speed against error: {scene}"),
+        x_label: "wall time of one solve [s] (median)".into(),
+        y_label: "relative error of the periodic solution".into(),
+        x_log: true,
+        y_log: true,
+        series,
+        ..Default::default()
+    }
+}

@@ -1,0 +1,293 @@
+//! PNG charts with plotters (the only module that uses it). Fonts are embedded (Noto Sans through
+//! ab_glyph): nothing is needed from the system at build or run time.
+
+use super::ReportError;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Style {
+    /// Connected line.
+    Line,
+    /// Line with a circle at each point.
+    LinePoints,
+    /// Vertical stems from the bottom of the axis (spectral lines).
+    Stems,
+    /// Circles only.
+    Points,
+}
+
+/// One data series.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend label.
+    pub name: String,
+    /// (x, y) points.
+    pub points: Vec<(f64, f64)>,
+    /// Drawing style.
+    pub style: Style,
+    /// Palette index.
+    pub color: usize,
+}
+
+/// A labelled vertical marker (for example a mesh harmonic or a sideband).
+#[derive(Clone, Debug)]
+pub struct Marker {
+    /// Position on the x axis.
+    pub x: f64,
+    /// Short label drawn at the top.
+    pub label: String,
+    /// Palette index.
+    pub color: usize,
+}
+
+/// A shaded x range (for example an unstable parameter range).
+#[derive(Clone, Debug)]
+pub struct Band {
+    /// Start and end on the x axis.
+    pub from: f64,
+    /// End.
+    pub to: f64,
+}
+
+/// One chart (panel).
+#[derive(Clone, Debug, Default)]
+pub struct Chart {
+    /// Title above the panel.
+    pub title: String,
+    /// x-axis label with unit.
+    pub x_label: String,
+    /// y-axis label with unit.
+    pub y_label: String,
+    /// Logarithmic x axis.
+    pub x_log: bool,
+    /// Logarithmic y axis.
+    pub y_log: bool,
+    /// Series.
+    pub series: Vec<Series>,
+    /// Vertical markers.
+    pub markers: Vec<Marker>,
+    /// Shaded ranges.
+    pub bands: Vec<Band>,
+    /// Fixed x range.
+    pub x_range: Option<(f64, f64)>,
+    /// Fixed y range.
+    pub y_range: Option<(f64, f64)>,
+    /// A unit circle (for Floquet multipliers; equal axes expected).
+    pub unit_circle: bool,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+fn register_font() -> Result<(), ReportError> {
+    static ONCE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *ONCE.get_or_init(|| {
+        plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, ttf_noto_sans::REGULAR).is_ok()
+    });
+    if ok { Ok(()) } else { Err(ReportError::BadData { what: "font".into(), why: "embedded font rejected".into() }) }
+}
+
+fn data_range(chart: &Chart) -> Result<((f64, f64), (f64, f64)), ReportError> {
+    let bad = |why: &str| ReportError::BadData { what: chart.title.clone(), why: why.into() };
+    let pts: Vec<(f64, f64)> = chart.series.iter().flat_map(|s| s.points.iter().copied()).collect();
+    if pts.is_empty() {
+        return Err(bad("no data points"));
+    }
+    if pts.iter().any(|(x, y)| !x.is_finite() || !y.is_finite()) {
+        return Err(bad("non-finite data (NaN or infinity)"));
+    }
+    let keep = |v: f64, log: bool| !log || v > 0.0;
+    let xs: Vec<f64> = pts.iter().map(|p| p.0).filter(|v| keep(*v, chart.x_log)).collect();
+    let ys: Vec<f64> = pts.iter().map(|p| p.1).filter(|v| keep(*v, chart.y_log)).collect();
+    if xs.is_empty() || ys.is_empty() {
+        return Err(bad("no positive values for a logarithmic axis"));
+    }
+    let span = |v: &[f64], log: bool| {
+        let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        if log {
+            let (lo, hi) = if lo == hi { (lo / 2.0, hi * 2.0) } else { (lo, hi) };
+            (lo / 1.5, hi * 1.5)
+        } else {
+            let pad = if hi > lo { 0.05 * (hi - lo) } else { lo.abs().max(1.0) * 0.1 };
+            (lo - pad, hi + pad)
+        }
+    };
+    Ok((
+        chart.x_range.unwrap_or_else(|| span(&xs, chart.x_log)),
+        chart.y_range.unwrap_or_else(|| span(&ys, chart.y_log)),
+    ))
+}
+
+/// Renders `charts` stacked vertically into a PNG of `width` x `height` pixels, written atomically.
+///
+/// # Errors
+/// Empty or non-finite data, drawing or writing failures.
+pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Result<(), ReportError> {
+    register_font()?;
+    for c in charts {
+        data_range(c)?;
+    }
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(format!(".{}.tmp.png", std::process::id()));
+    let tmp = path.with_file_name(name);
+    let result = (|| -> Result<(), ReportError> {
+        let root = BitMapBackend::new(&tmp, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
+        let areas = root.split_evenly((charts.len(), 1));
+        for (chart, area) in charts.iter().zip(areas.iter()) {
+            draw(chart, area).map_err(|e| draw_err(path, e))?;
+        }
+        root.present().map_err(|e| draw_err(path, e))?;
+        Ok(())
+    })();
+    match result {
+        Ok(()) => std::fs::rename(&tmp, path)
+            .map_err(|e| ReportError::Write { path: path.display().to_string(), message: e.to_string() }),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn draw_err(path: &Path, e: impl std::fmt::Display) -> ReportError {
+    ReportError::Write { path: path.display().to_string(), message: e.to_string() }
+}
+
+type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+fn draw(chart: &Chart, area: &DrawingArea<BitMapBackend<'_>, Shift>) -> DrawResult {
+    let ((x0, x1), (y0, y1)) = data_range(chart)?;
+    match (chart.x_log, chart.y_log) {
+        (false, false) => draw_in(chart, area, x0..x1, y0..y1),
+        (true, false) => draw_in(chart, area, (x0..x1).log_scale(), y0..y1),
+        (false, true) => draw_in(chart, area, x0..x1, (y0..y1).log_scale()),
+        (true, true) => draw_in(chart, area, (x0..x1).log_scale(), (y0..y1).log_scale()),
+    }
+}
+
+fn draw_in<X, Y>(chart: &Chart, area: &DrawingArea<BitMapBackend<'_>, Shift>, xs: X, ys: Y) -> DrawResult
+where
+    X: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    Y: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
+    X::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+    Y::CoordDescType: plotters::coord::ranged1d::ValueFormatter<f64>,
+{
+    let mut c = ChartBuilder::on(area)
+        .caption(&chart.title, ("sans-serif", 26))
+        .margin(12)
+        .x_label_area_size(52)
+        .y_label_area_size(95)
+        .build_cartesian_2d(xs, ys)?;
+    c.configure_mesh()
+        .x_desc(chart.x_label.as_str())
+        .y_desc(chart.y_label.as_str())
+        .axis_desc_style(("sans-serif", 20))
+        .label_style(("sans-serif", 16))
+        .light_line_style(RGBColor(235, 235, 235))
+        .y_label_formatter(&|v| fmt_tick(*v))
+        .x_label_formatter(&|v| fmt_tick(*v))
+        .draw()?;
+    let (xr, yr) = (c.x_range(), c.y_range());
+    for b in &chart.bands {
+        c.draw_series(std::iter::once(Rectangle::new(
+            [(b.from, yr.start), (b.to, yr.end)],
+            RGBColor(255, 200, 200).mix(0.5).filled(),
+        )))?;
+    }
+    if chart.unit_circle {
+        let circle: Vec<(f64, f64)> =
+            (0..=360).map(|d| (f64::from(d).to_radians().cos(), f64::from(d).to_radians().sin())).collect();
+        c.draw_series(LineSeries::new(circle, BLACK.stroke_width(1)))?
+            .label("unit circle |rho| = 1")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+    }
+    for (i, m) in chart.markers.iter().enumerate() {
+        if m.x < xr.start || m.x > xr.end {
+            continue;
+        }
+        let col = color(m.color);
+        c.draw_series(std::iter::once(PathElement::new(
+            vec![(m.x, yr.start), (m.x, yr.end)],
+            col.mix(0.35).stroke_width(1),
+        )))?;
+        // stagger labels on three rows so that neighbours do not collide
+        let row = (i % 3) as i32;
+        let font = ("sans-serif", 14).into_font().color(&col).pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Center,
+            plotters::style::text_anchor::VPos::Top,
+        ));
+        c.draw_series(std::iter::once(
+            EmptyElement::at((m.x, yr.end)) + Text::new(m.label.clone(), (0, 4 + 16 * row), font),
+        ))?;
+    }
+    for s in &chart.series {
+        let col = color(s.color);
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(x, y)| (!chart.x_log || *x > 0.0) && (!chart.y_log || *y > 0.0))
+            .collect();
+        let legend = move |(x, y): (i32, i32)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3));
+        match s.style {
+            Style::Line => {
+                c.draw_series(LineSeries::new(pts, col.stroke_width(2)))?.label(s.name.as_str()).legend(legend);
+            }
+            Style::LinePoints => {
+                c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(2)))?.label(s.name.as_str()).legend(legend);
+                c.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, col.filled())))?;
+            }
+            Style::Points => {
+                c.draw_series(pts.into_iter().map(|p| Circle::new(p, 5, col.filled())))?
+                    .label(s.name.as_str())
+                    .legend(legend);
+            }
+            Style::Stems => {
+                let base = yr.start;
+                c.draw_series(
+                    pts.into_iter().map(|(x, y)| PathElement::new(vec![(x, base), (x, y)], col.stroke_width(2))),
+                )?
+                .label(s.name.as_str())
+                .legend(legend);
+            }
+        }
+    }
+    if chart.series.len() > 1 || chart.unit_circle {
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(180, 180, 180))
+            .label_font(("sans-serif", 16))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+    }
+    Ok(())
+}
+
+/// Tick labels: plain for moderate magnitudes, scientific otherwise.
+fn fmt_tick(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-2..1e5).contains(&a) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.0e}")
+    }
+}
