@@ -442,11 +442,13 @@ impl Validator<'_> {
             o.method = match m.as_str() {
                 "rk4" => Method::Rk4,
                 "hill" => Method::Hill,
+                "magnus4" => Method::Magnus,
                 "auto" => Method::Auto,
                 other => {
-                    return Err(
-                        self.err("solver.method", format!("unknown solver \"{other}\" (expected rk4, hill or auto)"))
-                    );
+                    return Err(self.err(
+                        "solver.method",
+                        format!("unknown solver \"{other}\" (expected rk4, hill, magnus4 or auto)"),
+                    ));
                 }
             };
         }

@@ -144,7 +144,8 @@ fn warn_all(warnings: &[String]) {
 
 fn stability(path: &str, json: bool) -> Result<u8, Error> {
     let scene = Scene::load(path)?;
-    let steady = crate::solver::solve(scene.system(), &scene.solver)?;
+    let steady =
+        crate::solver::solve(scene.system(), &scene.solver).map_err(|e| Error::Other(format!("{path}: {e}")))?;
     let summary = StabilitySummary::new(&scene, &steady);
     warn_all(&summary.warnings);
     if steady.error_estimate > scene.solver.tolerance {
@@ -185,7 +186,7 @@ fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) 
         // refuse a bad request before any computation
         crate::synth::check_request(&scene, std::path::Path::new(out), allow_aliasing, &mut Vec::new())?;
     }
-    let sim = pipeline::simulate(&scene)?;
+    let sim = pipeline::simulate(&scene).map_err(|e| Error::Other(format!("{path}: {e}")))?;
     let mut summary = SimulateSummary::new(&scene, &sim);
     warn_all(&summary.stability.warnings);
     if !sim.steady.trusted {

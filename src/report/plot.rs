@@ -102,7 +102,10 @@ fn register_font() -> Result<(), ReportError> {
     if ok { Ok(()) } else { Err(ReportError::BadData { what: "font".into(), why: "embedded font rejected".into() }) }
 }
 
-fn data_range(chart: &Chart) -> Result<((f64, f64), (f64, f64)), ReportError> {
+/// x and y ranges of a chart.
+type Ranges = ((f64, f64), (f64, f64));
+
+fn data_range(chart: &Chart) -> Result<Ranges, ReportError> {
     let bad = |why: &str| ReportError::BadData { what: chart.title.clone(), why: why.into() };
     let pts: Vec<(f64, f64)> = chart.series.iter().flat_map(|s| s.points.iter().copied()).collect();
     if pts.is_empty() {

@@ -1,7 +1,8 @@
 //! Eigenvalues of a general real matrix that never hang and never return NaN for finite input.
 //!
 //! nalgebra's `complex_eigenvalues()` iterates without limit and mis-handles 2x2 blocks with real
-//! eigenvalues. Recipe: balance (Parlett-Reinsch), real Schur form with a bounded iteration count, own
+//! eigenvalues, and its `balance_parlett_reinsch` can loop forever on matrices of huge dynamic range.
+//! Recipe: our own bounded Parlett-Reinsch balancing, real Schur form with a bounded iteration count, own
 //! 2x2 block eigenvalues, and up to three retries on an orthogonally rotated matrix.
 
 use super::SolverError;
@@ -36,6 +37,47 @@ fn rotation(n: usize, seed: u64) -> DMatrix<f64> {
     DMatrix::identity(n, n) - 2.0 * &v * v.transpose()
 }
 
+/// Parlett-Reinsch balancing by powers of 2 (a similarity, so eigenvalues are unchanged), at most 100
+/// sweeps and scale factors within 2^+-500 (nalgebra's version has no bound and can spin forever).
+pub fn balance(m: &mut DMatrix<f64>) {
+    let n = m.nrows();
+    const RADIX: f64 = 2.0;
+    for _ in 0..100 {
+        let mut done = true;
+        for i in 0..n {
+            let c: f64 = (0..n).filter(|&j| j != i).map(|j| m[(j, i)].abs()).sum();
+            let r: f64 = (0..n).filter(|&j| j != i).map(|j| m[(i, j)].abs()).sum();
+            if c == 0.0 || r == 0.0 || !c.is_finite() || !r.is_finite() {
+                continue;
+            }
+            let s = c + r;
+            let (mut f, mut cc) = (1.0f64, c);
+            let mut guard = 0;
+            while cc < r / RADIX && guard < 500 {
+                f *= RADIX;
+                cc *= RADIX * RADIX;
+                guard += 1;
+            }
+            while cc > r * RADIX && guard < 1000 {
+                f /= RADIX;
+                cc /= RADIX * RADIX;
+                guard += 1;
+            }
+            // column i scaled by f and row i by 1/f: keep it when the two norms shrink by 5 %
+            if c * f + r / f < 0.95 * s {
+                done = false;
+                for j in 0..n {
+                    m[(i, j)] /= f;
+                    m[(j, i)] *= f;
+                }
+            }
+        }
+        if done {
+            break;
+        }
+    }
+}
+
 /// Eigenvalues of `m` (any finite square real matrix), sorted by decreasing modulus.
 ///
 /// # Errors
@@ -65,7 +107,7 @@ fn schur_eigenvalues(m: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, SolverError>
             let q = rotation(n, attempt);
             q.transpose() * m * &q
         };
-        nalgebra::linalg::balancing::balance_parlett_reinsch(&mut a);
+        balance(&mut a);
         let Some(schur) = nalgebra::linalg::Schur::try_new(a, f64::EPSILON, 300 * n) else { continue };
         let (_, t) = schur.unpack();
         let mut vals = Vec::with_capacity(n);
@@ -132,6 +174,17 @@ mod tests {
         for r in roots {
             assert!(ev.iter().any(|v| (v - r).norm() < 1e-12), "{r} not in {ev:?}");
         }
+    }
+
+    #[test]
+    fn balance_terminates_on_huge_dynamic_range() {
+        // regression: nalgebra's balance_parlett_reinsch spun forever on a diverged RK4 monodromy like this
+        let m = DMatrix::from_row_slice(3, 3, &[1e300, 1e-300, 0.0, 1e-300, 1.0, 1e300, 0.0, 1e-200, 1e-10]);
+        let mut b = m.clone();
+        balance(&mut b);
+        assert!(eigenvalues(&m).is_ok());
+        // a similarity: the trace is unchanged
+        assert_eq!(b.trace(), m.trace());
     }
 
     #[test]

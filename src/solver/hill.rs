@@ -302,7 +302,7 @@ pub fn solve(
         }
         last_change = Some(change);
         if next_h >= max_harmonics {
-            return Err(SolverError::ToleranceNotReached { tolerance, steps: next_h, estimate: est });
+            return Err(SolverError::ToleranceNotReached { cond: f64::NAN, tolerance, steps: next_h, estimate: est });
         }
         growth = if est > 1e3 * tolerance { 1.6 } else { 1.25 };
         h = next_h;

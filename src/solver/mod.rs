@@ -37,9 +37,12 @@ pub enum SolverError {
     Singular,
     /// The requested tolerance needs more steps than allowed.
     #[error(
-        "tolerance {tolerance:e} not reached with {steps} steps (estimated error {estimate:e}); raise solver.tolerance or solver.steps"
+        "the periodic solution cannot meet tolerance {tolerance:e}: {steps} steps (or harmonics) still leave an estimated error of {estimate:.2e}{}; raise solver.tolerance",
+        conditioning(*cond)
     )]
     ToleranceNotReached {
+        /// Condition number of I - Phi at the last attempt (NaN when unknown).
+        cond: f64,
         /// Requested tolerance.
         tolerance: f64,
         /// Steps of the last attempt.
@@ -52,6 +55,14 @@ pub enum SolverError {
     Unsupported(String),
 }
 
+fn conditioning(cond: f64) -> String {
+    if cond.is_finite() && cond > 1e4 {
+        format!(" because cond(I - Phi) = {cond:.2e}: a Floquet multiplier near +1 amplifies every error")
+    } else {
+        String::new()
+    }
+}
+
 /// Which solver to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -59,6 +70,8 @@ pub enum Method {
     Rk4,
     /// Harmonic balance (Hill's method) with a companion RK4 monodromy for the multipliers.
     Hill,
+    /// Fourth-order Magnus integrator (A-stable, for stiff systems), steps on the jumps.
+    Magnus,
     /// Cheapest available method meeting the tolerance.
     Auto,
 }
@@ -69,6 +82,7 @@ impl Method {
         match self {
             Self::Rk4 => "rk4",
             Self::Hill => "hill",
+            Self::Magnus => "magnus4",
             Self::Auto => "auto",
         }
     }
@@ -131,6 +145,8 @@ pub enum Trajectory {
         grid: rk4::Grid,
         /// States at the nodes.
         states: Vec<f64>,
+        /// Scheme that produced them (partial steps use it too).
+        scheme: rk4::Scheme,
     },
     /// Fourier coefficients from harmonic balance.
     Fourier(hill::HillSolution),
@@ -178,7 +194,12 @@ impl SteadyState {
         for &t in times {
             let tau = t.rem_euclid(self.period_s);
             match &self.trajectory {
-                Trajectory::Grid { grid, states } => rk4::state_at(&mut st, grid, states, tau, &mut x),
+                Trajectory::Grid { grid, states, scheme } => {
+                    if *scheme != rk4::Scheme::Rk4 {
+                        st = rk4::Stepper::with_scheme(sys, *scheme);
+                    }
+                    rk4::state_at(&mut st, grid, states, tau, &mut x)
+                }
                 Trajectory::Fourier(h) => h.state(tau, &mut x),
             }
             out.extend_from_slice(&x);
@@ -217,6 +238,7 @@ pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadySta
     match opts.method {
         Method::Rk4 => solve_rk4(sys, opts, "requested"),
         Method::Hill => solve_hill(sys, opts, "requested".into()),
+        Method::Magnus => solve_steps(sys, opts, "requested", rk4::Scheme::Magnus4),
         Method::Auto => match sys.fourier_form() {
             Some(_) if opts.steps.is_none() => solve_hill(
                 sys,
@@ -225,11 +247,24 @@ pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadySta
                     .into(),
             ),
             Some(_) => solve_rk4(sys, opts, "auto: solver.steps fixes a step count, so the step-based rk4 product"),
-            None => solve_rk4(
-                sys,
-                opts,
-                "auto: coefficients jump, so the rk4 product with steps on the jumps (harmonic balance would converge only algebraically)",
-            ),
+            None => {
+                // stiff when the explicit stability limit alone asks for far more steps than the coefficients'
+                // resolution: then the A-stable Magnus scheme, else the cheaper rk4 product
+                let limit = sys.period_s() * max_rate(sys) / RK4_STABILITY_LIMIT;
+                let resolution = (16 * sys.max_harmonic()).max(16 * (sys.breakpoints().len() + 1)) as f64;
+                if limit > 8.0 * resolution {
+                    let why = format!(
+                        "auto: coefficients jump and the system is stiff (rk4 needs {limit:.0} steps for stability alone): A-stable magnus4 with steps on the jumps"
+                    );
+                    solve_steps(sys, opts, &why, rk4::Scheme::Magnus4)
+                } else {
+                    solve_rk4(
+                        sys,
+                        opts,
+                        "auto: coefficients jump, so the rk4 product with steps on the jumps (harmonic balance would converge only algebraically)",
+                    )
+                }
+            }
         },
     }
 }
@@ -242,22 +277,20 @@ struct Attempt {
     cond: f64,
 }
 
-fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid) -> Result<Attempt, SolverError> {
-    let run = rk4::monodromy(sys, grid);
+fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme) -> Result<Attempt, SolverError> {
+    let run = rk4::monodromy_with(sys, grid, scheme);
     if run.monodromy.iter().chain(run.forcing.iter()).any(|v| !v.is_finite()) {
         return Err(SolverError::NonFinite { what: format!("monodromy matrix after {} steps", grid.steps()) });
     }
     let floquet = Floquet::from_monodromy(&run.monodromy, sys.period_s())?;
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &run.monodromy;
-    let sv = a.clone().singular_values();
-    let (smax, smin) = (sv.max(), sv.min());
-    let cond = if smin > 0.0 { smax / smin } else { f64::INFINITY };
+    let cond = condition_number(&a);
     let x0 = a.lu().solve(&run.forcing).ok_or(SolverError::Singular)?;
     if !cond.is_finite() || x0.iter().any(|v| !v.is_finite()) {
         return Err(SolverError::Singular);
     }
-    let states = rk4::trajectory(sys, grid, &x0);
+    let states = rk4::trajectory_with(sys, grid, &x0, scheme);
     Ok(Attempt { run, floquet, x0, states, cond })
 }
 
@@ -273,15 +306,22 @@ fn difference(coarse: &Attempt, fine: &Attempt, n: usize) -> f64 {
             worst = worst.max(diff / scale);
         }
     }
-    let rho_scale = fine.floquet.rho_max.max(f64::MIN_POSITIVE);
-    for r in &coarse.floquet.multipliers {
-        let d = fine.floquet.multipliers.iter().map(|q| (q - r).norm()).fold(f64::INFINITY, f64::min);
-        worst = worst.max(d / rho_scale);
-    }
-    worst
+    // the monodromy itself, not its eigenvalues: nearly repeated multipliers (at a stability boundary) move
+    // like the square root of a perturbation, while Phi, its trace and |rho|max decisions do not
+    let scale = fine.run.monodromy.amax().max(f64::MIN_POSITIVE);
+    worst.max((&coarse.run.monodromy - &fine.run.monodromy).amax() / scale)
 }
 
 fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Result<SteadyState, SolverError> {
+    solve_steps(sys, opts, reason, rk4::Scheme::Rk4)
+}
+
+fn solve_steps(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+    reason: &str,
+    scheme: rk4::Scheme,
+) -> Result<SteadyState, SolverError> {
     let period = sys.period_s();
     let breaks = sys.breakpoints();
     let n = sys.dim();
@@ -289,30 +329,43 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut warnings = Vec::new();
     let (grid, fine, estimate) = if let Some(steps) = opts.steps {
-        if steps < limit {
+        if steps < limit && scheme == rk4::Scheme::Rk4 {
             warnings.push(format!(
                 "{steps} steps is below the explicit RK4 stability limit of {limit} steps (h |lambda|max > {RK4_STABILITY_LIMIT}): the result is not trustworthy"
             ));
         }
         let grid = rk4::Grid::new(period, &breaks, steps);
-        let coarse = attempt(sys, &grid)?;
-        let fine = attempt(sys, &grid.refined())?;
+        let below = steps < limit && scheme == rk4::Scheme::Rk4;
+        let explain = |e: SolverError| {
+            if below {
+                SolverError::Unsupported(format!(
+                    "solver.steps = {steps} is below the explicit RK4 stability limit of {limit} steps and the product diverged ({e}); use at least {limit} steps or method magnus4/hill"
+                ))
+            } else {
+                e
+            }
+        };
+        let coarse = attempt(sys, &grid, scheme).map_err(explain)?;
+        let fine = attempt(sys, &grid.refined(), scheme).map_err(explain)?;
         // error of the coarse result: |x_m - x_2m| (1 + 1/15)
         let est = difference(&coarse, &fine, n) * 16.0 / 15.0;
         (grid, coarse, est)
     } else {
-        let mut m = (2 * limit).max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1));
+        // an explicit scheme must start above its stability limit; Magnus is A-stable
+        let stable_start = if scheme == rk4::Scheme::Rk4 { 2 * limit } else { 0 };
+        let mut m = stable_start.max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1));
         loop {
             let grid = rk4::Grid::new(period, &breaks, m);
-            let coarse = attempt(sys, &grid)?;
+            let coarse = attempt(sys, &grid, scheme)?;
             let fine_grid = grid.refined();
-            let fine = attempt(sys, &fine_grid)?;
+            let fine = attempt(sys, &fine_grid, scheme)?;
             let est = difference(&coarse, &fine, n) / 15.0;
             if est <= opts.tolerance {
                 break (fine_grid, fine, est);
             }
             if fine_grid.steps() >= opts.max_steps {
                 return Err(SolverError::ToleranceNotReached {
+                    cond: fine.cond,
                     tolerance: opts.tolerance,
                     steps: fine_grid.steps(),
                     estimate: est,
@@ -320,7 +373,9 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
             }
             let ratio = (est / opts.tolerance).powf(0.25) * 1.1;
             let next = ((grid.steps() as f64) * ratio).ceil() as usize;
-            m = next.clamp(2 * grid.steps(), opts.max_steps / 2);
+            // at least double (the fine grid is already computed), never beyond the cap (the next fine grid
+            // doubles it); a cap below the doubling is caught by the check above on the next round
+            m = next.max(2 * grid.steps()).min((opts.max_steps / 2).max(grid.steps() + 1));
         }
     };
     let roundoff = fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt();
@@ -345,6 +400,7 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
             warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
         }
     }
+    repeated_warning(&fine.floquet, estimate, &mut warnings);
     let mut floquet = fine.floquet;
     if (floquet.rho_max - 1.0).abs() <= opts.tolerance.max(estimate) {
         // on the unit circle within the accuracy: bounded at best, never asymptotically stable
@@ -360,7 +416,7 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
         ));
     }
     Ok(SteadyState {
-        method: "rk4",
+        method: if scheme == rk4::Scheme::Rk4 { "rk4" } else { "magnus4" },
         reason: reason.to_string(),
         period_s: period,
         resolution: grid.steps(),
@@ -372,7 +428,7 @@ fn solve_rk4(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: &str) -> Re
         stability_limit_steps: limit,
         trusted,
         warnings,
-        trajectory: Trajectory::Grid { grid, states: fine.states },
+        trajectory: Trajectory::Grid { grid, states: fine.states, scheme },
     })
 }
 
@@ -458,7 +514,12 @@ fn romberg_monodromy(
             return Ok((r2, est, total));
         }
         if 4 * m >= max_steps {
-            return Err(SolverError::ToleranceNotReached { tolerance: tol, steps: 4 * m, estimate: est });
+            return Err(SolverError::ToleranceNotReached {
+                cond: f64::NAN,
+                tolerance: tol,
+                steps: 4 * m,
+                estimate: est,
+            });
         }
         m *= 2;
         (a, b) = (b, c);
@@ -478,8 +539,7 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &monodromy;
-    let sv = a.singular_values();
-    let cond = if sv.min() > 0.0 { sv.max() / sv.min() } else { f64::INFINITY };
+    let cond = condition_number(&a);
     let mut x0 = DVector::zeros(n);
     sol.state(0.0, x0.as_mut_slice());
     let mut warnings = Vec::new();
@@ -512,6 +572,7 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
             warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
         }
     }
+    repeated_warning(&floquet, phi_err, &mut warnings);
     let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
     Ok(SteadyState {
         method: "hill",
@@ -535,4 +596,35 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
         warnings,
         trajectory: Trajectory::Fourier(sol),
     })
+}
+
+/// Nearly repeated multipliers (as at a parametric-resonance boundary) are sensitive like the square root of
+/// the monodromy error: say how far their values can be trusted.
+fn repeated_warning(f: &Floquet, phi_error: f64, warnings: &mut Vec<String>) {
+    let m = &f.multipliers;
+    let scale = f.rho_max.max(f64::MIN_POSITIVE);
+    for i in 0..m.len() {
+        for j in i + 1..m.len() {
+            if (m[i] - m[j]).norm() < 1e-3 * scale && m[i].norm() > 1e-6 * scale {
+                let spread = phi_error.max(f64::EPSILON).sqrt() * scale;
+                warnings.push(format!(
+                    "multipliers {i} and {j} nearly coincide ({:.6}{:+.6}i): near a stability boundary their values are only good to about {spread:.1e}; the monodromy itself meets the tolerance",
+                    m[i].re, m[i].im
+                ));
+                return;
+            }
+        }
+    }
+}
+
+/// 2-norm condition number by an SVD with a bounded number of sweeps (nalgebra's plain
+/// `singular_values()` iterates without limit); infinite when singular or not converged.
+pub fn condition_number(a: &DMatrix<f64>) -> f64 {
+    match nalgebra::linalg::SVD::try_new(a.clone(), false, false, f64::EPSILON, 200 * a.nrows().max(1)) {
+        Some(svd) => {
+            let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
+            if smin > 0.0 && smax.is_finite() { smax / smin } else { f64::INFINITY }
+        }
+        None => f64::INFINITY,
+    }
 }
