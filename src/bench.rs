@@ -121,9 +121,11 @@ pub fn bench_scene(scene: &Scene, progress: &dyn Fn(&str)) -> Result<(Vec<BenchR
     // references: each method is judged against the other, converged far beyond the bench range
     progress(&format!("{name}: references"));
     // the tightest rk4 reference that converges within its step cap (the hunting period stops near 1e-10)
-    let rk4_ref = [1e-11, 1e-10, 1e-9]
-        .iter()
-        .find_map(|&tol| solver::solve(sys, &SolverOptions { method: Method::Rk4, tolerance: tol, ..Default::default() }).ok().map(|r| (r, tol)));
+    let rk4_ref = [1e-11, 1e-10, 1e-9].iter().find_map(|&tol| {
+        solver::solve(sys, &SolverOptions { method: Method::Rk4, tolerance: tol, ..Default::default() })
+            .ok()
+            .map(|r| (r, tol))
+    });
     let hill_ref = match &form {
         Some(f) => Some(hill::solve(f, sys.max_harmonic(), 1e-13, 1 << 20)?.0),
         None => None,

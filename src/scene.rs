@@ -72,6 +72,8 @@ struct RawSolver {
     tolerance: Option<f64>,
     #[serde(default)]
     steps: Option<u64>,
+    #[serde(default)]
+    harmonics: Option<u64>,
 }
 
 #[derive(Deserialize, Debug, Clone, Default)]
@@ -457,6 +459,12 @@ impl Validator<'_> {
                 return Err(self.err("solver.tolerance", format!("must be in (0, 1), got {t}")));
             }
             o.tolerance = t;
+        }
+        if let Some(h) = s.harmonics {
+            if !(1..=1_000_000).contains(&h) {
+                return Err(self.err("solver.harmonics", format!("must be in 1..=1000000, got {h}")));
+            }
+            o.harmonics = Some(h as usize);
         }
         if let Some(n) = s.steps {
             if n < 1 || n > o.max_steps as u64 {

@@ -135,3 +135,29 @@ fn huge_input_is_refused_not_allocated() {
         &["mesh cycles"],
     );
 }
+
+#[test]
+fn solver_choices_that_cannot_work() {
+    // paper gear: k_z reaches harmonic 140 and the forcing 146 over one pinion revolution
+    check(
+        "fewharmonics",
+        &edited(|v| v["solver"] = serde_json::json!({"method": "hill", "harmonics": 50})),
+        &["solver.harmonics = 50", "146"],
+    );
+    // a jump in the coefficients: harmonic balance would converge only algebraically, so it is refused
+    check(
+        "hilljump",
+        &edited(|v| {
+            v["solver"] = serde_json::json!({"method": "hill"});
+            v["gear_pair"]["mesh_stiffness"] =
+                serde_json::json!({"rectangular": {"contact_ratio": 1.6, "pair_stiffness_n_per_m": 5e8}});
+        }),
+        &["harmonic balance needs Fourier-series coefficients"],
+    );
+    // an explicit step count far below the rk4 stability limit (67 steps per revolution here)
+    check(
+        "fewsteps",
+        &edited(|v| v["solver"] = serde_json::json!({"method": "rk4", "steps": 10})),
+        &["stability limit"],
+    );
+}

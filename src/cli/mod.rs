@@ -136,6 +136,14 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
     }
 }
 
+/// The warning that explains a refusal best (stability limit, then conditioning), for the one error line.
+fn main_reason(warnings: &[String]) -> String {
+    ["stability limit", "ill-conditioned", "near +1"]
+        .iter()
+        .find_map(|k| warnings.iter().find(|w| w.contains(k)))
+        .map_or(String::new(), |w| format!("; {w}"))
+}
+
 fn warn_all(warnings: &[String]) {
     for w in warnings {
         eprintln!("gearvib: warning: {w}");
@@ -147,13 +155,15 @@ fn stability(path: &str, json: bool) -> Result<u8, Error> {
     let steady =
         crate::solver::solve(scene.system(), &scene.solver).map_err(|e| Error::Other(format!("{path}: {e}")))?;
     let summary = StabilitySummary::new(&scene, &steady);
-    warn_all(&summary.warnings);
     if steady.error_estimate > scene.solver.tolerance {
         return Err(Error::Other(format!(
-            "{path}: multipliers not trusted: estimated error {:.2e} is above solver.tolerance {:.1e}",
-            steady.error_estimate, scene.solver.tolerance
+            "{path}: multipliers not trusted: estimated error {:.2e} is above solver.tolerance {:.1e}{}",
+            steady.error_estimate,
+            scene.solver.tolerance,
+            main_reason(&summary.warnings)
         )));
     }
+    warn_all(&summary.warnings);
     if json {
         println!("{}", to_json_line(&summary));
     } else {
@@ -188,13 +198,16 @@ fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) 
     }
     let sim = pipeline::simulate(&scene).map_err(|e| Error::Other(format!("{path}: {e}")))?;
     let mut summary = SimulateSummary::new(&scene, &sim);
-    warn_all(&summary.stability.warnings);
     if !sim.steady.trusted {
         return Err(Error::Other(format!(
-            "{path}: periodic solution not printed: it cannot meet solver.tolerance {:.1e} (estimated error {:.2e}, cond(I - Phi) {:.2e})",
-            scene.solver.tolerance, sim.steady.error_estimate, sim.steady.cond_i_minus_phi
+            "{path}: periodic solution not printed: it cannot meet solver.tolerance {:.1e} (estimated error {:.2e}, cond(I - Phi) {:.2e}){}",
+            scene.solver.tolerance,
+            sim.steady.error_estimate,
+            sim.steady.cond_i_minus_phi,
+            main_reason(&summary.stability.warnings)
         )));
     }
+    warn_all(&summary.stability.warnings);
     if let Some(out) = output {
         let info = crate::synth::write_signal(&scene, &sim, std::path::Path::new(out), allow_aliasing)?;
         warn_all(&info.warnings);

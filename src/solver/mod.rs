@@ -100,13 +100,15 @@ pub struct SolverOptions {
     pub tolerance: f64,
     /// Fixed step count for a step-based method.
     pub steps: Option<usize>,
+    /// Fixed truncation order H for harmonic balance.
+    pub harmonics: Option<usize>,
     /// Upper bound on the steps the tolerance loop may use.
     pub max_steps: usize,
 }
 
 impl Default for SolverOptions {
     fn default() -> Self {
-        Self { method: Method::Auto, tolerance: 1e-8, steps: None, max_steps: 4_000_000 }
+        Self { method: Method::Auto, tolerance: 1e-8, steps: None, harmonics: None, max_steps: 4_000_000 }
     }
 }
 
@@ -411,8 +413,8 @@ fn solve_steps(
         ));
     } else if !floquet.stable {
         warnings.push(format!(
-            "unstable: |rho|max = {:.6} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
-            floquet.rho_max
+            "unstable: |rho|max = {} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
+            fmt_rho(floquet.rho_max)
         ));
     }
     Ok(SteadyState {
@@ -533,7 +535,22 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
             "harmonic balance needs Fourier-series coefficients; this scene has jumps (use rk4 or auto)".into(),
         )
     })?;
-    let (sol, est) = hill::solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?;
+    let (sol, est) = match opts.harmonics {
+        Some(h) if h < sys.max_harmonic() => {
+            return Err(SolverError::Unsupported(format!(
+                "solver.harmonics = {h} is below the highest harmonic of the scene's coefficients ({}): the truncated system cannot represent them",
+                sys.max_harmonic()
+            )));
+        }
+        Some(h) => {
+            // fixed H: its error is estimated against 1.25 H
+            let sol = hill::solve_order(&form, h)?;
+            let finer = hill::solve_order(&form, (h * 5).div_ceil(4).max(h + 1))?;
+            let est = hill::difference(&sol, &finer);
+            (sol, est)
+        }
+        None => hill::solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?,
+    };
     let (monodromy, phi_err, companion_steps) = companion_monodromy(sys, opts)?;
     let period = sys.period_s();
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
@@ -563,8 +580,8 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
         ));
     } else if !floquet.stable {
         warnings.push(format!(
-            "unstable: |rho|max = {:.6} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
-            floquet.rho_max
+            "unstable: |rho|max = {} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
+            fmt_rho(floquet.rho_max)
         ));
     }
     if let Some(r) = floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
@@ -627,4 +644,8 @@ pub fn condition_number(a: &DMatrix<f64>) -> f64 {
         }
         None => f64::INFINITY,
     }
+}
+
+fn fmt_rho(r: f64) -> String {
+    if r < 1e3 { format!("{r:.6}") } else { format!("{r:.3e}") }
 }
