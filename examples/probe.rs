@@ -1,21 +1,13 @@
-//! Probe: solver costs on the smooth stiff two-DOF model.
-use gearvib::scene::Scene;
-use gearvib::solver::{Method, SolverOptions, solve};
+//! Probe: largest bins of the averaged amplitude spectrum of a recording.
+use gearvib::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum};
 fn main() {
-    let text = std::fs::read_to_string("/tmp/stiff.json").unwrap();
-    let scene = Scene::from_value(serde_json::from_str(&text).unwrap(), "stiff").unwrap();
-    for (m, tol, steps) in [(Method::Magnus, 0.5, Some(57usize)), (Method::Rk4, 0.5, Some(57))] {
-        let t = std::time::Instant::now();
-        eprintln!("start {m:?}");
-        match solve(scene.system(), &SolverOptions { method: m, tolerance: tol, steps, ..Default::default() }) {
-            Ok(ss) => println!(
-                "{m:?} {tol:e}: {} res, est {:e}, {:.3} s, {}",
-                ss.resolution,
-                ss.error_estimate,
-                t.elapsed().as_secs_f64(),
-                ss.reason
-            ),
-            Err(e) => println!("{m:?} {tol:e}: {e} ({:.3} s)", t.elapsed().as_secs_f64()),
-        }
-    }
+    let rec = gearvib::io::read_recording(std::path::Path::new(
+        "data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav",
+    ))
+    .unwrap();
+    let s = amplitude_spectrum(&mut Fft::new(), &rec.channels[0], 10000.0, AmplitudeOptions::default()).unwrap();
+    let mut v: Vec<(f64, f64)> = s.freqs_hz.iter().zip(&s.values).map(|(f, a)| (*f, *a)).collect();
+    v.sort_by(|a, b| b.1.total_cmp(&a.1));
+    println!("{:?}", &v[..8]);
+    println!("{:?}", s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| (**f - 670.0).abs() < 3.0).collect::<Vec<_>>());
 }

@@ -523,8 +523,10 @@ fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(String, f64)]) -> Ve
             match (spectrum, shaft_hz) {
                 (Some(s), Some(f1)) => {
                     let f = o * f1;
-                    let (ff, a) =
-                        s.peak_near(f, 0.25 * f1.min(shafts.iter().map(|x| x.1 * f1).fold(f64::INFINITY, f64::min)))?;
+                    // within 1.5 bins only: a line of the other shaft can sit a few Hz away (3 f2 = 32.3 Hz
+                    // against f1 = 30 Hz for 14/39 teeth) and must not be taken for this one
+                    let df = s.freqs_hz.get(1).copied().unwrap_or(1.0);
+                    let (ff, a) = s.peak_near(f, 1.5 * df)?;
                     Some((Some(ff), a))
                 }
                 _ => {

@@ -27,6 +27,7 @@ pub mod report;
 pub mod scene;
 pub mod signal;
 pub mod solver;
+pub mod sweep;
 pub mod synth;
 
 /// Top-level error: one variant per layer.

@@ -27,6 +27,35 @@ enum Command {
         /// Write even when the sample rate is below twice the highest line requested (warns).
         #[arg(long)]
         allow_aliasing: bool,
+        /// Write PNG images and the JSON summary into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Floquet analysis and steady state over a range of one scene parameter (all cores).
+    Sweep {
+        /// Scene JSON file.
+        scene: String,
+        /// Parameter: speed, damping, load, or a dotted JSON path like gear_pair.damping_ratio.
+        #[arg(long)]
+        param: String,
+        /// First value.
+        #[arg(long, allow_hyphen_values = true)]
+        from: f64,
+        /// Last value.
+        #[arg(long, allow_hyphen_values = true)]
+        to: f64,
+        /// Number of values.
+        #[arg(long)]
+        steps: usize,
+        /// Stability map image.
+        #[arg(short = 'o', long = "output", value_name = "MAP.png")]
+        output: Option<String>,
+        /// Write the map and the JSON into this directory.
+        #[arg(long)]
+        report: Option<String>,
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -48,6 +77,9 @@ enum Command {
     Stability {
         /// Scene JSON file.
         scene: String,
+        /// Write the multiplier image and the JSON summary into this directory.
+        #[arg(long)]
+        report: Option<String>,
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
@@ -127,10 +159,13 @@ pub fn parse_args() -> Cli {
 /// Any layer's error; the caller prints it on one line and exits with code 2.
 pub fn run(cli: Cli) -> Result<u8, Error> {
     match cli.command {
-        Command::Simulate { scene, output, allow_aliasing, json } => {
-            simulate(&scene, output.as_deref(), allow_aliasing, json)
+        Command::Simulate { scene, output, allow_aliasing, report, json } => {
+            simulate(&scene, output.as_deref(), allow_aliasing, report.as_deref(), json)
         }
-        Command::Stability { scene, json } => stability(&scene, json),
+        Command::Stability { scene, report, json } => stability(&scene, report.as_deref(), json),
+        Command::Sweep { scene, param, from, to, steps, output, report, json } => {
+            sweep(&scene, &param, (from, to, steps), output.as_deref(), report.as_deref(), json)
+        }
         Command::Diagnose(args) => diagnose(&args),
         Command::Bench { scenes, report, json } => bench(&scenes, report.as_deref(), json),
     }
@@ -150,7 +185,18 @@ fn warn_all(warnings: &[String]) {
     }
 }
 
-fn stability(path: &str, json: bool) -> Result<u8, Error> {
+fn report_dir(dir: &str) -> Result<std::path::PathBuf, Error> {
+    let d = std::path::PathBuf::from(dir);
+    std::fs::create_dir_all(&d)
+        .map_err(|e| Error::Other(format!("--report {dir}: cannot create the directory: {e}")))?;
+    Ok(d)
+}
+
+fn report_err(e: crate::report::ReportError) -> Error {
+    Error::Other(e.to_string())
+}
+
+fn stability(path: &str, report: Option<&str>, json: bool) -> Result<u8, Error> {
     let scene = Scene::load(path)?;
     let steady =
         crate::solver::solve(scene.system(), &scene.solver).map_err(|e| Error::Other(format!("{path}: {e}")))?;
@@ -164,6 +210,14 @@ fn stability(path: &str, json: bool) -> Result<u8, Error> {
         )));
     }
     warn_all(&summary.warnings);
+    if let Some(dir) = report {
+        let d = report_dir(dir)?;
+        let p = crate::report::figures::multipliers(&scene, &steady, &d).map_err(report_err)?;
+        crate::io::write_atomic(&d.join("stability.json"), to_json_line(&summary).as_bytes())?;
+        if !json {
+            println!("report: {}", p.display());
+        }
+    }
     if json {
         println!("{}", to_json_line(&summary));
     } else {
@@ -190,7 +244,13 @@ fn print_stability(s: &StabilitySummary) {
     }
 }
 
-fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) -> Result<u8, Error> {
+fn simulate(
+    path: &str,
+    output: Option<&str>,
+    allow_aliasing: bool,
+    report: Option<&str>,
+    json: bool,
+) -> Result<u8, Error> {
     let scene = Scene::load(path)?;
     if let Some(out) = output {
         // refuse a bad request before any computation
@@ -222,6 +282,14 @@ fn simulate(path: &str, output: Option<&str>, allow_aliasing: bool, json: bool) 
                 info.format,
                 info.file
             );
+        }
+    }
+    if let Some(dir) = report {
+        let d = report_dir(dir)?;
+        let files = crate::report::figures::simulation(&scene, &sim, &d).map_err(report_err)?;
+        crate::io::write_atomic(&d.join("simulate.json"), to_json_line(&summary).as_bytes())?;
+        if !json {
+            println!("report: {}", files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", "));
         }
     }
     if json {
@@ -319,9 +387,13 @@ fn diagnose(a: &DiagnoseArgs) -> Result<u8, Error> {
     }
     if let Some(dir) = &a.report {
         for d in &done {
-            let files = crate::report::diagnose_report(d, std::path::Path::new(dir))?;
+            let dirp = report_dir(dir)?;
+            let stem =
+                std::path::Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
+            crate::io::write_atomic(&dirp.join(format!("{stem}-diagnosis.json")), to_json_line(d).as_bytes())?;
+            let files = crate::report::figures::diagnosis(d, &dirp).map_err(report_err)?;
             if !a.json {
-                println!("report: {}", files.join(", "));
+                println!("report: {}", files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", "));
             }
         }
     }
@@ -462,6 +534,68 @@ fn bench(scenes: &[String], report: Option<&str>, json: bool) -> Result<u8, Erro
     }
     for r in &all.references {
         println!("reference {}: rk4 points against {}; hill points against {}", r.scene, r.for_rk4, r.for_hill);
+    }
+    Ok(0)
+}
+
+fn sweep(
+    path: &str,
+    param: &str,
+    range: (f64, f64, usize),
+    output: Option<&str>,
+    report: Option<&str>,
+    json: bool,
+) -> Result<u8, Error> {
+    let scene = Scene::load(path)?;
+    let field = crate::sweep::resolve(&scene, param)?;
+    let (from, to, steps) = range;
+    let bar = {
+        use std::io::IsTerminal;
+        std::io::stderr().is_terminal().then(|| indicatif::ProgressBar::new(steps as u64))
+    };
+    let tick = || {
+        if let Some(b) = &bar {
+            b.inc(1);
+        }
+    };
+    let points = crate::sweep::sweep(&scene, &field, from, to, steps, &tick)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let failed = points.iter().filter(|p| p.error.is_some()).count();
+    if failed > 0 {
+        eprintln!("gearvib: warning: {failed} of {steps} points failed (listed with their error in the JSON)");
+    }
+    let doc = serde_json::json!({"scene": scene.name, "param": field, "points": points});
+    let mut images = Vec::new();
+    if let Some(dir) = report {
+        let d = report_dir(dir)?;
+        crate::io::write_atomic(&d.join("sweep.json"), doc.to_string().as_bytes())?;
+        images.push(d.join(format!("stability-map-{}.png", scene.name)));
+    }
+    if let Some(o) = output {
+        images.push(std::path::PathBuf::from(o));
+    }
+    for img in &images {
+        crate::report::figures::stability_map(img, &scene.name, &field, &field, &points).map_err(report_err)?;
+    }
+    if json {
+        println!("{doc}");
+        return Ok(0);
+    }
+    println!("{:>14} {:>14} {:>8}  lines", field, "|rho|max", "stable");
+    let stride = (points.len() / 40).max(1);
+    for p in points.iter().step_by(stride) {
+        match (p.rho_max, &p.error) {
+            (Some(r), _) => {
+                let lines: Vec<String> = p.lines.iter().map(|l| format!("{}={:.3e}", l.0, l.1)).collect();
+                println!("{:>14.6} {:>14.6e} {:>8}  {}", p.value, r, p.stable.unwrap_or(false), lines.join(" "));
+            }
+            (None, e) => println!("{:>14.6} failed: {}", p.value, e.clone().unwrap_or_default()),
+        }
+    }
+    for img in &images {
+        println!("wrote {}", img.display());
     }
     Ok(0)
 }

@@ -239,18 +239,25 @@ where
             EmptyElement::at((m.x, yr.end)) + Text::new(m.label.clone(), (0, 4 + 16 * row), font),
         ))?;
     }
+    let (ylo, yhi) = (yr.start.min(yr.end), yr.start.max(yr.end));
+    let (xlo, xhi) = (xr.start.min(xr.end), xr.start.max(xr.end));
     for s in &chart.series {
         let col = color(s.color);
+        // keep x inside the axis and clamp y into it: segments with an end outside a log axis are drawn
+        // as spikes by the backend
         let pts: Vec<(f64, f64)> = s
             .points
             .iter()
             .copied()
-            .filter(|(x, y)| (!chart.x_log || *x > 0.0) && (!chart.y_log || *y > 0.0))
+            .filter(|(x, y)| (!chart.x_log || *x > 0.0) && (!chart.y_log || *y > 0.0) && *x >= xlo && *x <= xhi)
+            .map(|(x, y)| (x, y.clamp(ylo, yhi)))
             .collect();
         let legend = move |(x, y): (i32, i32)| PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3));
         match s.style {
             Style::Line => {
-                c.draw_series(LineSeries::new(pts, col.stroke_width(2)))?.label(s.name.as_str()).legend(legend);
+                // dense zig-zags (spectra) with a 2-px stroke get long miter spikes at sharp corners: 1 px
+                let width = if pts.len() > 400 { 1 } else { 2 };
+                c.draw_series(LineSeries::new(pts, col.stroke_width(width)))?.label(s.name.as_str()).legend(legend);
             }
             Style::LinePoints => {
                 c.draw_series(LineSeries::new(pts.clone(), col.stroke_width(2)))?.label(s.name.as_str()).legend(legend);
@@ -285,9 +292,10 @@ where
 /// Tick labels: plain for moderate magnitudes, scientific otherwise.
 fn fmt_tick(v: f64) -> String {
     let a = v.abs();
-    if v == 0.0 {
+    // tick positions carry rounding noise: anything this small is the zero tick
+    if a < 1e-12 {
         "0".into()
-    } else if (1e-2..1e5).contains(&a) {
+    } else if (9.999e-3..1e5).contains(&a) {
         let s = format!("{v:.3}");
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {

@@ -1,0 +1,457 @@
+//! The report images: which data, which axes, which labels. Drawing itself is in [`super::plot`].
+
+use super::ReportError;
+use super::plot::{Band, Chart, Marker, Series, Style, render_png};
+use crate::diagnose::Diagnosis;
+use crate::pipeline::{OrderLine, Simulation};
+use crate::scene::{Model, Scene};
+use std::path::{Path, PathBuf};
+
+/// Kind of a spectral line of a gear pair, by its order of the pinion rotation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineKind {
+    /// A mesh harmonic k z1.
+    Mesh,
+    /// k z1 +- j, j = 1..6 (pinion rotation).
+    Pinion,
+    /// k z1 +- j z1/z2, j = 1..6 (wheel rotation).
+    Wheel,
+    /// Anything else.
+    Other,
+}
+
+/// Classifies `order` (pinion orders) for a pair with `z1`, `z2` teeth.
+pub fn classify(order: f64, z1: usize, z2: usize) -> LineKind {
+    let z = z1 as f64;
+    let k = (order / z).round();
+    let d = order - k * z;
+    let near = |x: f64| (x - x.round()).abs() < 1e-6;
+    if d.abs() < 1e-6 && k >= 1.0 {
+        LineKind::Mesh
+    } else if near(d) && d.abs() <= 6.5 {
+        LineKind::Pinion
+    } else if near(d * z2 as f64 / z) && (d * z2 as f64 / z).abs() <= 6.5 {
+        LineKind::Wheel
+    } else {
+        LineKind::Other
+    }
+}
+
+fn gear_teeth(scene: &Scene) -> Option<(usize, usize)> {
+    match &scene.model {
+        Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
+        _ => None,
+    }
+}
+
+/// Spectral lines as coloured stems (mesh, pinion and wheel sidebands apart) in Hz, log amplitude.
+fn order_stems(lines: &[OrderLine], teeth: Option<(usize, usize)>, floor: f64) -> Vec<Series> {
+    let mut groups: Vec<(LineKind, &str, usize)> = vec![(LineKind::Other, "other lines", 4)];
+    if teeth.is_some() {
+        groups = vec![
+            (LineKind::Mesh, "mesh harmonics k fz", 0),
+            (LineKind::Pinion, "pinion sidebands k fz +- j f1", 1),
+            (LineKind::Wheel, "wheel sidebands k fz +- j f2", 2),
+            (LineKind::Other, "other lines", 4),
+        ];
+    }
+    groups
+        .into_iter()
+        .filter_map(|(kind, name, color)| {
+            let pts: Vec<(f64, f64)> = lines
+                .iter()
+                .filter(|l| l.order > 0.0 && l.amplitude > floor)
+                .filter(|l| teeth.map_or(LineKind::Other, |(z1, z2)| classify(l.order, z1, z2)) == kind)
+                .map(|l| (l.frequency_hz, l.amplitude))
+                .collect();
+            (!pts.is_empty()).then(|| Series { name: name.into(), points: pts, style: Style::Stems, color })
+        })
+        .collect()
+}
+
+fn mesh_markers(scene: &Scene, max_hz: f64) -> Vec<Marker> {
+    let Some((z1, _)) = gear_teeth(scene) else { return Vec::new() };
+    let fz = z1 as f64 * scene.output.base_hz;
+    (1..)
+        .map(|k| k as f64 * fz)
+        .take_while(|f| *f <= max_hz)
+        .enumerate()
+        .map(|(i, f)| Marker { x: f, label: format!("{}x mesh", i + 1), color: 0 })
+        .collect()
+}
+
+/// Writes the simulation images into `dir`; returns their paths.
+///
+/// # Errors
+/// Non-finite data or write failures.
+pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    let mut out = Vec::new();
+    let q = &scene.output.quantity;
+    let unit = if q.unit().is_empty() { String::new() } else { format!(" [{}]", q.unit()) };
+    let period = sim.steady.period_s;
+    // waveform over (up to) three base revolutions, or three periods when the period is shorter
+    let revs = (period * scene.output.base_hz).max(1e-12);
+    let copies = (3.0 / revs).ceil().clamp(1.0, 64.0) as usize;
+    let m = sim.period_samples.len();
+    let shown = (copies * m).min(20_000);
+    let pts: Vec<(f64, f64)> =
+        (0..shown).map(|i| (1e3 * period * i as f64 / m as f64, sim.period_samples[i % m])).collect();
+    let wave = Chart {
+        title: format!("{}: {} over {:.3} s of steady state", scene.name, q.name(), period * shown as f64 / m as f64),
+        x_label: "time [ms]".into(),
+        y_label: format!("{}{unit}", q.name()),
+        series: vec![Series { name: q.name().into(), points: pts, style: Style::Line, color: 0 }],
+        ..Default::default()
+    };
+    let p = dir.join("waveform.png");
+    render_png(&p, 1400, 600, &[wave])?;
+    out.push(p);
+    // spectrum with mesh harmonics and sidebands
+    let peak = sim.orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
+    let floor = peak * 1e-5;
+    let teeth = gear_teeth(scene);
+    let max_hz = sim.orders.last().map_or(1.0, |l| l.frequency_hz);
+    let spectrum = Chart {
+        title: format!("{}: amplitude spectrum of {} (steady state, one period)", scene.name, q.name()),
+        x_label: format!(
+            "frequency [Hz]   (orders of the {} = {:.2} Hz)",
+            scene.output.base_name, scene.output.base_hz
+        ),
+        y_label: format!("amplitude{unit}"),
+        y_log: true,
+        // room on the right for the legend, above the data for the labels
+        x_range: Some((0.0, max_hz * 1.22)),
+        y_range: Some((floor, peak * 10.0)),
+        series: order_stems(&sim.orders, teeth, floor),
+        markers: mesh_markers(scene, max_hz),
+        ..Default::default()
+    };
+    let p = dir.join("spectrum.png");
+    render_png(&p, 1400, 700, &[spectrum])?;
+    out.push(p);
+    // zooms around the first three mesh harmonics (like the paper's Fig 13)
+    if let Some((z1, _)) = teeth {
+        let fz = z1 as f64 * scene.output.base_hz;
+        let mut charts = Vec::new();
+        for k in 1..=3 {
+            let centre = k as f64 * fz;
+            let (lo, hi) = (centre - 7.5 * scene.output.base_hz, centre + 7.5 * scene.output.base_hz);
+            let lines: Vec<OrderLine> =
+                sim.orders.iter().filter(|l| l.frequency_hz >= lo && l.frequency_hz <= hi).copied().collect();
+            if lines.iter().all(|l| l.amplitude <= floor) {
+                continue;
+            }
+            let markers = lines
+                .iter()
+                .filter(|l| l.amplitude > floor && (l.order - l.order.round()).abs() < 1e-9)
+                .map(|l| {
+                    let d = l.order.round() as i64 - (k * z1) as i64;
+                    Marker {
+                        x: l.frequency_hz,
+                        label: if d == 0 { format!("{k}fz") } else { format!("{d:+}") },
+                        color: if d == 0 { 0 } else { 1 },
+                    }
+                })
+                .collect();
+            charts.push(Chart {
+                title: format!("zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders"),
+                x_label: "frequency [Hz]".into(),
+                y_label: format!("amplitude{unit}"),
+                y_log: true,
+                x_range: Some((lo, hi + 5.0 * scene.output.base_hz)),
+                y_range: Some((floor, peak * 10.0)),
+                series: order_stems(&lines, teeth, floor),
+                markers,
+                ..Default::default()
+            });
+        }
+        if !charts.is_empty() {
+            let p = dir.join("zoom-mesh.png");
+            render_png(&p, 1400, 420 * charts.len() as u32, &charts)?;
+            out.push(p);
+        }
+    }
+    out.push(multipliers(scene, &sim.steady, dir)?);
+    if let Model::Press(..) = &scene.model {
+        out.push(press_figures(scene, sim, dir)?);
+    }
+    Ok(out)
+}
+
+/// Floquet multipliers in the complex plane with the unit circle.
+///
+/// # Errors
+/// Write failures.
+pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Path) -> Result<PathBuf, ReportError> {
+    let pts: Vec<(f64, f64)> = steady.floquet.multipliers.iter().map(|r| (r.re, r.im)).collect();
+    let r = steady.floquet.rho_max.max(1.0) * 1.15;
+    let verdict = if steady.floquet.stable { "asymptotically stable" } else { "NOT asymptotically stable" };
+    let chart = Chart {
+        title: format!("{}: Floquet multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
+        x_label: "Re rho".into(),
+        y_label: "Im rho".into(),
+        x_range: Some((-r, r)),
+        y_range: Some((-r, r)),
+        unit_circle: true,
+        series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
+        ..Default::default()
+    };
+    let p = dir.join("multipliers.png");
+    render_png(&p, 800, 800, &[chart])?;
+    Ok(p)
+}
+
+/// The press: q1 and q2 over one period with their spectra (the paper's Figs 3 and 4).
+fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<PathBuf, ReportError> {
+    let sys = scene.system();
+    let period = sim.steady.period_s;
+    let m = 720;
+    let times: Vec<f64> = (0..=m).map(|i| period * i as f64 / m as f64).collect();
+    let mut states = Vec::new();
+    sim.steady.states_at(sys, &times, &mut states);
+    let n = sys.dim();
+    let mut charts = Vec::new();
+    for (idx, name, unit, scale) in [(0usize, "q1", "rad", 1.0), (1, "q2", "mm", 1e3)] {
+        let pts: Vec<(f64, f64)> = times.iter().enumerate().map(|(i, t)| (*t, states[i * n + idx] * scale)).collect();
+        let samples: Vec<f64> = (0..1024).map(|i| i as f64 * period / 1024.0).collect();
+        let mut st = Vec::new();
+        sim.steady.states_at(sys, &samples, &mut st);
+        let x: Vec<f64> = (0..1024).map(|i| st[i * n + idx] * scale).collect();
+        let amps = crate::signal::spectrum::periodic_amplitudes(&x);
+        let lines: Vec<(f64, f64)> =
+            amps.iter().enumerate().skip(1).take(24).map(|(k, a)| (k as f64, a.max(1e-12))).collect();
+        let peak = lines.iter().map(|l| l.1).fold(0.0, f64::max);
+        charts.push(Chart {
+            title: format!(
+                "{}: {name} over one input revolution (Fig {})",
+                scene.name,
+                if idx == 0 { "3a" } else { "4a" }
+            ),
+            x_label: "time [s]".into(),
+            y_label: format!("{name} [{unit}]"),
+            series: vec![Series { name: name.into(), points: pts, style: Style::Line, color: idx }],
+            ..Default::default()
+        });
+        charts.push(Chart {
+            title: format!(
+                "spectrum of {name} by order of the input speed W (Fig {})",
+                if idx == 0 { "3b" } else { "4b" }
+            ),
+            x_label: "order of W".into(),
+            y_label: format!("amplitude [{unit}]"),
+            y_log: true,
+            x_range: Some((0.0, 25.0)),
+            y_range: Some((peak * 1e-6, peak * 3.0)),
+            series: vec![Series { name: name.into(), points: lines, style: Style::Stems, color: idx }],
+            ..Default::default()
+        });
+    }
+    let p = dir.join("press-q1-q2.png");
+    render_png(&p, 1400, 1600, &charts)?;
+    Ok(p)
+}
+
+/// Writes the diagnosis images of one recording into `dir` (file names start with the recording's stem).
+///
+/// # Errors
+/// Non-finite data or write failures.
+pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+    let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
+    let mut out = Vec::new();
+    // TSA of each gear (first channel)
+    let ch = d.channels[0];
+    let tsas: Vec<Chart> = d
+        .tsas()
+        .filter(|(g, _, _)| g.channel == ch)
+        .map(|(g, t, _)| Chart {
+            title: format!(
+                "{stem}: time-synchronous average, {} (channel {ch}, {} revolutions)",
+                g.gear, g.revolutions
+            ),
+            x_label: format!("{} angle [deg]", g.gear),
+            y_label: "TSA [recording unit]".into(),
+            series: vec![Series {
+                name: "TSA".into(),
+                points: t.iter().enumerate().map(|(i, v)| (360.0 * i as f64 / t.len() as f64, *v)).collect(),
+                style: Style::Line,
+                color: 0,
+            }],
+            ..Default::default()
+        })
+        .collect();
+    if !tsas.is_empty() {
+        let p = dir.join(format!("{stem}-tsa.png"));
+        render_png(&p, 1400, 450 * tsas.len() as u32, &tsas)?;
+        out.push(p);
+    }
+    // spectrum with mesh harmonics and sidebands (when the sample rate is known)
+    if let Some((_, amp, _)) = d.spectra().iter().find(|s| s.0 == ch) {
+        let fm = d.mesh_hz.unwrap_or(0.0);
+        let max_f = (3.6 * fm).min(*amp.freqs_hz.last().unwrap_or(&1.0));
+        let pts: Vec<(f64, f64)> = amp
+            .freqs_hz
+            .iter()
+            .zip(&amp.values)
+            .filter(|(f, _)| **f > 0.0 && **f <= max_f)
+            .map(|(f, v)| (*f, *v))
+            .collect();
+        let peak = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+        let mut series = vec![Series {
+            name: "amplitude spectrum (Hann, averaged)".into(),
+            points: pts,
+            style: Style::Line,
+            color: 4,
+        }];
+        let side = |shaft: &str| -> Vec<(f64, f64)> {
+            d.mesh_harmonics
+                .iter()
+                .flat_map(|h| h.sidebands.iter())
+                .filter(|s| s.shaft == shaft)
+                .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
+                .collect()
+        };
+        for (i, shaft) in d.shaft_hz.keys().enumerate() {
+            let pts = side(shaft);
+            if !pts.is_empty() {
+                series.push(Series {
+                    name: format!("{shaft} sidebands (+-1..3 {shaft} orders)"),
+                    points: pts,
+                    style: Style::Points,
+                    color: 1 + i,
+                });
+            }
+        }
+        let mesh_pts: Vec<(f64, f64)> =
+            d.mesh_harmonics.iter().filter_map(|h| h.frequency_hz.map(|f| (f, h.amplitude))).collect();
+        series.push(Series { name: "mesh harmonics".into(), points: mesh_pts, style: Style::Points, color: 0 });
+        let markers = d
+            .mesh_harmonics
+            .iter()
+            .filter_map(|h| h.frequency_hz.map(|f| Marker { x: f, label: format!("{}x mesh", h.k), color: 0 }))
+            .collect();
+        let chart = Chart {
+            title: format!("{stem}: spectrum, channel {ch}; verdict {} ({})", d.verdict.state, d.verdict.gear),
+            x_label: "frequency [Hz]".into(),
+            y_label: "amplitude [recording unit]".into(),
+            y_log: true,
+            x_range: Some((0.0, max_f * 1.25)),
+            y_range: Some((peak * 1e-5, peak * 10.0)),
+            series,
+            markers,
+            ..Default::default()
+        };
+        let p = dir.join(format!("{stem}-spectrum.png"));
+        render_png(&p, 1400, 700, &[chart])?;
+        out.push(p);
+    }
+    if let Some(c) = &d.comparison {
+        let meas: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 - 0.12, l.measured_db)).collect();
+        let model: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 + 0.12, l.model_db)).collect();
+        let lo = c.lines.iter().map(|l| l.measured_db.min(l.model_db)).fold(0.0, f64::min) - 5.0;
+        let hi = c.lines.iter().map(|l| l.measured_db.max(l.model_db)).fold(0.0, f64::max) + 5.0;
+        let chart = |name: &str, pts: Vec<(f64, f64)>, color: usize| Chart {
+            title: format!("{stem}: {name}, levels relative to the first mesh line (distance {:.1} dB)", c.distance_db),
+            x_label: "order of the pinion rotation".into(),
+            y_label: "level [dB re 1x mesh]".into(),
+            y_range: Some((lo, hi)),
+            series: vec![Series { name: name.into(), points: pts, style: Style::Points, color }],
+            ..Default::default()
+        };
+        let p = dir.join(format!("{stem}-vs-model.png"));
+        render_png(&p, 1400, 900, &[chart("measured", meas, 0), chart(&format!("model {}", c.scene), model, 1)])?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// One point of a parameter sweep, for the stability map.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SweepPoint {
+    /// Parameter value.
+    pub value: f64,
+    /// |rho|max (`null` when the point failed).
+    pub rho_max: Option<f64>,
+    /// Asymptotically stable.
+    pub stable: Option<bool>,
+    /// Result within tolerance.
+    pub trusted: bool,
+    /// Amplitudes of the first mesh harmonics (or strongest orders) of the output quantity.
+    pub lines: Vec<(String, f64)>,
+    /// Why the point failed, if it did.
+    pub error: Option<String>,
+}
+
+/// Stability map: |rho|max against the parameter (unstable ranges shaded) and the line amplitudes.
+///
+/// # Errors
+/// No usable point, or write failures.
+pub fn stability_map(
+    path: &Path,
+    scene: &str,
+    param: &str,
+    unit_label: &str,
+    points: &[SweepPoint],
+) -> Result<(), ReportError> {
+    let ok: Vec<&SweepPoint> = points.iter().filter(|p| p.rho_max.is_some()).collect();
+    let rho: Vec<(f64, f64)> = ok.iter().map(|p| (p.value, p.rho_max.unwrap_or(f64::NAN))).collect();
+    let mut bands = Vec::new();
+    let mut start: Option<f64> = None;
+    for w in points.windows(2) {
+        let unstable = |p: &SweepPoint| p.stable == Some(false);
+        if unstable(&w[0]) && start.is_none() {
+            start = Some(w[0].value);
+        }
+        if start.is_some() && !unstable(&w[1]) {
+            bands.push(Band { from: start.take().unwrap_or(w[0].value), to: w[0].value });
+        }
+    }
+    if let (Some(s), Some(last)) = (start, points.last()) {
+        bands.push(Band { from: s, to: last.value });
+    }
+    let (lo, hi) = (points.first().map_or(0.0, |p| p.value), points.last().map_or(1.0, |p| p.value));
+    let one: Vec<(f64, f64)> = vec![(lo, 1.0), (hi, 1.0)];
+    let top = Chart {
+        title: format!("{scene}: stability map over {param} (shaded: unstable, |rho|max > 1)"),
+        x_label: unit_label.into(),
+        y_label: "|rho|max (Floquet)".into(),
+        y_log: true,
+        x_range: Some((lo, hi)),
+        series: vec![
+            Series { name: "|rho|max".into(), points: rho, style: Style::Line, color: 0 },
+            Series { name: "stability limit |rho| = 1".into(), points: one, style: Style::Line, color: 1 },
+        ],
+        bands: bands.clone(),
+        ..Default::default()
+    };
+    let names: Vec<String> = ok.first().map(|p| p.lines.iter().map(|l| l.0.clone()).collect()).unwrap_or_default();
+    let series: Vec<Series> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| Series {
+            name: n.clone(),
+            points: ok
+                .iter()
+                .filter(|p| p.stable == Some(true))
+                .filter_map(|p| p.lines.get(i).map(|l| (p.value, l.1)))
+                .filter(|q| q.1 > 0.0)
+                .collect(),
+            style: Style::Line,
+            color: i + 2,
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    let mut charts = vec![top];
+    if !series.is_empty() {
+        charts.push(Chart {
+            title: "steady-state line amplitudes (stable points only)".into(),
+            x_label: unit_label.into(),
+            y_label: "amplitude [output unit]".into(),
+            y_log: true,
+            x_range: Some((lo, hi)),
+            series,
+            bands,
+            ..Default::default()
+        });
+    }
+    render_png(path, 1400, 500 * charts.len() as u32, &charts)
+}

@@ -1,0 +1,134 @@
+//! PNG reports and parameter sweeps.
+
+mod common;
+use common::*;
+use gearvib::report::plot::{Chart, Series, Style, render_png};
+
+/// Width and height from a PNG's IHDR chunk, after checking the signature.
+fn png_size(path: &std::path::Path) -> (u32, u32) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(&b[..8], b"\x89PNG\r\n\x1a\n", "{} is not a PNG", path.display());
+    assert_eq!(&b[12..16], b"IHDR");
+    (u32::from_be_bytes([b[16], b[17], b[18], b[19]]), u32::from_be_bytes([b[20], b[21], b[22], b[23]]))
+}
+
+#[test]
+fn simulate_report_writes_png_images_of_the_stated_size() {
+    let dir = temp_dir("report-sim");
+    let out = dir.to_string_lossy().into_owned();
+    let run = gearvib(&["simulate", &repo("data/scenes/paper-gear-fig8a.json"), "--report", &out]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    for (name, w, h) in [
+        ("waveform.png", 1400, 600),
+        ("spectrum.png", 1400, 700),
+        ("zoom-mesh.png", 1400, 1260),
+        ("multipliers.png", 800, 800),
+    ] {
+        assert_eq!(png_size(&dir.join(name)), (w, h), "{name}");
+    }
+    let summary = read_json(&dir.join("simulate.json").to_string_lossy());
+    assert!(summary["orders"].is_array());
+    // the press adds Figs 3-4
+    let run = gearvib(&["simulate", &repo("data/scenes/paper-press-case1.json"), "--report", &out]);
+    assert_eq!(run.code, 0);
+    assert_eq!(png_size(&dir.join("press-q1-q2.png")), (1400, 1600));
+}
+
+#[test]
+fn diagnose_report_writes_images() {
+    let dir = temp_dir("report-diag");
+    let out = dir.to_string_lossy().into_owned();
+    let rec = repo("data/recordings/gear-z14z39-fs10kHz-pitted-pinion-tooth3.wav");
+    let run = gearvib(&[
+        "diagnose",
+        &rec,
+        "--tacho-channel",
+        "2",
+        "--channel",
+        "1",
+        "--scene",
+        &repo("data/scenes/gear-z14z39-healthy.json"),
+        "--report",
+        &out,
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let stem = "gear-z14z39-fs10kHz-pitted-pinion-tooth3";
+    assert_eq!(png_size(&dir.join(format!("{stem}-spectrum.png"))), (1400, 700));
+    assert_eq!(png_size(&dir.join(format!("{stem}-tsa.png"))), (1400, 900));
+    assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (1400, 900));
+    assert!(dir.join(format!("{stem}-diagnosis.json")).exists());
+}
+
+#[test]
+fn empty_or_non_finite_data_is_refused_not_drawn_blank() {
+    let dir = temp_dir("report-bad");
+    let chart = |pts: Vec<(f64, f64)>| Chart {
+        title: "t".into(),
+        x_label: "x [s]".into(),
+        y_label: "y [m]".into(),
+        series: vec![Series { name: "s".into(), points: pts, style: Style::Line, color: 0 }],
+        ..Default::default()
+    };
+    let p = dir.join("x.png");
+    let e = render_png(&p, 400, 300, &[chart(vec![])]).unwrap_err();
+    assert!(e.to_string().contains("no data"), "{e}");
+    let e = render_png(&p, 400, 300, &[chart(vec![(0.0, 1.0), (1.0, f64::NAN)])]).unwrap_err();
+    assert!(e.to_string().contains("non-finite"), "{e}");
+    let mut log = chart(vec![(1.0, -1.0), (2.0, 0.0)]);
+    log.y_log = true;
+    assert!(render_png(&p, 400, 300, &[log]).is_err());
+    assert!(!p.exists(), "no blank image is left behind");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "no temporary files either");
+}
+
+#[test]
+fn speed_sweep_finds_the_principal_parametric_resonance() {
+    // instability where the mesh frequency is twice the natural frequency: z1 f1 = 2 f0, with
+    // f0 = sqrt(k0 / m_red) / 2 pi = 869.3 Hz and z1 = 14: 60 * 2 * 869.3 / 14 = 7451 rpm
+    let k0 = 8.1846e8f64;
+    let (j1, j2, r1, r2) = (0.093f64, 0.272f64, 0.03046f64, 0.08486f64);
+    let m = j1 * j2 / (j1 * r2 * r2 + j2 * r1 * r1);
+    let rpm = 60.0 * 2.0 * (k0 / m).sqrt() / (2.0 * std::f64::consts::PI) / 14.0;
+    let dir = temp_dir("sweep");
+    let png = dir.join("map.png").to_string_lossy().into_owned();
+    let run = gearvib(&[
+        "sweep",
+        &repo("data/scenes/hard-gear-light-damping.json"),
+        "--param",
+        "speed",
+        "--from",
+        "7000",
+        "--to",
+        "7900",
+        "--steps",
+        "61",
+        "-o",
+        &png,
+        "--json",
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let pts = v["points"].as_array().unwrap();
+    assert_eq!(pts.len(), 61);
+    let unstable: Vec<f64> =
+        pts.iter().filter(|p| p["stable"] == false).map(|p| p["value"].as_f64().unwrap()).collect();
+    assert!(!unstable.is_empty());
+    let (lo, hi) = (unstable[0], unstable[unstable.len() - 1]);
+    assert!(lo < rpm && rpm < hi, "zone {lo}..{hi} must contain {rpm}");
+    // the zone is narrow: its width follows k1/k0 ~ 4 %, far below the swept 900 rpm
+    assert!(hi - lo < 0.05 * rpm);
+    assert_eq!(png_size(std::path::Path::new(&png)), (1400, 1000));
+    let bad = gearvib(&[
+        "sweep",
+        &repo("data/scenes/hard-gear-light-damping.json"),
+        "--param",
+        "colour",
+        "--from",
+        "0",
+        "--to",
+        "1",
+        "--steps",
+        "3",
+    ]);
+    assert_one_line_error(&bad, &["--param colour", "no numeric field"]);
+}
