@@ -63,7 +63,7 @@ pub fn sweep(
     steps: usize,
     tick: &(dyn Fn() + Sync),
 ) -> Result<Vec<SweepPoint>, Error> {
-    if !(from.is_finite() && to.is_finite()) || !(2..=1_000_000).contains(&steps) {
+    if !(from.is_finite() && to.is_finite() && (2..=1_000_000).contains(&steps)) {
         return Err(Error::Other(format!(
             "--from/--to/--steps: need finite bounds and 2..=1000000 steps, got {from}, {to}, {steps}"
         )));
