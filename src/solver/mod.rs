@@ -397,26 +397,8 @@ fn solve_steps(
         ));
         trusted = false;
     }
-    if let Some(r) = fine.floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
-        if r < 1e-6 {
-            warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
-        }
-    }
-    repeated_warning(&fine.floquet, estimate, &mut warnings);
     let mut floquet = fine.floquet;
-    if (floquet.rho_max - 1.0).abs() <= opts.tolerance.max(estimate) {
-        // on the unit circle within the accuracy: bounded at best, never asymptotically stable
-        floquet.stable = false;
-        warnings.push(format!(
-            "|rho|max = {:.12} equals 1 within the accuracy: marginally stable at best (not asymptotically stable)",
-            floquet.rho_max
-        ));
-    } else if !floquet.stable {
-        warnings.push(format!(
-            "unstable: |rho|max = {} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
-            fmt_rho(floquet.rho_max)
-        ));
-    }
+    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), estimate, &mut warnings);
     Ok(SteadyState {
         method: if scheme == rk4::Scheme::Rk4 { "rk4" } else { "magnus4" },
         reason: reason.to_string(),
@@ -572,24 +554,7 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
         ));
     }
     let mut floquet = floquet;
-    if (floquet.rho_max - 1.0).abs() <= opts.tolerance.max(phi_err) {
-        floquet.stable = false;
-        warnings.push(format!(
-            "|rho|max = {:.12} equals 1 within the accuracy: marginally stable at best",
-            floquet.rho_max
-        ));
-    } else if !floquet.stable {
-        warnings.push(format!(
-            "unstable: |rho|max = {} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
-            fmt_rho(floquet.rho_max)
-        ));
-    }
-    if let Some(r) = floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
-        if r < 1e-6 {
-            warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
-        }
-    }
-    repeated_warning(&floquet, phi_err, &mut warnings);
+    floquet_warnings(&mut floquet, opts.tolerance.max(phi_err), phi_err, &mut warnings);
     let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
     Ok(SteadyState {
         method: "hill",
@@ -613,6 +578,30 @@ fn solve_hill(sys: &dyn PeriodicSystem, opts: &SolverOptions, reason: String) ->
         warnings,
         trajectory: Trajectory::Fourier(sol),
     })
+}
+
+/// Stability warnings shared by all solvers: marginal (|rho|max = 1 within `accuracy`, then marked not
+/// stable), unstable, a multiplier near +1, nearly repeated multipliers.
+fn floquet_warnings(floquet: &mut Floquet, accuracy: f64, phi_error: f64, warnings: &mut Vec<String>) {
+    if (floquet.rho_max - 1.0).abs() <= accuracy {
+        // on the unit circle within the accuracy: bounded at best, never asymptotically stable
+        floquet.stable = false;
+        warnings.push(format!(
+            "|rho|max = {:.12} equals 1 within the accuracy: marginally stable at best (not asymptotically stable)",
+            floquet.rho_max
+        ));
+    } else if !floquet.stable {
+        warnings.push(format!(
+            "unstable: |rho|max = {} > 1; the periodic solution exists but is not the attractor (free vibration grows)",
+            fmt_rho(floquet.rho_max)
+        ));
+    }
+    if let Some(r) = floquet.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
+        if r < 1e-6 {
+            warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
+        }
+    }
+    repeated_warning(floquet, phi_error, warnings);
 }
 
 /// Nearly repeated multipliers (as at a parametric-resonance boundary) are sensitive like the square root of
