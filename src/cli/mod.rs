@@ -230,9 +230,10 @@ fn print_stability(s: &StabilitySummary) {
     println!("scene            {}", s.scene);
     println!("period           {:.6} s", s.period_s);
     println!(
-        "method           {} ({} steps, stability limit {} steps), estimated error {:.2e} (tolerance {:.1e})",
-        s.method, s.steps, s.stability_limit_steps, s.error_estimate, s.tolerance
+        "method           {} ({} {}; rk4 stability limit {} steps), estimated error {:.2e} (tolerance {:.1e})",
+        s.method, s.steps, s.resolution_unit, s.stability_limit_steps, s.error_estimate, s.tolerance
     );
+    println!("why              {}", s.method_reason);
     println!("cond(I - Phi)    {:.3e}", s.cond_i_minus_phi);
     println!("|rho|max         {:.6e}  -> {}", s.rho_max, if s.stable { "asymptotically stable" } else { "UNSTABLE" });
     println!("multipliers      re            im            |rho|");

@@ -35,8 +35,10 @@ pub struct StabilitySummary {
     pub method: String,
     /// Why it was chosen.
     pub method_reason: String,
-    /// Steps used.
+    /// Resolution used: steps of a step-based method, harmonics for hill (key kept as `steps`).
     pub steps: usize,
+    /// "steps" or "harmonics".
+    pub resolution_unit: String,
     /// Estimated relative error.
     pub error_estimate: f64,
     /// Requested tolerance.
@@ -71,6 +73,7 @@ impl StabilitySummary {
             method: s.method.to_string(),
             method_reason: s.reason.clone(),
             steps: s.resolution,
+            resolution_unit: if s.method == "hill" { "harmonics" } else { "steps" }.into(),
             error_estimate: s.error_estimate,
             tolerance: scene.solver.tolerance,
             cond_i_minus_phi: s.cond_i_minus_phi,
