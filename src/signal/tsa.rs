@@ -156,9 +156,11 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
             got: x.len(),
         });
     }
-    let interp = Interpolator::new();
+    // the table is built once per process (1025 x 16 Bessel-windowed taps)
+    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
+    let interp = TABLE.get_or_init(Interpolator::new);
     if let Some((offset, period)) = map.constant {
-        return Ok(Tsa { samples: tsa_constant(x, &interp, offset, period / ratio, revs, points), revolutions: revs });
+        return Ok(Tsa { samples: tsa_constant(x, interp, offset, period / ratio, revs, points), revolutions: revs });
     }
     let mut acc = vec![0.0; points];
     for j in 0..revs {
