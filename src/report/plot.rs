@@ -295,7 +295,7 @@ fn fmt_tick(v: f64) -> String {
     // tick positions carry rounding noise: anything this small is the zero tick
     if a < 1e-12 {
         "0".into()
-    } else if (9.999e-3..1e5).contains(&a) {
+    } else if (9.999e-4..1e5).contains(&a) {
         let s = format!("{v:.3}");
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
