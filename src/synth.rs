@@ -90,16 +90,20 @@ impl Noise {
     fn uniform(&mut self) -> f64 {
         ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
     }
-    /// Standard normal (Box-Muller).
+    /// Standard normal (Marsaglia's polar method: one logarithm per pair, no trigonometry).
     fn gauss(&mut self) -> f64 {
         if let Some(s) = self.spare.take() {
             return s;
         }
-        let (u, v) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u.ln()).sqrt();
-        let (s, c) = (2.0 * std::f64::consts::PI * v).sin_cos();
-        self.spare = Some(r * s);
-        r * c
+        loop {
+            let (u, v) = (2.0 * self.uniform() - 1.0, 2.0 * self.uniform() - 1.0);
+            let s = u * u + v * v;
+            if s > 0.0 && s < 1.0 {
+                let f = (-2.0 * s.ln() / s).sqrt();
+                self.spare = Some(v * f);
+                return u * f;
+            }
+        }
     }
 }
 
@@ -291,7 +295,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
             times.push(phase(t, o.speed_modulation.map(|m| (m.depth, m.frequency_hz))));
         }
         let values = match &eval {
-            Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(tau.rem_euclid(period))).collect(),
+            Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(wrap(tau, period))).collect(),
             Evaluator::Direct(sc, si) => crate::pipeline::output_at(sc, &si.steady, &times),
         };
         buf.clear();
@@ -300,7 +304,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
             buf.push(noisy);
             for (_, ratio) in &shafts {
                 let rev = times[i] * o.base_hz * ratio;
-                buf.push(if rev - rev.floor() < 0.05 { pulse } else { 0.0 });
+                buf.push(if wrap(rev, 1.0) < 0.05 { pulse } else { 0.0 });
             }
         }
         match &mut sink {
@@ -344,6 +348,14 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
     let text = serde_json::to_string_pretty(&info).map_err(|e| Error::Other(e.to_string()))?;
     crate::io::write_atomic(Path::new(&side), text.as_bytes()).map_err(|e: DataError| Error::Other(e.to_string()))?;
     Ok(info)
+}
+
+/// `x` modulo `period` for x >= 0 by a cast (`rem_euclid` and `floor` are library calls on baseline x86-64,
+/// and this runs once per sample and channel).
+#[inline]
+fn wrap(x: f64, period: f64) -> f64 {
+    let r = x - (x / period) as i64 as f64 * period;
+    if r < 0.0 { r + period } else { r }
 }
 
 /// Nominal-speed time equivalent of the shaft angle at time t (see the module docs).
