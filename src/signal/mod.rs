@@ -28,7 +28,7 @@ pub enum SignalError {
 pub trait Sample: Copy + Send + Sync {
     /// As f64.
     fn f(self) -> f64;
-    /// sum_k x[k] taps[k] over 16 samples, in eight independent lanes (so the compiler vectorises it).
+    /// `sum_k x[k] taps[k]` over 16 samples, in eight independent lanes (so the compiler vectorises it).
     fn dot16(x: &[Self], taps: &[f32; 16]) -> f64;
 }
 
