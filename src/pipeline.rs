@@ -51,9 +51,7 @@ pub fn output_at(scene: &Scene, steady: &SteadyState, times: &[f64]) -> Vec<f64>
         let x = &states[i * n..(i + 1) * n];
         if q.needs_derivative() {
             sys.eval(t.rem_euclid(steady.period_s), crate::model::Side::Right, &mut p, &mut f);
-            for (r, xd) in xdot.iter_mut().enumerate() {
-                *xd = f[r] + (0..n).map(|c| p[(r, c)] * x[c]).sum::<f64>();
-            }
+            crate::model::state_derivative(&p, &f, x, &mut xdot);
         }
         out.push(q.value(x, &xdot));
     }

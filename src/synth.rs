@@ -164,12 +164,13 @@ fn evaluator<'a>(scene: &'a Scene, sim: &'a Simulation) -> Evaluator<'a> {
     let (mut p, mut f) = (nalgebra::DMatrix::zeros(n, n), nalgebra::DVector::zeros(n));
     let mut values = Vec::with_capacity(m);
     let mut slopes = Vec::with_capacity(m);
+    let mut xdot = vec![0.0; n];
     for (i, &t) in times.iter().enumerate() {
         let x = &states[i * n..(i + 1) * n];
         sys.eval(t, Side::Right, &mut p, &mut f);
+        crate::model::state_derivative(&p, &f, x, &mut xdot);
         values.push(weights.iter().zip(x).map(|(w, v)| w * v).sum());
-        let xdot = |r: usize| f[r] + (0..n).map(|c| p[(r, c)] * x[c]).sum::<f64>();
-        slopes.push(weights.iter().enumerate().map(|(r, w)| if *w == 0.0 { 0.0 } else { w * xdot(r) }).sum());
+        slopes.push(weights.iter().zip(&xdot).map(|(w, v)| w * v).sum());
     }
     Evaluator::Table(Table { period_s: period, values, slopes })
 }

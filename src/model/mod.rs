@@ -64,6 +64,13 @@ pub trait PeriodicSystem: Sync {
     }
 }
 
+/// x' = P x + f from an evaluated P and f (written into `out`, length n).
+pub fn state_derivative(p: &DMatrix<f64>, f: &DVector<f64>, x: &[f64], out: &mut [f64]) {
+    for (r, o) in out.iter_mut().enumerate() {
+        *o = f[r] + x.iter().enumerate().map(|(c, v)| p[(r, c)] * v).sum::<f64>();
+    }
+}
+
 /// Second-order system whose entries are Fourier series of one common base frequency 2 pi / T.
 #[derive(Clone, Debug)]
 pub struct FourierForm {
