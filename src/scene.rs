@@ -48,7 +48,9 @@ pub enum SceneError {
 struct RawScene {
     #[serde(default)]
     name: Option<String>,
+    /// Free text for people reading the scene; accepted, not used by the program.
     #[serde(default)]
+    #[allow(dead_code)]
     description: Option<String>,
     model: String,
     #[serde(default)]
@@ -352,7 +354,6 @@ impl Scene {
 
     fn from_raw(raw: RawScene, value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
         let v = Validator { file };
-        let _ = &raw.description;
         let solver = v.solver(&raw.solver)?;
         let mut notes = Vec::new();
         let stem = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
