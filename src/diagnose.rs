@@ -87,6 +87,9 @@ pub struct Sideband {
     pub order: f64,
     /// Peak amplitude.
     pub amplitude: f64,
+    /// False when a line of the other shaft (or the mesh line) lies within three spectral bins: the Hann
+    /// main lobe then mixes them and the amplitude cannot be attributed to this shaft.
+    pub resolved: bool,
 }
 
 /// A mesh harmonic with its sidebands.
@@ -549,10 +552,26 @@ fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(String, f64)]) -> Ve
                             frequency_hz: ff,
                             order: o,
                             amplitude: aa,
+                            resolved: true,
                         });
                     }
                 }
             }
+        }
+        // lines of different shafts closer than the resolution (3 bins, in orders) cannot be told apart
+        let resolution = match (spectrum, shaft_hz) {
+            (Some(s), Some(f1)) => 3.0 * s.freqs_hz.get(1).copied().unwrap_or(1.0) / f1,
+            _ => 0.0,
+        };
+        let nominal: Vec<(String, f64)> = shafts
+            .iter()
+            .flat_map(|(name, ratio)| {
+                (1..=3).flat_map(move |i| [-1.0, 1.0].map(|sg| (name.clone(), order + sg * f64::from(i) * ratio)))
+            })
+            .chain(std::iter::once(("mesh".to_string(), order)))
+            .collect();
+        for sb in &mut sidebands {
+            sb.resolved = !nominal.iter().any(|(name, o)| *name != sb.shaft && (o - sb.order).abs() < resolution);
         }
         out.push(MeshHarmonic { k, frequency_hz: f, order, amplitude: a, sidebands });
     }

@@ -452,7 +452,7 @@ fn print_diagnosis(d: &crate::diagnose::Diagnosis) {
     println!("mesh harmonics (channel {}):", d.channels[0]);
     for h in &d.mesh_harmonics {
         let f = h.frequency_hz.map_or("-".into(), |f| format!("{f:.2} Hz"));
-        let mut sb = h.sidebands.clone();
+        let mut sb = h.sidebands.iter().filter(|s| s.resolved).cloned().collect::<Vec<_>>();
         sb.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
         let top: Vec<String> =
             sb.iter().take(4).map(|s| format!("{:+} {} {:.3e}", s.offset, s.shaft, s.amplitude)).collect();

@@ -302,11 +302,12 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             style: Style::Line,
             color: 4,
         }];
+        // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured
         let side = |shaft: &str| -> Vec<(f64, f64)> {
             d.mesh_harmonics
                 .iter()
                 .flat_map(|h| h.sidebands.iter())
-                .filter(|s| s.shaft == shaft)
+                .filter(|s| s.shaft == shaft && s.resolved)
                 .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
                 .collect()
         };
@@ -314,7 +315,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             let pts = side(shaft);
             if !pts.is_empty() {
                 series.push(Series {
-                    name: format!("{shaft} sidebands (+-1..3 {shaft} orders)"),
+                    name: format!("{shaft} sidebands (+-1..3 {shaft} orders, resolved only)"),
                     points: pts,
                     style: Style::Points,
                     color: 1 + i,
