@@ -1,13 +1,24 @@
 //! gearvib: steady-state vibration of gear pairs and other linear time-periodic (LTP) machine models,
 //! Floquet stability, recording diagnosis and PNG reports.
 //!
-//! Flow: a JSON [`scene::Scene`] builds a [`model::PeriodicSystem`] (gear pair, forging press or generic
-//! LTP system); [`solver::solve`] finds its periodic steady state and Floquet multipliers by the RK4
-//! product method of Nguyen, Nguyen & Hoang (2009, Eqs 15-21); the `signal` layer analyses recorded or
-//! simulated signals.
+//! # Flow
+//! ```text
+//! scene JSON --scene--> model (GearPair, press, SecondOrderSystem) --implements--> system::PeriodicSystem
+//!     --solver::solve--> solver::SteadyState (periodic x(t), Floquet multipliers, error estimate)
+//!     --jobs::simulate--> report::summary::Simulation (orders, RMS) --io--> WAV/CSV + sidecar
+//! WAV/CSV --io--> io::Recording --jobs::diagnose (signal: spectra, TSA, indicators)--> report::summary::Diagnosis
+//! ```
+//! Layers, with dependencies pointing one way: `cli` -> `jobs` -> {`report`, `scene`, `io`, `signal`,
+//! `solver`, `model`} -> `system`. The solver never knows what a gear is ([`system::PeriodicSystem`] is all
+//! it sees), `signal` knows no ODE, `jobs` never see the command line, and `report` draws what jobs hand
+//! it. Principal types: [`scene::Scene`], [`system::PeriodicSystem`], [`solver::SteadyState`],
+//! [`io::Recording`], [`report::summary::Diagnosis`].
+//!
+//! The method is the RK4 product method of Nguyen, Nguyen & Hoang (2009, Eqs 15-21), with harmonic
+//! balance and a fourth-order Magnus scheme as faster or A-stable alternatives.
 //!
 //! ```
-//! use gearvib::model::{catalog, PeriodicSystem};
+//! use gearvib::model::catalog;
 //! use gearvib::solver::{solve, SolverOptions};
 //! // m y'' + c y' + k y = cos(w t): the steady state is known in closed form
 //! let sys = catalog::forced_oscillator(1.0, 0.2, 4.0, 1.0, 1.5);
@@ -17,20 +28,17 @@
 //! assert!(ss.floquet.stable);
 //! ```
 
-pub mod bench;
 pub mod cli;
-pub mod diagnose;
 pub mod io;
+pub mod jobs;
 pub mod model;
-pub mod pipeline;
 pub mod report;
 pub mod scene;
 pub mod signal;
 pub mod solver;
-pub mod sweep;
-pub mod synth;
+pub mod system;
 
-/// Top-level error: one variant per layer.
+/// Top-level error: one variant per layer, each wrapping that layer's enum.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Scene reading or validation.
@@ -45,7 +53,13 @@ pub enum Error {
     /// Signal analysis.
     #[error(transparent)]
     Signal(#[from] signal::SignalError),
-    /// Anything else, with its message.
-    #[error("{0}")]
-    Other(String),
+    /// Drawing or writing reports.
+    #[error(transparent)]
+    Report(#[from] report::ReportError),
+    /// A job (simulate, sweep, bench, diagnose) refused its input or could not finish.
+    #[error(transparent)]
+    Job(#[from] jobs::JobError),
+    /// A command-line flag that is wrong in itself or does not fit the input.
+    #[error(transparent)]
+    Cli(#[from] cli::CliError),
 }

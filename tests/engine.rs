@@ -173,7 +173,7 @@ fn press_lines(case: &str, quantity: &str) -> (f64, Vec<(f64, f64)>) {
     let mut v = read_json(&repo(&format!("data/scenes/paper-press-{case}.json")));
     v["output"]["quantity"] = quantity.into();
     let scene = Scene::from_value(v, case).unwrap();
-    let sim = gearvib::pipeline::simulate(&scene).unwrap();
+    let sim = gearvib::jobs::simulate::simulate(&scene).unwrap();
     (sim.steady.floquet.rho_max, sim.orders.iter().map(|o| (o.order, o.amplitude)).collect())
 }
 
@@ -208,7 +208,7 @@ fn gear_scene(edit: impl Fn(&mut serde_json::Value)) -> Scene {
 }
 
 fn lines(scene: &Scene) -> Vec<f64> {
-    gearvib::pipeline::simulate(scene).unwrap().orders.iter().map(|o| o.amplitude).collect()
+    gearvib::jobs::simulate::simulate(scene).unwrap().orders.iter().map(|o| o.amplitude).collect()
 }
 
 #[test]
@@ -336,7 +336,7 @@ fn gear_meets_requested_tolerance_against_independent_integration() {
 fn gear_period_is_one_mesh_cycle_without_errors() {
     let scene = gear_scene(|v| v["gear_pair"]["pinion"]["errors"] = serde_json::json!([]));
     assert!(rel(scene.system().period_s(), 1.0 / 420.0) < 1e-12);
-    let sim = gearvib::pipeline::simulate(&scene).unwrap();
+    let sim = gearvib::jobs::simulate::simulate(&scene).unwrap();
     // only multiples of the mesh order appear in the listing
     for o in &sim.orders {
         assert!((o.order / 14.0 - (o.order / 14.0).round()).abs() < 1e-9);

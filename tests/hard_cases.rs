@@ -97,7 +97,7 @@ fn lightly_damped_gear_matches_closed_form_decay_and_other_solver() {
     let scene = Scene::from_value(v, "light").unwrap();
     let sys = scene.system();
     let hill = solve(sys, &scene.solver).unwrap();
-    assert_eq!(hill.method, "hill");
+    assert_eq!(hill.method, Method::Hill);
     let rk = solve(sys, &with(Method::Rk4, 1e-9)).unwrap();
     // |rho| = exp(-c T / (2 m)) for a 1-DOF Hill equation with a complex pair (Liouville), c/m = 2 zeta w0
     let gearvib::scene::Model::GearPair(g) = &scene.model else { panic!() };
@@ -238,7 +238,7 @@ fn stiff_two_dof_piecewise_is_exact_with_magnus_and_auto_picks_it() {
     let (scene, _) = stiff_scene(true, r#"{"method": "auto", "tolerance": 1e-10}"#);
     let sys = scene.system();
     let ss = solve(sys, &scene.solver).unwrap();
-    assert_eq!(ss.method, "magnus4", "{}", ss.reason);
+    assert_eq!(ss.method, Method::Magnus, "{}", ss.reason);
     assert!(
         ss.stability_limit_steps > ss.resolution,
         "rk4 would need {} steps for stability alone, magnus used {}",
@@ -263,7 +263,7 @@ fn stiff_two_dof_smooth_hill_and_magnus_agree() {
     let (scene, _) = stiff_scene(false, r#"{"method": "auto", "tolerance": 1e-8}"#);
     let sys = scene.system();
     let hill = solve(sys, &scene.solver).unwrap();
-    assert_eq!(hill.method, "hill");
+    assert_eq!(hill.method, Method::Hill);
     let magnus = solve(sys, &with(Method::Magnus, 1e-7)).unwrap();
     // A-stability: at a quarter of rk4's stability limit, magnus stays bounded and close while rk4 is
     // refused or flagged

@@ -1,6 +1,7 @@
-//! Files <-> signals: WAV (hound) and CSV readers and writers, and atomic output.
+//! Files <-> signals: WAV (hound) and CSV readers and writers, the sidecar, and atomic output.
 
 pub mod csv;
+pub mod sidecar;
 pub mod wav;
 
 use std::io::Write;
@@ -112,7 +113,7 @@ pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
     match extension(path).as_deref() {
         Some("wav") => {
             let mut rec = wav::read(path)?;
-            apply_sidecar_scale(path, &mut rec);
+            apply_sidecar(path, &mut rec);
             Ok(rec)
         }
         Some("csv") | Some("txt") | Some("tsv") => csv::read(path),
@@ -126,22 +127,24 @@ pub fn extension(path: &Path) -> Option<String> {
 }
 
 /// An integer WAV written by gearvib stores value / full_scale; its sidecar `FILE.json` states
-/// `full_scale`, which restores physical units. Files without a readable sidecar are left as read.
-fn apply_sidecar_scale(path: &Path, rec: &mut Recording) {
-    let mut side = path.as_os_str().to_os_string();
-    side.push(".json");
-    let Ok(text) = std::fs::read_to_string(&side) else { return };
-    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else { return };
-    if let Some(fs) = v.get("full_scale").and_then(serde_json::Value::as_f64).filter(|f| f.is_finite() && *f > 0.0) {
+/// `full_scale`, which restores physical units, and names the channels. Files without a readable sidecar
+/// are left as read.
+fn apply_sidecar(path: &Path, rec: &mut Recording) {
+    let Some(side) = sidecar::read(path) else { return };
+    if let Some(fs) = side.full_scale.filter(|f| f.is_finite() && *f > 0.0) {
         for c in &mut rec.channels {
             c.iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
         }
     }
-    if let Some(chs) = v.get("channels").and_then(serde_json::Value::as_array) {
-        for (name, c) in rec.names.iter_mut().zip(chs) {
-            if let Some(n) = c.get("name").and_then(serde_json::Value::as_str) {
-                *name = n.to_string();
-            }
-        }
+    for (name, c) in rec.names.iter_mut().zip(&side.channels) {
+        name.clone_from(&c.name);
     }
+}
+
+/// Creates a directory (and its parents) for outputs.
+///
+/// # Errors
+/// The directory cannot be created.
+pub fn create_dir(dir: &Path) -> Result<(), DataError> {
+    std::fs::create_dir_all(dir).map_err(|e| DataError::io(dir, format!("cannot create the directory: {e}")))
 }

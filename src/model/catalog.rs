@@ -2,7 +2,8 @@
 //!
 //! Each function returns a system together with what is known about it independently of any solver.
 
-use super::{Coefficient, FourierSeries, PiecewiseConstant, SecondOrderSystem};
+use super::SecondOrderSystem;
+use crate::system::{Coefficient, FourierSeries, PiecewiseConstant};
 use std::f64::consts::PI;
 
 fn c(v: f64) -> Coefficient {

@@ -13,7 +13,7 @@
 //! healthy mesh, one pinion revolution with pinion errors, one wheel revolution with wheel errors only,
 //! and the hunting period z_w / gcd(z_p, z_w) pinion revolutions with both.
 
-use super::{FourierForm, FourierSeries, PeriodicSystem, PiecewiseConstant, Side};
+use crate::system::{FourierForm, FourierSeries, PeriodicSystem, PiecewiseConstant, Side};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -22,7 +22,8 @@ use std::f64::consts::PI;
 pub enum MeshStiffness {
     /// Fourier series in the mesh angle (base w_z = z1 w1), N/m.
     Fourier(FourierSeries),
-    /// Piecewise-constant values over one mesh cycle (period 1/f_z), N/m.
+    /// Piecewise-constant values over one mesh cycle, N/m. Given over any period (for example 1 = one
+    /// cycle, starts as fractions of it); [`GearPair::new`] rescales it to the mesh period 1/f_z in s.
     Piecewise(PiecewiseConstant),
 }
 
@@ -43,7 +44,8 @@ impl MeshStiffness {
 }
 
 /// Which gear of the pair.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Gear {
     /// The driving gear (index 1 in the paper).
     Pinion,
@@ -120,8 +122,14 @@ impl GearPair {
         let w1 = params.speed_rpm / 60.0 * 2.0 * PI;
         params.pinion_errors.omega_rad_s = w1;
         params.wheel_errors.omega_rad_s = w1 * params.pinion_teeth as f64 / params.wheel_teeth as f64;
-        if let MeshStiffness::Fourier(s) = &mut params.mesh {
-            s.omega_rad_s = w1 * params.pinion_teeth as f64;
+        let mesh_period_s = 1.0 / (params.speed_rpm / 60.0 * params.pinion_teeth as f64);
+        match &mut params.mesh {
+            MeshStiffness::Fourier(s) => s.omega_rad_s = w1 * params.pinion_teeth as f64,
+            MeshStiffness::Piecewise(p) => {
+                let scale = mesh_period_s / p.period_s;
+                p.starts.iter_mut().for_each(|s| *s *= scale);
+                p.period_s = mesh_period_s;
+            }
         }
         let mut g = Self { params, m_red, c_z, k0, period_s: 0.0, breakpoints: Vec::new() };
         g.period_s = g.revolutions_per_period() * g.pinion_period_s();
@@ -321,6 +329,61 @@ impl PeriodicSystem for GearPair {
         let c =
             (self.params.wheel_errors.harmonics() as f64 * revs * z1 / self.params.wheel_teeth as f64).round() as usize;
         a.max(b).max(c) + a.min(b.max(c))
+    }
+}
+
+/// A local profile deviation on one tooth (pit, spall): a Gaussian bump of height `depth_m`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToothFault {
+    /// Tooth number, 1-based (tooth 1 meshes first after the angle origin).
+    pub tooth: usize,
+    /// Height of the bump in m (positive = material missing, adds to e(t)).
+    pub depth_m: f64,
+    /// Width: 6 sigma = `width_teeth` pitches.
+    pub width_teeth: f64,
+}
+
+/// Local profile deviations on single teeth as a Fourier series in the gear angle (w = 1 rad per rad):
+/// each a periodised Gaussian of height d centred on the tooth's mesh cycle, c = 2 pi (tooth - 1/2) / z,
+/// with 6 sigma = `width_teeth` pitches, in closed form:
+///
+/// ```text
+/// g(theta) = d sigma / sqrt(2 pi) [1 + 2 sum_k exp(-k^2 sigma^2 / 2) cos(k (theta - c))]
+/// ```
+/// Its spectrum decays like exp(-(k sigma)^2 / 2): the series keeps the k with that factor above `keep`
+/// (then terms below `keep` of the largest can be dropped by the caller).
+pub fn gaussian_tooth_faults(teeth: usize, faults: &[ToothFault], keep: f64) -> FourierSeries {
+    // (d sigma / sqrt(2 pi), sigma, centre)
+    let terms: Vec<(f64, f64, f64)> = faults
+        .iter()
+        .map(|f| {
+            let centre = 2.0 * PI * (f.tooth as f64 - 0.5) / teeth as f64;
+            let sigma = 2.0 * PI * f.width_teeth / teeth as f64 / 6.0;
+            (f.depth_m * sigma / (2.0 * PI).sqrt(), sigma, centre)
+        })
+        .collect();
+    let sigma_min = terms.iter().map(|t| t.1).fold(f64::INFINITY, f64::min);
+    let h = ((2.0 * (1.0 / keep).ln()).sqrt() / sigma_min).ceil() as usize;
+    let mut series = FourierSeries::new(1.0, terms.iter().map(|t| t.0).sum(), vec![0.0; h], vec![0.0; h]);
+    for (a, sigma, c) in &terms {
+        for k in 1..=h {
+            let amp = 2.0 * a * (-0.5 * (k as f64 * sigma).powi(2)).exp();
+            series.cos[k - 1] += amp * (k as f64 * c).cos();
+            series.sin[k - 1] += amp * (k as f64 * c).sin();
+        }
+    }
+    series
+}
+
+/// Rectangular mesh stiffness of contact ratio `eps` in [1, 3) and single-pair stiffness `kp` (N/m) over one
+/// mesh cycle of period 1: ceil(eps) pairs in contact for the first frac(eps) of the cycle, floor(eps)
+/// pairs for the rest (a constant floor(eps) kp when eps is whole).
+pub fn rectangular_stiffness(eps: f64, kp: f64) -> PiecewiseConstant {
+    let (lo, frac) = (eps.floor(), eps - eps.floor());
+    if frac == 0.0 {
+        PiecewiseConstant { period_s: 1.0, starts: vec![0.0], values: vec![lo * kp] }
+    } else {
+        PiecewiseConstant { period_s: 1.0, starts: vec![0.0, frac], values: vec![(lo + 1.0) * kp, lo * kp] }
     }
 }
 

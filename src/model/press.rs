@@ -11,7 +11,8 @@
 //! U'' and U''' are derivatives with respect to phi (not t). Products of series are formed exactly, so the
 //! press is a [`SecondOrderSystem`] with Fourier entries of period 2 pi / W.
 
-use super::{Coefficient, FourierSeries, SecondOrderSystem};
+use super::SecondOrderSystem;
+use crate::system::{Coefficient, FourierSeries};
 use std::f64::consts::PI;
 
 /// Press parameters (SI; torsional k1 in N m/rad and c1 in N m s/rad).

@@ -1,6 +1,6 @@
 //! Generic N-DOF second-order periodic system M(t) y'' + C(t) y' + K(t) y = d(t) (Eq 2).
 
-use super::{Coefficient, FourierForm, PeriodicSystem, Side};
+use crate::system::{Coefficient, FourierForm, PeriodicSystem, Side};
 use nalgebra::{DMatrix, DVector};
 
 /// Row-major N x N coefficient matrices and N forcing entries, all of one period `period_s`.

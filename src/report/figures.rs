@@ -2,8 +2,7 @@
 
 use super::ReportError;
 use super::plot::{Band, Chart, Marker, Series, Style, render_png};
-use crate::diagnose::Diagnosis;
-use crate::pipeline::{OrderLine, Simulation};
+use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Simulation, SweepPoint};
 use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 
@@ -303,7 +302,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             color: 4,
         }];
         // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured
-        let side = |shaft: &str| -> Vec<(f64, f64)> {
+        let side = |shaft: Shaft| -> Vec<(f64, f64)> {
             d.mesh_harmonics
                 .iter()
                 .flat_map(|h| h.sidebands.iter())
@@ -311,7 +310,11 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                 .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
                 .collect()
         };
-        for (i, shaft) in d.shaft_hz.keys().enumerate() {
+        let shafts = match d.shaft_hz {
+            ShaftHz::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
+            ShaftHz::Estimated { .. } => vec![Shaft::Estimated],
+        };
+        for (i, shaft) in shafts.into_iter().enumerate() {
             let pts = side(shaft);
             if !pts.is_empty() {
                 series.push(Series {
@@ -363,23 +366,6 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     Ok(out)
-}
-
-/// One point of a parameter sweep, for the stability map.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct SweepPoint {
-    /// Parameter value.
-    pub value: f64,
-    /// |rho|max (`null` when the point failed).
-    pub rho_max: Option<f64>,
-    /// Asymptotically stable.
-    pub stable: Option<bool>,
-    /// Result within tolerance.
-    pub trusted: bool,
-    /// Amplitudes of the first mesh harmonics (or strongest orders) of the output quantity.
-    pub lines: Vec<(String, f64)>,
-    /// Why the point failed, if it did.
-    pub error: Option<String>,
 }
 
 /// Stability map: |rho|max against the parameter (unstable ranges shaded) and the line amplitudes.
@@ -455,4 +441,54 @@ pub fn stability_map(
         });
     }
     render_png(path, 1400, 500 * charts.len() as u32, &charts)
+}
+
+/// Work-precision chart of one scene's results (log-log error against time).
+fn bench_chart(scene: &str, results: &[BenchResult]) -> Chart {
+    let mut series = Vec::new();
+    for (i, m) in ["rk4", "hill"].iter().enumerate() {
+        let pts: Vec<(f64, f64)> = results
+            .iter()
+            .filter(|r| r.scene == scene && r.method == *m)
+            .map(|r| (r.time_s, r.error.max(1e-16)))
+            .collect();
+        if !pts.is_empty() {
+            let label = if *m == "rk4" {
+                "rk4 product (paper), steps doubling"
+            } else {
+                "harmonic balance (Hill), harmonics x1.25"
+            };
+            series.push(Series { name: label.into(), points: pts, style: Style::LinePoints, color: i });
+        }
+    }
+    let auto: Vec<(f64, f64)> = results
+        .iter()
+        .filter(|r| r.scene == scene && r.method.starts_with("auto"))
+        .map(|r| (r.time_s, r.error.max(1e-16)))
+        .collect();
+    if !auto.is_empty() {
+        series.push(Series {
+            name: "auto at tolerance 1e-6, 1e-8, 1e-10 (full solve)".into(),
+            points: auto,
+            style: Style::Points,
+            color: 3,
+        });
+    }
+    Chart {
+        title: format!("Speed against error: {scene}"),
+        x_label: "wall time of one solve [s] (median)".into(),
+        y_label: "relative error of the periodic solution".into(),
+        x_log: true,
+        y_log: true,
+        series,
+        ..Default::default()
+    }
+}
+
+/// Draws the work-precision chart of `scene` from `results` into `png`.
+///
+/// # Errors
+/// Empty data or a failed write.
+pub fn bench(png: &Path, scene: &str, results: &[BenchResult]) -> Result<(), ReportError> {
+    render_png(png, 1200, 800, &[bench_chart(scene, results)])
 }

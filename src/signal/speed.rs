@@ -75,7 +75,7 @@ pub fn estimate_period<T: Sample>(
     };
     let Some(shortest) = strong_from(0) else {
         return Err(SignalError::Invalid(format!(
-            "no repetition period found between {min_lag} and {max_lag} samples: give --rpm or --shaft-hz"
+            "no repetition period found between {min_lag} and {max_lag} samples: give the shaft speed"
         )));
     };
     // The shortest strong lag may be the tooth-mesh period. A shaft carries at least 8 teeth, so a strong

@@ -12,8 +12,14 @@
 //! solution between H and 1.5 H is below the tolerance.
 
 use super::SolverError;
-use crate::model::FourierForm;
+use super::companion::companion_monodromy;
+use super::floquet::{Floquet, condition_number, floquet_warnings};
+use super::steady::{SteadyState, Trajectory};
+use super::{Method, RK4_STABILITY_LIMIT, SolverOptions, max_rate};
+use crate::system::FourierForm;
+use crate::system::PeriodicSystem;
 use nalgebra::Complex;
+use nalgebra::{DMatrix, DVector};
 
 type C64 = Complex<f64>;
 
@@ -25,7 +31,7 @@ struct Coefficients {
     stiffness: Vec<Vec<C64>>,
 }
 
-fn complex(s: &crate::model::FourierSeries, h: usize) -> Vec<C64> {
+fn complex(s: &crate::system::FourierSeries, h: usize) -> Vec<C64> {
     let c = s.complex_coefficients();
     let hs = s.harmonics();
     (0..=2 * h)
@@ -308,4 +314,78 @@ pub fn solve(
         h = next_h;
         prev = next;
     }
+}
+
+/// Harmonic-balance steady state with multipliers from the companion monodromy.
+pub(super) fn solve_steady(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+    reason: String,
+) -> Result<SteadyState, SolverError> {
+    let form = sys.fourier_form().ok_or_else(|| {
+        SolverError::Unsupported(
+            "harmonic balance needs Fourier-series coefficients; this scene has jumps (use rk4 or auto)".into(),
+        )
+    })?;
+    let (sol, est) = match opts.harmonics {
+        Some(h) if h < sys.max_harmonic() => {
+            return Err(SolverError::Unsupported(format!(
+                "solver.harmonics = {h} is below the highest harmonic of the scene's coefficients ({}): the truncated system cannot represent them",
+                sys.max_harmonic()
+            )));
+        }
+        Some(h) => {
+            // fixed H: its error is estimated against 1.25 H
+            let sol = solve_order(&form, h)?;
+            let finer = solve_order(&form, (h * 5).div_ceil(4).max(h + 1))?;
+            let est = difference(&sol, &finer);
+            (sol, est)
+        }
+        None => solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?,
+    };
+    let (monodromy, phi_err, companion_steps) = companion_monodromy(sys, opts)?;
+    let period = sys.period_s();
+    let floquet = Floquet::from_monodromy(&monodromy, period)?;
+    let n = sys.dim();
+    let a = DMatrix::identity(n, n) - &monodromy;
+    let cond = condition_number(&a);
+    let mut x0 = DVector::zeros(n);
+    sol.state(0.0, x0.as_mut_slice());
+    let mut warnings = Vec::new();
+    let estimate = est.max(phi_err);
+    let mut trusted = estimate <= opts.tolerance;
+    // harmonic balance solves (I - Phi)-like systems in the frequency domain: near a multiplier of 1 the
+    // Hill matrix is nearly singular in the same way
+    let roundoff = cond * f64::EPSILON * 100.0;
+    if roundoff > opts.tolerance {
+        trusted = false;
+        warnings.push(format!(
+            "I - Phi is ill-conditioned (cond {cond:.3e}): a multiplier is near +1 and rounding may cost {roundoff:.1e} relative error"
+        ));
+    }
+    let mut floquet = floquet;
+    floquet_warnings(&mut floquet, opts.tolerance.max(phi_err), phi_err, &mut warnings);
+    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    Ok(SteadyState {
+        method: Method::Hill,
+        reason: format!(
+            "{reason}; {} harmonics in {} independent classes (coupling stride {}), multipliers from an rk4 companion of {} steps over {:.6} s",
+            sol.harmonics,
+            sol.stride.min(2 * sol.harmonics + 1),
+            sol.stride,
+            companion_steps,
+            sys.homogeneous_period_s()
+        ),
+        period_s: period,
+        resolution: sol.harmonics,
+        error_estimate: estimate,
+        monodromy,
+        floquet,
+        x0,
+        cond_i_minus_phi: cond,
+        stability_limit_steps: limit,
+        trusted,
+        warnings,
+        trajectory: Trajectory::Fourier(sol),
+    })
 }

@@ -16,7 +16,7 @@
 //! solves (I - Phi) x0 = c_m (Eq 21). Step boundaries are placed on every coefficient jump, so a
 //! piecewise-smooth system keeps fourth order.
 
-use crate::model::{PeriodicSystem, Side};
+use crate::system::{PeriodicSystem, Side};
 use nalgebra::{DMatrix, DVector};
 
 /// Step grid over one period: nodes t_0 = 0 < ... < t_m = T, with every breakpoint a node.
@@ -78,11 +78,11 @@ pub enum Scheme {
 
 /// Preallocated buffers for one-step schemes of one system.
 pub struct Stepper<'a> {
-    sys: &'a dyn PeriodicSystem,
+    pub(super) sys: &'a dyn PeriodicSystem,
     scheme: Scheme,
-    n: usize,
-    p: [DMatrix<f64>; 3],
-    f: [DVector<f64>; 3],
+    pub(super) n: usize,
+    pub(super) p: [DMatrix<f64>; 3],
+    pub(super) f: [DVector<f64>; 3],
     k: Vec<f64>,
     acc: Vec<f64>,
     tmp: Vec<f64>,
@@ -100,33 +100,6 @@ impl<'a> Stepper<'a> {
         let m = || DMatrix::zeros(n, n);
         let v = || DVector::zeros(n);
         Self { sys, scheme, n, p: [m(), m(), m()], f: [v(), v(), v()], k: Vec::new(), acc: Vec::new(), tmp: Vec::new() }
-    }
-
-    fn augmented(&self, slot: usize) -> DMatrix<f64> {
-        let n = self.n;
-        let mut a = DMatrix::zeros(n + 1, n + 1);
-        a.view_mut((0, 0), (n, n)).copy_from(&self.p[slot]);
-        a.view_mut((0, n), (n, 1)).copy_from(&self.f[slot]);
-        a
-    }
-
-    fn magnus_step(&mut self, ta: f64, tb: f64, w: &mut [f64], s: &[f64]) {
-        let h = tb - ta;
-        let c = 3f64.sqrt() / 6.0;
-        self.sys.eval(ta + h * (0.5 - c), Side::Right, &mut self.p[0], &mut self.f[0]);
-        self.sys.eval(ta + h * (0.5 + c), Side::Right, &mut self.p[1], &mut self.f[1]);
-        let (a1, a2) = (self.augmented(0), self.augmented(1));
-        let omega = (&a1 + &a2) * (0.5 * h) + (&a2 * &a1 - &a1 * &a2) * (3f64.sqrt() * h * h / 12.0);
-        let e = omega.exp();
-        let n = self.n;
-        let mut col = vec![0.0; n];
-        for (j, &sj) in s.iter().enumerate() {
-            let wc = &mut w[j * n..(j + 1) * n];
-            for (r, out) in col.iter_mut().enumerate() {
-                *out = e[(r, n)] * sj + (0..n).map(|k| e[(r, k)] * wc[k]).sum::<f64>();
-            }
-            wc.copy_from_slice(&col);
-        }
     }
 
     /// k = h (P W + f s), W column-major n x cols.

@@ -1,9 +1,61 @@
 //! Parameter sweeps: Floquet analysis and steady state over a range of one scene parameter, in parallel.
 
+use super::JobError;
 use crate::Error;
-use crate::report::figures::SweepPoint;
+use crate::report::summary::{SweepPoint, SweepSummary};
 use crate::scene::{Model, Scene};
 use rayon::prelude::*;
+use std::path::PathBuf;
+
+/// One `sweep` call.
+#[derive(Clone, Debug)]
+pub struct SweepJob {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// Parameter: `speed`, `damping`, `load`, or a dotted JSON path such as `gear_pair.damping_ratio`.
+    pub param: String,
+    /// First value (the parameter's unit).
+    pub from: f64,
+    /// Last value.
+    pub to: f64,
+    /// Number of values, at least 2.
+    pub steps: usize,
+    /// Stability-map images to draw (PNG).
+    pub images: Vec<PathBuf>,
+    /// Directory for `sweep.json` and the stability map.
+    pub report: Option<PathBuf>,
+}
+
+/// What [`run`] produced.
+#[derive(Clone, Debug)]
+pub struct SweepOutcome {
+    /// The points and the resolved parameter.
+    pub summary: SweepSummary,
+    /// Images written.
+    pub images: Vec<PathBuf>,
+}
+
+/// Runs a sweep: loads the scene, resolves the parameter, evaluates every point on all cores (`tick` after
+/// each), writes the JSON and the stability maps asked for.
+///
+/// # Errors
+/// Unreadable scene, unknown parameter, bad range, unwritable outputs.
+pub fn run(job: &SweepJob, tick: &(dyn Fn() + Sync)) -> Result<SweepOutcome, Error> {
+    let scene = Scene::load(&job.scene.display().to_string())?;
+    let field = resolve(&scene, &job.param)?;
+    let points = sweep(&scene, &field, job.from, job.to, job.steps, tick)?;
+    let summary = SweepSummary { param: field.clone(), points, scene: scene.name.clone() };
+    let mut images = job.images.clone();
+    if let Some(dir) = &job.report {
+        crate::io::create_dir(dir)?;
+        crate::io::write_atomic(&dir.join("sweep.json"), crate::report::summary::to_json_line(&summary).as_bytes())?;
+        images.push(dir.join(format!("stability-map-{}.png", scene.name)));
+    }
+    for img in &images {
+        crate::report::figures::stability_map(img, &scene.name, &field, &field, &summary.points)?;
+    }
+    Ok(SweepOutcome { summary, images })
+}
 
 /// Dotted JSON path of a parameter: an alias (`speed`, `damping`, `load`) or any numeric field of the scene
 /// by its path, e.g. `gear_pair.pinion.errors[0].amplitude_m`.
@@ -21,10 +73,14 @@ pub fn resolve(scene: &Scene, name: &str) -> Result<String, Error> {
     };
     match pointer(&scene.json, &path).and_then(|v| v.as_f64()) {
         Some(_) => Ok(path),
-        None => Err(Error::Other(format!(
-            "--param {name}: {} has no numeric field `{path}` (aliases: speed, damping, load; or a dotted path such as gear_pair.damping_ratio)",
-            scene.file
-        ))),
+        None => Err(JobError::Parameter {
+            scene: scene.file.clone(),
+            name: name.to_string(),
+            message: format!(
+                "the scene has no numeric field `{path}` (aliases: speed, damping, load; or a dotted path such as gear_pair.damping_ratio)"
+            ),
+        }
+        .into()),
     }
 }
 
@@ -64,9 +120,11 @@ pub fn sweep(
     tick: &(dyn Fn() + Sync),
 ) -> Result<Vec<SweepPoint>, Error> {
     if !(from.is_finite() && to.is_finite() && (2..=1_000_000).contains(&steps)) {
-        return Err(Error::Other(format!(
-            "--from/--to/--steps: need finite bounds and 2..=1000000 steps, got {from}, {to}, {steps}"
-        )));
+        return Err(JobError::Value {
+            what: "sweep range".into(),
+            message: format!("needs finite bounds and 2..=1000000 values, got from {from} to {to} in {steps}"),
+        }
+        .into());
     }
     let z1 = match &scene.model {
         Model::GearPair(g) => Some(g.params().pinion_teeth),
@@ -102,7 +160,7 @@ fn point(scene: &Scene, path: &str, value: f64, z1: Option<usize>) -> SweepPoint
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),
     };
-    match crate::pipeline::simulate(&s) {
+    match super::simulate::simulate(&s) {
         Ok(sim) => {
             let lines = match z1 {
                 Some(z) => (1..=3)

@@ -15,13 +15,19 @@ pub struct PiecewiseConstant {
 }
 
 impl PiecewiseConstant {
-    /// Value at t, taking the `side` limit at a jump.
+    /// Value at t, taking the `side` limit at a jump. A time within 1e-9 of the period from a jump counts as
+    /// on it: jump times computed as `start + cycle * period` by a caller differ from `starts` by rounding,
+    /// and taking the wrong side there would cost a step-based solver its order of accuracy.
     pub fn eval(&self, t: f64, side: Side) -> f64 {
-        let tau = t.rem_euclid(self.period_s);
-        // position of the first start strictly greater than tau (Right) or >= tau (Left)
+        let tol = 1e-9 * self.period_s;
+        let mut tau = t.rem_euclid(self.period_s);
+        if self.period_s - tau <= tol {
+            tau -= self.period_s; // just before the next period's start: the same as just before 0
+        }
+        // position of the first start beyond tau (Right) or at/beyond tau (Left), jumps within tol counted
         let idx = match side {
-            Side::Right => self.starts.partition_point(|&s| s <= tau),
-            Side::Left => self.starts.partition_point(|&s| s < tau),
+            Side::Right => self.starts.partition_point(|&s| s <= tau + tol),
+            Side::Left => self.starts.partition_point(|&s| s < tau - tol),
         };
         let j = if idx == 0 { self.values.len() - 1 } else { idx - 1 };
         self.values[j]
@@ -110,5 +116,11 @@ mod tests {
         assert_eq!(p.eval(-0.25, Side::Right), 3.0);
         assert!((p.mean() - (0.5 + 2.0 + 1.5) / 2.0).abs() < 1e-15);
         assert_eq!(p.jumps(), vec![0.0, 0.5, 1.5]);
+        // a jump time off by rounding still takes the side asked for
+        let near = 0.5 * (1.0 + 4.0 * f64::EPSILON);
+        assert_eq!(p.eval(near, Side::Left), 1.0);
+        assert_eq!(p.eval(0.5 * (1.0 - 4.0 * f64::EPSILON), Side::Right), 2.0);
+        assert_eq!(p.eval(2.0 * (1.0 - f64::EPSILON), Side::Right), 1.0);
+        assert_eq!(p.eval(2.0 * (1.0 - f64::EPSILON), Side::Left), 3.0);
     }
 }

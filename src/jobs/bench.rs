@@ -5,46 +5,59 @@
 //! times of one period. Time = median wall time of producing the periodic solution at that resolution
 //! (rk4: monodromy product, (I - Phi) x0 = c_m and the node states; hill: the Fourier solve).
 
+use super::JobError;
 use crate::Error;
-use crate::model::PeriodicSystem;
+use crate::report::summary::{BenchReport, BenchResult, Reference};
 use crate::scene::Scene;
 use crate::solver::{self, Method, SolverOptions, hill, rk4};
+use crate::system::PeriodicSystem;
 use nalgebra::{DMatrix, DVector};
+use std::path::PathBuf;
 use std::time::Instant;
 
-/// One measured point.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct BenchResult {
-    /// Scene name.
-    pub scene: String,
-    /// "rk4", "hill" or "auto@tol".
-    pub method: String,
-    /// Steps (rk4) or harmonics (hill).
-    pub resolution: usize,
-    /// Median wall time of one solve, s.
-    pub time_s: f64,
-    /// Relative error of the periodic solution against the reference.
-    pub error: f64,
+/// One `bench` call.
+#[derive(Clone, Debug, Default)]
+pub struct BenchJob {
+    /// Scenes; empty means [`DEFAULT_SCENES`].
+    pub scenes: Vec<PathBuf>,
+    /// Directory for `bench.json` and the work-precision PNGs.
+    pub report: Option<PathBuf>,
 }
 
-/// What the errors of one scene are measured against.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Reference {
-    /// Scene name.
-    pub scene: String,
-    /// Reference for rk4 points.
-    pub for_rk4: String,
-    /// Reference for hill points.
-    pub for_hill: String,
+/// What [`run`] produced.
+#[derive(Clone, Debug)]
+pub struct BenchOutcome {
+    /// Every measured point and the references.
+    pub report: BenchReport,
+    /// Images written.
+    pub images: Vec<PathBuf>,
 }
 
-/// A whole benchmark run.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct BenchReport {
-    /// Measured points.
-    pub results: Vec<BenchResult>,
-    /// References used.
-    pub references: Vec<Reference>,
+/// Benchmarks every scene of `job` (`progress` receives a short status line) and writes the report.
+///
+/// # Errors
+/// A scene cannot be loaded, a reference cannot be computed, or the report cannot be written.
+pub fn run(job: &BenchJob, progress: &dyn Fn(&str)) -> Result<BenchOutcome, Error> {
+    let paths: Vec<PathBuf> =
+        if job.scenes.is_empty() { DEFAULT_SCENES.iter().map(PathBuf::from).collect() } else { job.scenes.clone() };
+    let loaded = paths.iter().map(|p| Scene::load(&p.display().to_string())).collect::<Result<Vec<_>, _>>()?;
+    let mut all = BenchReport { results: Vec::new(), references: Vec::new() };
+    for scene in &loaded {
+        let (r, reference) = bench_scene(scene, progress)?;
+        all.results.extend(r);
+        all.references.push(reference);
+    }
+    let mut images = Vec::new();
+    if let Some(dir) = &job.report {
+        crate::io::create_dir(dir)?;
+        crate::io::write_atomic(&dir.join("bench.json"), crate::report::summary::to_json_line(&all).as_bytes())?;
+        for scene in &loaded {
+            let png = dir.join(format!("bench-{}.png", scene.name));
+            crate::report::figures::bench(&png, &scene.name, &all.results)?;
+            images.push(png);
+        }
+    }
+    Ok(BenchOutcome { report: all, images })
 }
 
 const SAMPLES: usize = 512;
@@ -155,7 +168,10 @@ pub fn bench_scene(scene: &Scene, progress: &dyn Fn(&str)) -> Result<(Vec<BenchR
     }
     let reference_for_rk4 = if reference_for_rk4.is_empty() {
         let finest = 16 * ladder[ladder.len() - 1].min(1 << 18);
-        rk4_states(sys, finest, &times).ok_or_else(|| Error::Other(format!("{name}: rk4 reference failed")))?
+        rk4_states(sys, finest, &times).ok_or_else(|| JobError::Input {
+            file: scene.file.clone(),
+            message: format!("the rk4 reference of {finest} steps failed"),
+        })?
     } else {
         reference_for_rk4
     };
@@ -201,7 +217,7 @@ pub fn bench_scene(scene: &Scene, progress: &dyn Fn(&str)) -> Result<(Vec<BenchR
         if let Ok(ss) = ss {
             let mut out = Vec::new();
             ss.states_at(sys, &times, &mut out);
-            let reference = if ss.method == "hill" {
+            let reference = if ss.method == Method::Hill {
                 reference_for_hill.as_ref().unwrap_or(&reference_for_rk4)
             } else {
                 &reference_for_rk4
@@ -230,46 +246,3 @@ pub const DEFAULT_SCENES: [&str; 5] = [
     "data/scenes/gear-z14z39-rectangular-stiffness.json",
     "data/scenes/gear-z14z39-wheel-eccentricity.json",
 ];
-
-/// Work-precision chart of one scene's results (log-log error against time).
-pub fn chart(scene: &str, results: &[BenchResult]) -> crate::report::plot::Chart {
-    use crate::report::plot::{Chart, Series, Style};
-    let mut series = Vec::new();
-    for (i, m) in ["rk4", "hill"].iter().enumerate() {
-        let pts: Vec<(f64, f64)> = results
-            .iter()
-            .filter(|r| r.scene == scene && r.method == *m)
-            .map(|r| (r.time_s, r.error.max(1e-16)))
-            .collect();
-        if !pts.is_empty() {
-            let label = if *m == "rk4" {
-                "rk4 product (paper), steps doubling"
-            } else {
-                "harmonic balance (Hill), harmonics x1.25"
-            };
-            series.push(Series { name: label.into(), points: pts, style: Style::LinePoints, color: i });
-        }
-    }
-    let auto: Vec<(f64, f64)> = results
-        .iter()
-        .filter(|r| r.scene == scene && r.method.starts_with("auto"))
-        .map(|r| (r.time_s, r.error.max(1e-16)))
-        .collect();
-    if !auto.is_empty() {
-        series.push(Series {
-            name: "auto at tolerance 1e-6, 1e-8, 1e-10 (full solve)".into(),
-            points: auto,
-            style: Style::Points,
-            color: 3,
-        });
-    }
-    Chart {
-        title: format!("Speed against error: {scene}"),
-        x_label: "wall time of one solve [s] (median)".into(),
-        y_label: "relative error of the periodic solution".into(),
-        x_log: true,
-        y_log: true,
-        series,
-        ..Default::default()
-    }
-}

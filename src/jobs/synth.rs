@@ -10,62 +10,18 @@
 //! derivatives, a power-of-two number of points per period fine enough for the tolerance) and evaluated by
 //! cubic Hermite interpolation; otherwise every sample is one partial RK4 step from the nearest grid node.
 
+use super::JobError;
 use crate::Error;
-use crate::io::{DataError, csv::CsvOut, wav::WavOut, wav::WavSampleFormat};
-use crate::model::{OutputQuantity, Side};
-use crate::pipeline::Simulation;
+use crate::io::sidecar::{ChannelInfo, Sidecar};
+use crate::io::{csv::CsvOut, wav::WavOut, wav::WavSampleFormat};
+use crate::model::OutputQuantity;
+use crate::report::summary::Simulation;
 use crate::scene::{Model, Scene, WavFormat};
+use crate::system::Side;
 use std::path::Path;
 
-/// What a written signal file holds (also written as the sidecar `OUT.json`).
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct SignalInfo {
-    /// Written file.
-    pub file: String,
-    /// Scene name.
-    pub scene: String,
-    /// Scene file.
-    pub scene_file: String,
-    /// Sample rate in Hz.
-    pub sample_rate_hz: f64,
-    /// Frames (samples per channel).
-    pub frames: u64,
-    /// Duration in s.
-    pub duration_s: f64,
-    /// Channels in file order.
-    pub channels: Vec<ChannelInfo>,
-    /// "f32", "i16", "i24" (WAV) or "csv".
-    pub format: String,
-    /// Physical value of integer full scale (integer WAV only).
-    pub full_scale: Option<f64>,
-    /// Samples clipped at integer full scale.
-    pub clipped_samples: u64,
-    /// White measurement noise RMS (output unit).
-    pub noise_rms: f64,
-    /// Noise seed.
-    pub seed: u64,
-    /// Speed fluctuation depth and frequency, if any.
-    pub speed_modulation: Option<[f64; 2]>,
-    /// Base frequency of the orders in Hz (pinion rotation for the gear pair).
-    pub base_hz: f64,
-    /// Period of the steady state in s.
-    pub period_s: f64,
-    /// How samples were evaluated.
-    pub evaluation: String,
-    /// Warnings (aliasing allowed, clipping).
-    pub warnings: Vec<String>,
-}
-
-/// One channel of a written file.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct ChannelInfo {
-    /// Name, e.g. "dq/dt" or "tacho pinion".
-    pub name: String,
-    /// Unit of the stored values (integer WAV: multiply the [-1, 1) value by `full_scale`).
-    pub unit: String,
-    /// Description.
-    pub description: String,
-}
+/// What a written signal file holds (the sidecar).
+pub type SignalInfo = Sidecar;
 
 /// Refuses requests that would need more samples than this (about 8 GiB as f64).
 pub const MAX_TOTAL_SAMPLES: f64 = 1.0e9;
@@ -168,7 +124,7 @@ fn evaluator<'a>(scene: &'a Scene, sim: &'a Simulation) -> Evaluator<'a> {
     for (i, &t) in times.iter().enumerate() {
         let x = &states[i * n..(i + 1) * n];
         sys.eval(t, Side::Right, &mut p, &mut f);
-        crate::model::state_derivative(&p, &f, x, &mut xdot);
+        crate::system::state_derivative(&p, &f, x, &mut xdot);
         values.push(weights.iter().zip(x).map(|(w, v)| w * v).sum());
         slopes.push(weights.iter().zip(&xdot).map(|(w, v)| w * v).sum());
     }
@@ -194,33 +150,45 @@ fn tacho_shafts(scene: &Scene) -> Vec<(String, f64)> {
 pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: &mut Vec<String>) -> Result<(), Error> {
     let ext = crate::io::extension(out);
     if !matches!(ext.as_deref(), Some("wav") | Some("csv")) {
-        return Err(Error::Other(format!("-o {}: unknown extension: expected .wav or .csv", out.display())));
+        return Err(JobError::Input {
+            file: out.display().to_string(),
+            message: "unknown extension for the signal file: expected .wav or .csv".into(),
+        }
+        .into());
     }
     let o = &scene.output;
     let highest = o.max_order * o.base_hz * (1.0 + o.speed_modulation.map_or(0.0, |m| m.depth));
     if o.sample_rate_hz < 2.0 * highest {
         let msg = format!(
-            "{}: field `output.sample_rate_hz`: {} Hz is below twice the highest line requested ({:.1} Hz = order {} of {:.3} Hz): the signal would alias",
-            scene.file, o.sample_rate_hz, highest, o.max_order, o.base_hz
+            "field `output.sample_rate_hz`: {} Hz is below twice the highest line requested ({:.1} Hz = order {} of {:.3} Hz): the signal would alias",
+            o.sample_rate_hz, highest, o.max_order, o.base_hz
         );
         if !allow_aliasing {
-            return Err(Error::Other(format!("{msg}; lower output.max_order or pass --allow-aliasing")));
+            return Err(JobError::Aliasing {
+                file: scene.file.clone(),
+                message: format!("{msg}; lower output.max_order"),
+            }
+            .into());
         }
-        warnings.push(msg);
+        warnings.push(format!("{}: {msg}", scene.file));
     }
     let channels = 1 + if o.tacho { tacho_shafts(scene).len() } else { 0 };
     let total = o.sample_rate_hz * o.duration_s * channels as f64;
     if total > MAX_TOTAL_SAMPLES {
-        return Err(Error::Other(format!(
-            "{}: field `output.duration_s`: {:.3e} samples ({} channels) exceed the limit of {:.0e}; shorten the duration or lower the sample rate",
-            scene.file, total, channels, MAX_TOTAL_SAMPLES
-        )));
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: format!(
+                "field `output.duration_s`: {total:.3e} samples ({channels} channels) exceed the limit of {MAX_TOTAL_SAMPLES:.0e}; shorten the duration or lower the sample rate"
+            ),
+        }
+        .into());
     }
     if o.sample_rate_hz.round() != o.sample_rate_hz && ext.as_deref() == Some("wav") {
-        return Err(Error::Other(format!(
-            "{}: field `output.sample_rate_hz`: WAV needs a whole number of Hz, got {}",
-            scene.file, o.sample_rate_hz
-        )));
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: format!("field `output.sample_rate_hz`: WAV needs a whole number of Hz, got {}", o.sample_rate_hz),
+        }
+        .into());
     }
     Ok(())
 }
@@ -297,7 +265,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         }
         let values = match &eval {
             Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(wrap(tau, period))).collect(),
-            Evaluator::Direct(sc, si) => crate::pipeline::output_at(sc, &si.steady, &times),
+            Evaluator::Direct(sc, si) => super::simulate::output_at(sc, &si.steady, &times),
         };
         buf.clear();
         for (i, v) in values.iter().enumerate() {
@@ -322,8 +290,10 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         }
     };
     if clipped > 0 {
-        warnings
-            .push(format!("{clipped} samples clipped at integer full scale {:?}; raise output.full_scale", full_scale));
+        warnings.push(format!(
+            "{clipped} samples clipped at integer full scale {}; raise output.full_scale",
+            full_scale.unwrap_or(1.0)
+        ));
     }
     let info = SignalInfo {
         file: out.display().to_string(),
@@ -344,10 +314,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         evaluation: eval.describe(),
         warnings,
     };
-    let mut side = out.as_os_str().to_os_string();
-    side.push(".json");
-    let text = serde_json::to_string_pretty(&info).map_err(|e| Error::Other(e.to_string()))?;
-    crate::io::write_atomic(Path::new(&side), text.as_bytes()).map_err(|e: DataError| Error::Other(e.to_string()))?;
+    crate::io::sidecar::write(out, &info)?;
     Ok(info)
 }
 

@@ -1,9 +1,102 @@
-//! JSON summaries with the stable keys of DESIGN.md section 5.
+//! Every JSON contract of DESIGN.md section 5 (stable keys): the results jobs hand to the printer and to
+//! the figures.
 
-use crate::pipeline::{OrderLine, Simulation};
+mod diagnosis;
+
+pub use diagnosis::*;
+
 use crate::scene::Scene;
 use crate::solver::SteadyState;
 use serde::Serialize;
+
+/// One spectral line of the output quantity.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct OrderLine {
+    /// Order: multiple of the scene's base frequency (pinion rotation for the gear pair).
+    pub order: f64,
+    /// Frequency in Hz.
+    pub frequency_hz: f64,
+    /// One-sided peak amplitude in the output unit.
+    pub amplitude: f64,
+}
+
+/// Result of simulating a scene.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    /// Steady state and Floquet analysis.
+    pub steady: SteadyState,
+    /// Output quantity over one period at `period_samples.len()` equally spaced times from 0.
+    pub period_samples: Vec<f64>,
+    /// Lines up to the scene's `max_order`, every harmonic of 1/T.
+    pub orders: Vec<OrderLine>,
+    /// RMS over one period (includes the mean), output unit.
+    pub rms: f64,
+    /// Peak-to-peak over one period, output unit.
+    pub peak_to_peak: f64,
+}
+
+/// One point of a parameter sweep, for the stability map.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SweepPoint {
+    /// Parameter value.
+    pub value: f64,
+    /// |rho|max (`null` when the point failed).
+    pub rho_max: Option<f64>,
+    /// Asymptotically stable.
+    pub stable: Option<bool>,
+    /// Result within tolerance.
+    pub trusted: bool,
+    /// Amplitudes of the first mesh harmonics (or strongest orders) of the output quantity.
+    pub lines: Vec<(String, f64)>,
+    /// Why the point failed, if it did.
+    pub error: Option<String>,
+}
+
+/// `gearvib sweep --json`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SweepSummary {
+    /// Dotted JSON path of the parameter swept.
+    pub param: String,
+    /// One entry per value.
+    pub points: Vec<SweepPoint>,
+    /// Scene name.
+    pub scene: String,
+}
+
+/// One measured point.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchResult {
+    /// Scene name.
+    pub scene: String,
+    /// "rk4", "hill" or "auto@tol".
+    pub method: String,
+    /// Steps (rk4) or harmonics (hill).
+    pub resolution: usize,
+    /// Median wall time of one solve, s.
+    pub time_s: f64,
+    /// Relative error of the periodic solution against the reference.
+    pub error: f64,
+}
+
+/// What the errors of one scene are measured against.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reference {
+    /// Scene name.
+    pub scene: String,
+    /// Reference for rk4 points.
+    pub for_rk4: String,
+    /// Reference for hill points.
+    pub for_hill: String,
+}
+
+/// A whole benchmark run.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// Measured points.
+    pub results: Vec<BenchResult>,
+    /// References used.
+    pub references: Vec<Reference>,
+}
 
 /// A Floquet multiplier as JSON.
 #[derive(Serialize, Debug, Clone, Copy)]
@@ -17,7 +110,7 @@ pub struct Multiplier {
 }
 
 /// `gearvib stability --json`.
-#[derive(Serialize, Debug)]
+#[derive(Serialize, Debug, Clone)]
 pub struct StabilitySummary {
     /// Scene name.
     pub scene: String,
@@ -70,10 +163,10 @@ impl StabilitySummary {
             exponents: s.floquet.exponents.iter().map(|e| e.map(|c| [c.re, c.im])).collect(),
             rho_max: s.floquet.rho_max,
             stable: s.floquet.stable,
-            method: s.method.to_string(),
+            method: s.method.name().to_string(),
             method_reason: s.reason.clone(),
             steps: s.resolution,
-            resolution_unit: if s.method == "hill" { "harmonics" } else { "steps" }.into(),
+            resolution_unit: if s.method == crate::solver::Method::Hill { "harmonics" } else { "steps" }.into(),
             error_estimate: s.error_estimate,
             tolerance: scene.solver.tolerance,
             cond_i_minus_phi: s.cond_i_minus_phi,
@@ -86,7 +179,7 @@ impl StabilitySummary {
 }
 
 /// `gearvib simulate --json`: the stability keys plus the output quantity.
-#[derive(Serialize, Debug)]
+#[derive(Serialize, Debug, Clone)]
 pub struct SimulateSummary {
     /// Stability part.
     #[serde(flatten)]

@@ -1,459 +1,43 @@
-//! Scenes: one JSON file states one simulation (model, solver, output). Parsed with serde
-//! (`deny_unknown_fields`), then validated into typed model objects; every error names the file and the
-//! field. Units are in the field names (SI unless the name says otherwise).
+//! Validation of the raw scene into typed model objects: every value checked, every error naming the file
+//! and the dotted field path.
 
-use crate::model::{
-    self, Coefficient, FourierSeries, GearPair, GearPairParams, MeshStiffness, OutputQuantity, PeriodicSystem,
-    PiecewiseConstant, PressParams, SecondOrderSystem, gear::Crack, gear::Gear,
-};
-use crate::solver::{Method, SolverOptions};
-use serde::Deserialize;
+use super::raw::*;
+use super::{OutputOptions, SceneError, SpeedModulation, WavFormat};
+use crate::model::gear::{self, Crack, Gear, ToothFault};
+use crate::model::{self, GearPair, GearPairParams, MeshStiffness, OutputQuantity, PressParams, SecondOrderSystem};
+use crate::solver::SolverOptions;
+use crate::system::{Coefficient, FourierSeries, PeriodicSystem, PiecewiseConstant};
 use std::f64::consts::PI;
 
-/// Errors reading or validating a scene.
-#[derive(Debug, thiserror::Error)]
-pub enum SceneError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene: {message}")]
-    Io {
-        /// Scene path.
-        file: String,
-        /// OS message.
-        message: String,
-    },
-    /// JSON syntax, unknown or missing field, wrong type.
-    #[error("{file}: {message}")]
-    Json {
-        /// Scene path.
-        file: String,
-        /// serde_json's message with line and column.
-        message: String,
-    },
-    /// A value that is well-formed but physically meaningless.
-    #[error("{file}: field `{field}`: {message}")]
-    Invalid {
-        /// Scene path.
-        file: String,
-        /// Dotted path of the field.
-        field: String,
-        /// What is wrong.
-        message: String,
-    },
-}
-
-// ---------- raw serde structures ----------
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawScene {
-    #[serde(default)]
-    name: Option<String>,
-    /// Free text for people reading the scene; accepted, not used by the program.
-    #[serde(default)]
-    #[allow(dead_code)]
-    description: Option<String>,
-    model: String,
-    #[serde(default)]
-    gear_pair: Option<RawGearPair>,
-    #[serde(default)]
-    press: Option<RawPress>,
-    #[serde(default)]
-    ltp: Option<RawLtp>,
-    #[serde(default)]
-    solver: RawSolver,
-    #[serde(default)]
-    output: RawOutput,
-}
-
-#[derive(Deserialize, Debug, Clone, Default)]
-#[serde(deny_unknown_fields)]
-struct RawSolver {
-    #[serde(default)]
-    method: Option<String>,
-    #[serde(default)]
-    tolerance: Option<f64>,
-    #[serde(default)]
-    steps: Option<u64>,
-    #[serde(default)]
-    harmonics: Option<u64>,
-}
-
-#[derive(Deserialize, Debug, Clone, Default)]
-#[serde(deny_unknown_fields)]
-struct RawOutput {
-    #[serde(default)]
-    quantity: Option<String>,
-    #[serde(default)]
-    sample_rate_hz: Option<f64>,
-    #[serde(default)]
-    duration_s: Option<f64>,
-    #[serde(default)]
-    max_order: Option<f64>,
-    #[serde(default)]
-    noise_rms: Option<f64>,
-    #[serde(default)]
-    seed: Option<u64>,
-    #[serde(default)]
-    speed_modulation: Option<RawSpeedModulation>,
-    #[serde(default)]
-    tacho: Option<bool>,
-    #[serde(default)]
-    wav_format: Option<String>,
-    #[serde(default)]
-    full_scale: Option<f64>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawSpeedModulation {
-    depth: f64,
-    frequency_hz: f64,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawHarmonic {
-    order: u32,
-    amplitude_m: f64,
-    #[serde(default)]
-    phase_rad: f64,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawToothFault {
-    tooth: u32,
-    depth_m: f64,
-    #[serde(default = "one")]
-    width_teeth: f64,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawGear {
-    teeth: u32,
-    inertia_kg_m2: f64,
-    base_radius_m: f64,
-    #[serde(default)]
-    errors: Vec<RawHarmonic>,
-    #[serde(default)]
-    tooth_faults: Vec<RawToothFault>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawStiffnessHarmonic {
-    amplitude_n_per_m: f64,
-    #[serde(default)]
-    phase_rad: f64,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields, rename_all = "snake_case")]
-enum RawMesh {
-    Fourier {
-        mean_n_per_m: f64,
-        #[serde(default)]
-        harmonics: Vec<RawStiffnessHarmonic>,
-    },
-    Rectangular {
-        contact_ratio: f64,
-        pair_stiffness_n_per_m: f64,
-    },
-    Samples {
-        values_n_per_m: Vec<f64>,
-    },
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawCrack {
-    gear: String,
-    tooth: u32,
-    stiffness_loss: f64,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawGearPair {
-    speed_rpm: f64,
-    damping_ratio: f64,
-    static_deflection_m: f64,
-    pinion: RawGear,
-    wheel: RawGear,
-    mesh_stiffness: RawMesh,
-    #[serde(default)]
-    crack: Option<RawCrack>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawPress {
-    speed_rpm: f64,
-    torsional_stiffness_n_m_per_rad: f64,
-    follower_stiffness_n_per_m: f64,
-    torsional_damping_n_m_s_per_rad: f64,
-    follower_damping_n_s_per_m: f64,
-    cam_inertia_kg_m2: f64,
-    follower_mass_kg: f64,
-    load_n: f64,
-    cam_cos_m_per_rad: Vec<f64>,
-    #[serde(default)]
-    cam_sin_m_per_rad: Vec<f64>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawEntry {
-    #[serde(default)]
-    mean: Option<f64>,
-    #[serde(default)]
-    cos: Vec<f64>,
-    #[serde(default)]
-    sin: Vec<f64>,
-    #[serde(default)]
-    steps: Option<RawSteps>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawSteps {
-    starts_s: Vec<f64>,
-    values: Vec<f64>,
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct RawLtp {
-    period_s: f64,
-    mass: Vec<Vec<RawEntry>>,
-    damping: Vec<Vec<RawEntry>>,
-    stiffness: Vec<Vec<RawEntry>>,
-    forcing: Vec<RawEntry>,
-}
-
-// ---------- validated scene ----------
-
-/// The model a scene builds.
-#[derive(Clone, Debug)]
-pub enum Model {
-    /// Gear pair (Eqs 36-46).
-    GearPair(GearPair),
-    /// Forging-press cam mechanism (Eqs 32-35).
-    Press(PressParams, SecondOrderSystem),
-    /// Generic LTP system.
-    Ltp(SecondOrderSystem),
-}
-
-/// Slow sinusoidal speed fluctuation: speed(t) = nominal (1 + depth sin(2 pi f t)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpeedModulation {
-    /// Relative depth (0.01 = 1 %).
-    pub depth: f64,
-    /// Modulation frequency in Hz.
-    pub frequency_hz: f64,
-}
-
-/// Sample format of a written WAV file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WavFormat {
-    /// 32-bit IEEE float, values in the physical unit.
-    F32,
-    /// 16-bit integer, full scale = `full_scale` physical units.
-    I16,
-    /// 24-bit integer, full scale = `full_scale` physical units.
-    I24,
-}
-
-/// What `simulate` reports and writes.
-#[derive(Clone, Debug)]
-pub struct OutputOptions {
-    /// Output quantity.
-    pub quantity: OutputQuantity,
-    /// Frequency whose multiples are the orders (pinion rotation, press input shaft, 1/T), Hz.
-    pub base_hz: f64,
-    /// Name of the base ("pinion rotation").
-    pub base_name: String,
-    /// Highest order listed in `orders`.
-    pub max_order: f64,
-    /// Sample rate of a written signal, Hz.
-    pub sample_rate_hz: f64,
-    /// Duration of a written signal, s.
-    pub duration_s: f64,
-    /// RMS of white measurement noise added to the written signal (physical unit).
-    pub noise_rms: f64,
-    /// Seed of the noise generator.
-    pub seed: u64,
-    /// Optional speed fluctuation.
-    pub speed_modulation: Option<SpeedModulation>,
-    /// Add once-per-revolution tachometer channels.
-    pub tacho: bool,
-    /// WAV sample format.
-    pub wav_format: WavFormat,
-    /// Physical value mapped to integer full scale (integer WAV only).
-    pub full_scale: Option<f64>,
-    /// True when `sample_rate_hz` came from the scene rather than a default.
-    pub sample_rate_given: bool,
-}
-
-/// A validated scene.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    /// Scene name (file stem when not given).
-    pub name: String,
-    /// Path it was read from.
-    pub file: String,
-    /// Model.
-    pub model: Model,
-    /// Solver options.
-    pub solver: SolverOptions,
-    /// Output options.
-    pub output: OutputOptions,
-    /// What was modelled and what was dropped, in plain words.
-    pub notes: Vec<String>,
-    /// The raw JSON, for parameter sweeps.
-    pub json: serde_json::Value,
-}
-
-impl Scene {
-    /// The model as a periodic system.
-    pub fn system(&self) -> &dyn PeriodicSystem {
-        match &self.model {
-            Model::GearPair(g) => g,
-            Model::Press(_, s) | Model::Ltp(s) => s,
-        }
-    }
-
-    /// Reads and validates a scene file.
-    ///
-    /// # Errors
-    /// [`SceneError`] naming the file and field.
-    pub fn load(path: &str) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
-        // typed parse first, for messages with the field path and line/column
-        let mut de = serde_json::Deserializer::from_str(&text);
-        let raw: RawScene = serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(path, e))?;
-        let value: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| SceneError::Json { file: path.to_string(), message: e.to_string() })?;
-        Self::from_raw(raw, value, path)
-    }
-
-    /// Validates a scene given as JSON (`file` is used in messages).
-    ///
-    /// # Errors
-    /// [`SceneError`] naming the file and field.
-    pub fn from_value(value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
-        let raw: RawScene = serde_path_to_error::deserialize(value.clone()).map_err(|e| json_error(file, e))?;
-        Self::from_raw(raw, value, file)
-    }
-
-    fn from_raw(raw: RawScene, value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
-        let v = Validator { file };
-        let solver = v.solver(&raw.solver)?;
-        let mut notes = Vec::new();
-        let stem = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
-        let name = raw.name.clone().unwrap_or_else(|| stem.to_string());
-        let present =
-            [("gear_pair", raw.gear_pair.is_some()), ("press", raw.press.is_some()), ("ltp", raw.ltp.is_some())];
-        for (key, is) in present {
-            if is && key != raw.model {
-                return Err(v.err(key, format!("given, but `model` is \"{}\"", raw.model)));
-            }
-        }
-        let missing =
-            |key: &str| v.err(key, format!("missing: `model` is \"{key}\" so the `{key}` object is required"));
-        let (model, output) = match raw.model.as_str() {
-            "gear_pair" => {
-                let g = raw.gear_pair.as_ref().ok_or_else(|| missing("gear_pair"))?;
-                let gp = v.gear_pair(g, solver.tolerance, &mut notes)?;
-                let out = v.gear_output(&raw.output, &gp)?;
-                (Model::GearPair(gp), out)
-            }
-            "press" => {
-                let p = raw.press.as_ref().ok_or_else(|| missing("press"))?;
-                let params = v.press(p)?;
-                let sys =
-                    params.system().map_err(|_| v.err("press.follower_mass_kg", "mass matrix is singular".into()))?;
-                let out = v.press_output(&raw.output, &params)?;
-                (Model::Press(params, sys), out)
-            }
-            "ltp" => {
-                let l = raw.ltp.as_ref().ok_or_else(|| missing("ltp"))?;
-                let sys = v.ltp(l)?;
-                let out = v.ltp_output(&raw.output, &sys, l.period_s)?;
-                (Model::Ltp(sys), out)
-            }
-            other => {
-                return Err(v.err("model", format!("unknown model \"{other}\" (expected gear_pair, press or ltp)")));
-            }
-        };
-        let mut scene = Self { name, file: file.to_string(), model, solver, output, notes, json: value };
-        let sys = scene.system();
-        let period = sys.period_s();
-        let note = format!(
-            "period {:.6} s ({:.4} base revolutions), highest coefficient harmonic {}",
-            period,
-            period * scene.output.base_hz,
-            sys.max_harmonic()
-        );
-        scene.notes.insert(0, note);
-        Ok(scene)
-    }
-}
-
-fn json_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> SceneError {
-    let path = e.path().to_string();
-    let inner = e.into_inner();
-    let message = if path == "." || path == "?" || path.is_empty() {
-        inner.to_string()
-    } else {
-        format!("field `{path}`: {inner}")
-    };
-    SceneError::Json { file: file.to_string(), message }
-}
-
-struct Validator<'a> {
+pub(super) struct Validator<'a> {
     file: &'a str,
 }
 
 impl Validator<'_> {
-    fn err(&self, field: &str, message: String) -> SceneError {
+    pub(super) fn new(file: &str) -> Validator<'_> {
+        Validator { file }
+    }
+    pub(super) fn err(&self, field: &str, message: String) -> SceneError {
         SceneError::Invalid { file: self.file.to_string(), field: field.to_string(), message }
     }
-    fn positive(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+    pub(super) fn positive(&self, field: &str, x: f64) -> Result<f64, SceneError> {
         if x.is_finite() && x > 0.0 {
             Ok(x)
         } else {
             Err(self.err(field, format!("must be a positive number, got {x}")))
         }
     }
-    fn non_negative(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+    pub(super) fn non_negative(&self, field: &str, x: f64) -> Result<f64, SceneError> {
         if x.is_finite() && x >= 0.0 { Ok(x) } else { Err(self.err(field, format!("must be >= 0, got {x}"))) }
     }
-    fn finite(&self, field: &str, x: f64) -> Result<f64, SceneError> {
+    pub(super) fn finite(&self, field: &str, x: f64) -> Result<f64, SceneError> {
         if x.is_finite() { Ok(x) } else { Err(self.err(field, format!("must be finite, got {x}"))) }
     }
 
-    fn solver(&self, s: &RawSolver) -> Result<SolverOptions, SceneError> {
+    pub(super) fn solver(&self, s: &RawSolver) -> Result<SolverOptions, SceneError> {
         let mut o = SolverOptions::default();
-        if let Some(m) = &s.method {
-            o.method = match m.as_str() {
-                "rk4" => Method::Rk4,
-                "hill" => Method::Hill,
-                "magnus4" => Method::Magnus,
-                "auto" => Method::Auto,
-                other => {
-                    return Err(self.err(
-                        "solver.method",
-                        format!("unknown solver \"{other}\" (expected rk4, hill, magnus4 or auto)"),
-                    ));
-                }
-            };
+        if let Some(m) = s.method {
+            o.method = m;
         }
         if let Some(t) = s.tolerance {
             if !(t.is_finite() && t > 0.0 && t < 1.0) {
@@ -476,7 +60,7 @@ impl Validator<'_> {
         Ok(o)
     }
 
-    fn errors(&self, field: &str, list: &[RawHarmonic]) -> Result<FourierSeries, SceneError> {
+    pub(super) fn errors(&self, field: &str, list: &[RawHarmonic]) -> Result<FourierSeries, SceneError> {
         let mut terms = Vec::new();
         for (i, h) in list.iter().enumerate() {
             let f = format!("{field}[{i}]");
@@ -494,7 +78,7 @@ impl Validator<'_> {
     /// missing, adds to e(t)) centred on the tooth's mesh cycle with 6 sigma = `width_teeth` pitches, as a
     /// Fourier series in the gear angle. Its spectrum decays like exp(-(k sigma)^2 / 2), so few harmonics
     /// meet the tolerance.
-    fn tooth_faults(
+    pub(super) fn tooth_faults(
         &self,
         field: &str,
         teeth: u32,
@@ -505,10 +89,8 @@ impl Validator<'_> {
         if faults.is_empty() {
             return Ok(FourierSeries::constant(0.0));
         }
-        // periodised Gaussian of height d, centre c, width sigma (rad):
-        //   g(theta) = d sigma / sqrt(2 pi) [1 + 2 sum_k exp(-k^2 sigma^2 / 2) cos(k (theta - c))]
         let keep = tolerance.max(1e-7);
-        let mut terms: Vec<(f64, f64, f64)> = Vec::new(); // (d sigma / sqrt(2 pi), sigma, centre)
+        let mut list = Vec::with_capacity(faults.len());
         for (i, f) in faults.iter().enumerate() {
             let fld = format!("{field}[{i}]");
             if f.tooth < 1 || f.tooth > teeth {
@@ -520,20 +102,9 @@ impl Validator<'_> {
                     self.err(&format!("{fld}.width_teeth"), format!("must be in (0, {teeth}], got {}", f.width_teeth))
                 );
             }
-            let centre = 2.0 * PI * (f.tooth as f64 - 0.5) / teeth as f64;
-            let sigma = 2.0 * PI * f.width_teeth / teeth as f64 / 6.0;
-            terms.push((f.depth_m * sigma / (2.0 * PI).sqrt(), sigma, centre));
+            list.push(ToothFault { tooth: f.tooth as usize, depth_m: f.depth_m, width_teeth: f.width_teeth });
         }
-        let sigma_min = terms.iter().map(|t| t.1).fold(f64::INFINITY, f64::min);
-        let h = ((2.0 * (1.0 / keep).ln()).sqrt() / sigma_min).ceil() as usize;
-        let mut series = FourierSeries::new(1.0, terms.iter().map(|t| t.0).sum(), vec![0.0; h], vec![0.0; h]);
-        for (a, sigma, c) in &terms {
-            for k in 1..=h {
-                let amp = 2.0 * a * (-0.5 * (k as f64 * sigma).powi(2)).exp();
-                series.cos[k - 1] += amp * (k as f64 * c).cos();
-                series.sin[k - 1] += amp * (k as f64 * c).sin();
-            }
-        }
+        let mut series = gear::gaussian_tooth_faults(teeth as usize, &list, keep);
         let dropped = series.truncate_below(keep * series.max_amplitude());
         notes.push(format!(
             "{field}: Gaussian profile deviation as {} harmonics (terms below {:.1e} of the largest dropped, {} more)",
@@ -544,7 +115,7 @@ impl Validator<'_> {
         Ok(series)
     }
 
-    fn gear(&self, field: &str, g: &RawGear) -> Result<(), SceneError> {
+    pub(super) fn gear(&self, field: &str, g: &RawGear) -> Result<(), SceneError> {
         if g.teeth < 3 || g.teeth > 100_000 {
             return Err(
                 self.err(&format!("{field}.teeth"), format!("must be an integer in 3..=100000, got {}", g.teeth))
@@ -555,7 +126,12 @@ impl Validator<'_> {
         Ok(())
     }
 
-    fn mesh(&self, m: &RawMesh, tolerance: f64, notes: &mut Vec<String>) -> Result<MeshStiffness, SceneError> {
+    pub(super) fn mesh(
+        &self,
+        m: &RawMesh,
+        tolerance: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<MeshStiffness, SceneError> {
         let f = "gear_pair.mesh_stiffness";
         match m {
             RawMesh::Fourier { mean_n_per_m, harmonics } => {
@@ -586,11 +162,7 @@ impl Validator<'_> {
                 }
                 let kp = self.positive(&format!("{f}.rectangular.pair_stiffness_n_per_m"), *pair_stiffness_n_per_m)?;
                 let (lo, frac) = (eps.floor(), eps - eps.floor());
-                let p = if frac == 0.0 {
-                    PiecewiseConstant { period_s: 1.0, starts: vec![0.0], values: vec![lo * kp] }
-                } else {
-                    PiecewiseConstant { period_s: 1.0, starts: vec![0.0, frac], values: vec![(lo + 1.0) * kp, lo * kp] }
-                };
+                let p = gear::rectangular_stiffness(eps, kp);
                 notes.push(format!(
                     "rectangular mesh stiffness: {} pairs for {:.3} of each mesh cycle",
                     lo + 1.0,
@@ -622,7 +194,12 @@ impl Validator<'_> {
         }
     }
 
-    fn gear_pair(&self, g: &RawGearPair, tolerance: f64, notes: &mut Vec<String>) -> Result<GearPair, SceneError> {
+    pub(super) fn gear_pair(
+        &self,
+        g: &RawGearPair,
+        tolerance: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<GearPair, SceneError> {
         let f = "gear_pair";
         self.positive(&format!("{f}.speed_rpm"), g.speed_rpm)?;
         self.non_negative(&format!("{f}.damping_ratio"), g.damping_ratio)?;
@@ -651,15 +228,9 @@ impl Validator<'_> {
         let crack = match &g.crack {
             None => None,
             Some(c) => {
-                let (gear, teeth) = match c.gear.as_str() {
-                    "pinion" => (Gear::Pinion, g.pinion.teeth),
-                    "wheel" => (Gear::Wheel, g.wheel.teeth),
-                    other => {
-                        return Err(self.err(
-                            &format!("{f}.crack.gear"),
-                            format!("must be \"pinion\" or \"wheel\", got \"{other}\""),
-                        ));
-                    }
+                let (gear, teeth) = match c.gear {
+                    Gear::Pinion => (Gear::Pinion, g.pinion.teeth),
+                    Gear::Wheel => (Gear::Wheel, g.wheel.teeth),
                 };
                 if c.tooth < 1 || c.tooth > teeth {
                     return Err(
@@ -712,7 +283,7 @@ impl Validator<'_> {
         Ok(gp)
     }
 
-    fn press(&self, p: &RawPress) -> Result<PressParams, SceneError> {
+    pub(super) fn press(&self, p: &RawPress) -> Result<PressParams, SceneError> {
         let f = "press";
         let cos = p.cam_cos_m_per_rad.clone();
         for (i, x) in cos.iter().chain(&p.cam_sin_m_per_rad).enumerate() {
@@ -738,7 +309,7 @@ impl Validator<'_> {
         })
     }
 
-    fn entry(&self, field: &str, e: &RawEntry, period: f64) -> Result<Coefficient, SceneError> {
+    pub(super) fn entry(&self, field: &str, e: &RawEntry, period: f64) -> Result<Coefficient, SceneError> {
         if let Some(st) = &e.steps {
             if e.mean.is_some() || !e.cos.is_empty() || !e.sin.is_empty() {
                 return Err(self.err(field, "give either `steps` or `mean`/`cos`/`sin`, not both".into()));
@@ -777,7 +348,7 @@ impl Validator<'_> {
         Ok(Coefficient::Fourier(FourierSeries::new(2.0 * PI / period, mean, e.cos.clone(), e.sin.clone())))
     }
 
-    fn matrix(
+    pub(super) fn matrix(
         &self,
         name: &str,
         rows: &[Vec<RawEntry>],
@@ -802,7 +373,7 @@ impl Validator<'_> {
         Ok(out)
     }
 
-    fn ltp(&self, l: &RawLtp) -> Result<SecondOrderSystem, SceneError> {
+    pub(super) fn ltp(&self, l: &RawLtp) -> Result<SecondOrderSystem, SceneError> {
         let period = self.positive("ltp.period_s", l.period_s)?;
         let n = l.forcing.len();
         if n == 0 || n > 64 {
@@ -829,7 +400,7 @@ impl Validator<'_> {
         })
     }
 
-    fn common_output(
+    pub(super) fn common_output(
         &self,
         o: &RawOutput,
         quantity: OutputQuantity,
@@ -870,14 +441,7 @@ impl Validator<'_> {
                 })
             }
         };
-        let wav_format = match o.wav_format.as_deref() {
-            None | Some("f32") => WavFormat::F32,
-            Some("i16") => WavFormat::I16,
-            Some("i24") => WavFormat::I24,
-            Some(other) => {
-                return Err(self.err("output.wav_format", format!("must be f32, i16 or i24, got \"{other}\"")));
-            }
-        };
+        let wav_format = o.wav_format.unwrap_or(WavFormat::F32);
         let full_scale = match o.full_scale {
             Some(x) => Some(self.positive("output.full_scale", x)?),
             None => None,
@@ -899,7 +463,7 @@ impl Validator<'_> {
         })
     }
 
-    fn gear_output(&self, o: &RawOutput, g: &GearPair) -> Result<OutputOptions, SceneError> {
+    pub(super) fn gear_output(&self, o: &RawOutput, g: &GearPair) -> Result<OutputOptions, SceneError> {
         let q = match o.quantity.as_deref() {
             None | Some("velocity") => {
                 OutputQuantity::Linear { weights: vec![0.0, 1.0], unit: "m/s".into(), name: "dq/dt".into() }
@@ -928,7 +492,7 @@ impl Validator<'_> {
         self.common_output(o, q, g.pinion_hz(), "pinion rotation", max_order, fs)
     }
 
-    fn press_output(&self, o: &RawOutput, p: &PressParams) -> Result<OutputOptions, SceneError> {
+    pub(super) fn press_output(&self, o: &RawOutput, p: &PressParams) -> Result<OutputOptions, SceneError> {
         let q = match o.quantity.as_deref() {
             None | Some("q1") => {
                 OutputQuantity::Linear { weights: vec![1.0, 0.0, 0.0, 0.0], unit: "rad".into(), name: "q1".into() }
@@ -952,7 +516,12 @@ impl Validator<'_> {
         self.common_output(o, q, hz, "input shaft rotation", 4.0 * k, 1000.0)
     }
 
-    fn ltp_output(&self, o: &RawOutput, sys: &SecondOrderSystem, period: f64) -> Result<OutputOptions, SceneError> {
+    pub(super) fn ltp_output(
+        &self,
+        o: &RawOutput,
+        sys: &SecondOrderSystem,
+        period: f64,
+    ) -> Result<OutputOptions, SceneError> {
         let n = sys.dof();
         let spec = o.quantity.clone().unwrap_or_else(|| "y1".into());
         let bad = || self.err("output.quantity", format!("must be y<i> or v<i> with i in 1..={n}, got \"{spec}\""));
@@ -974,6 +543,6 @@ impl Validator<'_> {
     }
 }
 
-fn fmt_revs(r: f64) -> String {
+pub(super) fn fmt_revs(r: f64) -> String {
     if (r - r.round()).abs() < 1e-9 { format!("{}", r.round()) } else { format!("{r:.4}") }
 }

@@ -1,0 +1,149 @@
+//! Command-line arguments (clap). Only the shape of the flags lives here; their meaning is in `cli::run`.
+
+use crate::model::Quantity;
+use clap::{Parser, Subcommand};
+
+/// gearvib: gear-pair vibration simulation, Floquet stability and gear-fault diagnosis.
+#[derive(Parser, Debug)]
+#[command(name = "gearvib", version, about, long_about = None)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Periodic steady state of a scene: orders, RMS, multipliers; optionally write the signal.
+    Simulate {
+        /// Scene JSON file.
+        scene: String,
+        /// Write the output quantity as a time signal (.wav or .csv) plus a sidecar OUT.json.
+        #[arg(short = 'o', long = "output", value_name = "OUT")]
+        output: Option<String>,
+        /// Write even when the sample rate is below twice the highest line requested (warns).
+        #[arg(long)]
+        allow_aliasing: bool,
+        /// Write PNG images and the JSON summary into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Floquet analysis and steady state over a range of one scene parameter (all cores).
+    Sweep {
+        /// Scene JSON file.
+        scene: String,
+        /// Parameter: speed, damping, load, or a dotted JSON path like gear_pair.damping_ratio.
+        #[arg(long)]
+        param: String,
+        /// First value.
+        #[arg(long, allow_hyphen_values = true)]
+        from: f64,
+        /// Last value.
+        #[arg(long, allow_hyphen_values = true)]
+        to: f64,
+        /// Number of values.
+        #[arg(long)]
+        steps: usize,
+        /// Stability map image.
+        #[arg(short = 'o', long = "output", value_name = "MAP.png")]
+        output: Option<String>,
+        /// Write the map and the JSON into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
+    Diagnose(DiagnoseArgs),
+    /// Speed against error of every solver on the paper's scenes and the hard cases.
+    Bench {
+        /// Scenes (default: the paper's cases and the hard cases in data/scenes).
+        scenes: Vec<String>,
+        /// Write the table (JSON) and work-precision PNGs into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Monodromy matrix and Floquet multipliers of a scene.
+    Stability {
+        /// Scene JSON file.
+        scene: String,
+        /// Write the multiplier image and the JSON summary into this directory.
+        #[arg(long)]
+        report: Option<String>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Arguments of `diagnose`.
+#[derive(clap::Args, Debug)]
+pub struct DiagnoseArgs {
+    /// Recordings (.wav or .csv), in time order (NA4 uses that order).
+    #[arg(required = true)]
+    pub recordings: Vec<String>,
+    /// Analyse only this channel (1-based); default: all but the tachometer.
+    #[arg(long)]
+    pub channel: Option<usize>,
+    /// Sample rate in Hz (overrides the file; needed for a CSV without a time column).
+    #[arg(long)]
+    pub fs: Option<f64>,
+    /// The sample rate is not known: analyse in orders of the estimated shaft period only.
+    #[arg(long)]
+    pub fs_unknown: bool,
+    /// Pinion (input) shaft speed in rpm.
+    #[arg(long, conflicts_with = "shaft_hz")]
+    pub rpm: Option<f64>,
+    /// Pinion (input) shaft speed in Hz.
+    #[arg(long)]
+    pub shaft_hz: Option<f64>,
+    /// Teeth of pinion and wheel, e.g. 14,39.
+    #[arg(long, value_name = "ZP,ZW")]
+    pub teeth: Option<String>,
+    /// Tachometer channel (1-based) on the pinion shaft.
+    #[arg(long)]
+    pub tacho_channel: Option<usize>,
+    /// Tachometer pulses per revolution.
+    #[arg(long, default_value_t = 1)]
+    pub pulses_per_rev: usize,
+    /// Healthy recording of the same machine to judge against.
+    #[arg(long)]
+    pub baseline: Option<String>,
+    /// Scene to simulate at the recording's speed and compare with.
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// What the recording measures (for --scene): acceleration, velocity or displacement.
+    #[arg(long, default_value = "velocity")]
+    pub quantity: Quantity,
+    /// Exit with code 1 when any recording is at least this bad.
+    #[arg(long, value_enum)]
+    pub fail_on: Option<FailOn>,
+    /// Write PNG images and the JSON summary into this directory.
+    #[arg(long)]
+    pub report: Option<String>,
+    /// One JSON object per recording, one per line.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The verdict from which `--fail-on` exits with code 1.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum FailOn {
+    /// Faulty recordings only.
+    Faulty,
+    /// Suspect or faulty recordings.
+    Suspect,
+}
+
+/// Parses the process arguments (clap prints usage errors itself and exits with code 2).
+pub fn parse_args() -> Cli {
+    Cli::parse()
+}

@@ -1,0 +1,147 @@
+//! Text output of every command (the JSON forms are `report::summary`). Writes to any `Write`, so a
+//! closed pipe comes back as an `io::Error` of kind `BrokenPipe` instead of a panic.
+
+use crate::report::summary::{BenchReport, Diagnosis, SimulateSummary, StabilitySummary, SweepSummary};
+use std::io::{self, Write};
+
+/// The text form of `stability`.
+pub fn stability(w: &mut dyn Write, s: &StabilitySummary) -> io::Result<()> {
+    writeln!(w, "scene            {}", s.scene)?;
+    writeln!(w, "period           {:.6} s", s.period_s)?;
+    writeln!(
+        w,
+        "method           {} ({} {}; rk4 stability limit {} steps), estimated error {:.2e} (tolerance {:.1e})",
+        s.method, s.steps, s.resolution_unit, s.stability_limit_steps, s.error_estimate, s.tolerance
+    )?;
+    writeln!(w, "why              {}", s.method_reason)?;
+    writeln!(w, "cond(I - Phi)    {:.3e}", s.cond_i_minus_phi)?;
+    writeln!(
+        w,
+        "|rho|max         {:.6e}  -> {}",
+        s.rho_max,
+        if s.stable { "asymptotically stable" } else { "UNSTABLE" }
+    )?;
+    writeln!(w, "multipliers      re            im            |rho|")?;
+    for m in &s.multipliers {
+        writeln!(w, "                 {:+.6e} {:+.6e} {:.6e}", m.re, m.im, m.abs)?;
+    }
+    for n in &s.notes {
+        writeln!(w, "note             {n}")?;
+    }
+    Ok(())
+}
+
+/// The text form of one diagnosis.
+pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
+    writeln!(w, "file             {}", d.file)?;
+    match d.sample_rate_hz {
+        Some(fs) => writeln!(w, "sample rate      {fs} Hz, {} samples, channels {:?}", d.samples, d.channels)?,
+        None => {
+            writeln!(w, "sample rate      unknown (orders only), {} samples, channels {:?}", d.samples, d.channels)?
+        }
+    }
+    let shafts: Vec<String> = d
+        .shaft_hz
+        .entries()
+        .into_iter()
+        .map(|(k, v)| match v {
+            Some(f) => format!("{k} {f:.4} Hz"),
+            None => format!("{k} period {:.3} samples", d.shaft_period_samples),
+        })
+        .collect();
+    writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?;
+    match d.mesh_hz {
+        Some(f) => writeln!(w, "mesh             {f:.3} Hz = order {} ({})", d.mesh_order, d.teeth_source)?,
+        None => writeln!(w, "mesh             order {} ({})", d.mesh_order, d.teeth_source)?,
+    }
+    writeln!(w, "VERDICT          {} (gear: {})", d.verdict.state.name().to_uppercase(), d.verdict.gear.name())?;
+    for r in &d.verdict.reasons {
+        writeln!(w, "  - {r}")?;
+    }
+    writeln!(w, "indicators (TSA of each gear's shaft; FM4/M6A/M8A on the difference signal, NA4 on the residual):")?;
+    let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest_factor"];
+    writeln!(w, "  {:<10} {:>3} {}", "gear", "ch", keys.iter().map(|k| format!("{k:>10}")).collect::<String>())?;
+    for g in &d.gears {
+        let vals: String =
+            keys.iter().map(|k| format!("{:>10.4}", g.indicators.get(*k).copied().unwrap_or(f64::NAN))).collect();
+        writeln!(w, "  {:<10} {:>3} {vals}", g.gear.name().chars().take(10).collect::<String>(), g.channel)?;
+    }
+    writeln!(w, "mesh harmonics (channel {}):", d.channels[0])?;
+    for h in &d.mesh_harmonics {
+        let f = h.frequency_hz.map_or("-".into(), |f| format!("{f:.2} Hz"));
+        let mut sb = h.sidebands.iter().filter(|s| s.resolved).cloned().collect::<Vec<_>>();
+        sb.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
+        let top: Vec<String> =
+            sb.iter().take(4).map(|s| format!("{:+} {} {:.3e}", s.offset, s.shaft, s.amplitude)).collect();
+        writeln!(w, "  {}x mesh  {f:>12}  {:.4e}   strongest sidebands: {}", h.k, h.amplitude, top.join("; "))?;
+    }
+    if let Some(c) = &d.comparison {
+        writeln!(
+            w,
+            "model comparison ({} at {:.1} rpm): distance {:.2} dB over {} lines, scale at mesh {:.3e}",
+            c.scene,
+            c.model_speed_rpm,
+            c.distance_db,
+            c.lines.len(),
+            c.scale_at_mesh
+        )?;
+        for m in &c.model_misses {
+            writeln!(w, "  model misses      {m}")?;
+        }
+        for m in &c.model_overpredicts {
+            writeln!(w, "  model overpredicts {m}")?;
+        }
+    }
+    for warning in &d.warnings {
+        writeln!(w, "warning          {warning}")?;
+    }
+    writeln!(w)?;
+    Ok(())
+}
+
+/// The text form of `simulate` (the stability part, then the output's strongest lines).
+pub fn simulate(w: &mut dyn Write, summary: &SimulateSummary) -> io::Result<()> {
+    stability(w, &summary.stability)?;
+    writeln!(
+        w,
+        "output           {} [{}], RMS {:.4e}, peak-to-peak {:.4e}",
+        summary.quantity, summary.unit, summary.rms, summary.peak_to_peak
+    )?;
+    let peak = summary.orders.iter().skip(1).map(|o| o.amplitude).fold(0.0, f64::max);
+    writeln!(w, "strongest lines (order of {} = {:.4} Hz, above 1 % of the largest):", summary.base, summary.base_hz)?;
+    writeln!(w, "  order     freq [Hz]    amplitude [{}]", summary.unit)?;
+    let mut lines: Vec<_> = summary.orders.iter().skip(1).filter(|o| o.amplitude >= 0.01 * peak).collect();
+    lines.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
+    for o in lines.iter().take(20) {
+        writeln!(w, "  {:8.3}  {:10.3}   {:.4e}", o.order, o.frequency_hz, o.amplitude)?;
+    }
+    Ok(())
+}
+
+/// The text form of `bench`.
+pub fn bench(w: &mut dyn Write, all: &BenchReport) -> io::Result<()> {
+    writeln!(w, "{:<36} {:<22} {:>10} {:>12} {:>12}", "scene", "method", "resolution", "time [s]", "error")?;
+    for r in &all.results {
+        writeln!(w, "{:<36} {:<22} {:>10} {:>12.3e} {:>12.3e}", r.scene, r.method, r.resolution, r.time_s, r.error)?;
+    }
+    for r in &all.references {
+        writeln!(w, "reference {}: rk4 points against {}; hill points against {}", r.scene, r.for_rk4, r.for_hill)?;
+    }
+    Ok(())
+}
+
+/// The text form of `sweep` (at most about 40 rows).
+pub fn sweep(w: &mut dyn Write, s: &SweepSummary) -> io::Result<()> {
+    writeln!(w, "{:>14} {:>14} {:>8}  lines", s.param, "|rho|max", "stable")?;
+    let stride = (s.points.len() / 40).max(1);
+    for p in s.points.iter().step_by(stride) {
+        match (p.rho_max, &p.error) {
+            (Some(r), _) => {
+                let lines: Vec<String> = p.lines.iter().map(|l| format!("{}={:.3e}", l.0, l.1)).collect();
+                writeln!(w, "{:>14.6} {:>14.6e} {:>8}  {}", p.value, r, p.stable.unwrap_or(false), lines.join(" "))?;
+            }
+            (None, e) => writeln!(w, "{:>14.6} failed: {}", p.value, e.clone().unwrap_or_default())?,
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,491 @@
+//! Diagnosis of recorded signals: speed and teeth (given, tachometer, or estimated), spectra, TSA per
+//! gear, condition indicators, sidebands labelled by shaft, a verdict, and comparison with a model.
+//!
+//! Which signal each indicator uses (see `reference/diagnostics.md`): RMS, kurtosis and crest factor on
+//! the TSA of the gear's shaft; FM0 on the TSA and its mesh-harmonic amplitudes; FM4, M6A, M8A on the
+//! difference signal; NA4 on the residual (ensemble of the recordings in command-line order; NA4* against
+//! a baseline's residual variance); ER = RMS(difference) / RMS(regular); SI, SLF and SER on the TSA
+//! amplitude spectrum around the first mesh harmonic. Raw-signal RMS and kurtosis are reported but never
+//! decide the verdict.
+
+mod compare;
+mod verdict;
+
+pub use compare::compare;
+pub use verdict::{Thresholds, ensemble_na4, judge};
+
+use super::{ChannelRole, JobError};
+use crate::Error;
+use crate::io::{self, Recording};
+use crate::model::Quantity;
+use crate::report::summary::{
+    Diagnosis, GearIndicators, MeshHarmonic, Shaft, ShaftHz, Sideband, SpeedSource, TeethSource, Verdict, VerdictGear,
+    VerdictState,
+};
+use crate::signal::indicators as ind;
+use crate::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
+use crate::signal::speed;
+use crate::signal::tsa::{self, AngleMap, Decomposition};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One `diagnose` call: recordings in time order, the shared options, an optional healthy baseline, an
+/// optional comparison scene and an optional report directory.
+#[derive(Clone, Debug, Default)]
+pub struct DiagnoseJob {
+    /// Recordings (.wav or .csv), in time order (NA4 uses that order).
+    pub recordings: Vec<PathBuf>,
+    /// Analysis options shared by all recordings and the baseline.
+    pub options: Options,
+    /// Healthy recording of the same machine to judge against.
+    pub baseline: Option<PathBuf>,
+    /// Scene simulated at each recording's speed and compared with it.
+    pub scene: Option<PathBuf>,
+    /// Directory for the PNG images and the JSON of each recording.
+    pub report: Option<PathBuf>,
+}
+
+/// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
+#[derive(Clone, Debug)]
+pub struct DiagnoseOutcome {
+    /// Diagnoses in the order of the recordings.
+    pub diagnoses: Vec<Diagnosis>,
+    /// Report files written (empty without a report directory).
+    pub report_files: Vec<PathBuf>,
+}
+
+/// Diagnoses every recording of `job`: the baseline first (its speed and mesh order are shared with the
+/// recordings when they were estimated), the recordings in parallel, NA4 over the ensemble in time order,
+/// the verdict of each against the baseline, the model comparison (the scene loaded once), and the report.
+///
+/// # Errors
+/// Any recording, the baseline or the scene cannot be read or analysed; the report cannot be written.
+pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
+    let opts = &job.options;
+    let baseline = job.baseline.as_deref().map(|b| diagnose(b, opts, None)).transpose()?;
+    let geometry = baseline.as_ref().map(|b| Geometry {
+        period_samples: (b.speed_source == SpeedSource::Estimated).then_some(b.shaft_period_samples),
+        mesh_order: (b.teeth_source == TeethSource::Estimated).then_some(b.mesh_order),
+    });
+    let results: Vec<Result<Diagnosis, Error>> =
+        job.recordings.par_iter().map(|r| diagnose(r, opts, geometry.as_ref())).collect();
+    let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    ensemble_na4(&mut done);
+    let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
+    let thresholds = Thresholds::default();
+    for d in &mut done {
+        judge(d, baseline.as_ref(), &thresholds);
+        if let Some(s) = &scene {
+            compare(d, s, opts.quantity)?;
+        }
+    }
+    let mut report_files = Vec::new();
+    if let Some(dir) = &job.report {
+        for d in &done {
+            report_files.extend(write_report(d, dir)?);
+        }
+    }
+    Ok(DiagnoseOutcome { diagnoses: done, report_files })
+}
+
+/// Writes `DIR/<stem>-diagnosis.json` and the diagnosis images of `d`.
+///
+/// # Errors
+/// The directory cannot be created or a file cannot be written.
+pub fn write_report(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    io::create_dir(dir)?;
+    let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
+    io::write_atomic(&dir.join(format!("{stem}-diagnosis.json")), crate::report::summary::to_json_line(d).as_bytes())?;
+    Ok(crate::report::figures::diagnosis(d, dir)?)
+}
+
+/// Options of [`diagnose`]. Defaults: all channels but the tachometer, sample rate from the file, speed
+/// estimated, teeth estimated, velocity, 8 revolutions at least, shaft orders 1..=2 in the regular signal.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// 1-based channel to analyse (all but the tachometer when `None`).
+    pub channel: Option<usize>,
+    /// Sample rate override in Hz.
+    pub fs_hz: Option<f64>,
+    /// Analyse in orders only when no sample rate is known.
+    pub fs_unknown: bool,
+    /// Pinion (input) shaft speed in Hz.
+    pub shaft_hz: Option<f64>,
+    /// Teeth of pinion and wheel.
+    pub teeth: Option<(usize, usize)>,
+    /// 1-based tachometer channel (pinion shaft).
+    pub tacho_channel: Option<usize>,
+    /// Tachometer pulses per revolution.
+    pub pulses_per_rev: usize,
+    /// What the recording measures.
+    pub quantity: Quantity,
+    /// Fewest whole revolutions a TSA needs.
+    pub min_revolutions: usize,
+    /// Shaft orders 1..=n counted as regular.
+    pub shaft_orders: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            channel: None,
+            fs_hz: None,
+            fs_unknown: false,
+            shaft_hz: None,
+            teeth: None,
+            tacho_channel: None,
+            pulses_per_rev: 1,
+            quantity: Quantity::Velocity,
+            min_revolutions: 8,
+            shaft_orders: 2,
+        }
+    }
+}
+
+fn bad(path: &Path, msg: impl std::fmt::Display) -> Error {
+    JobError::Input { file: path.display().to_string(), message: msg.to_string() }.into()
+}
+
+/// Speed and gear geometry shared by all recordings of one call (from the options, the baseline or the
+/// first recording).
+#[derive(Clone, Debug)]
+pub struct Geometry {
+    /// Shaft period in samples, when known from the baseline.
+    pub period_samples: Option<f64>,
+    /// Mesh order, when known.
+    pub mesh_order: Option<usize>,
+}
+
+/// Diagnoses one recording.
+///
+/// # Errors
+/// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
+pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+    let rec = io::read_recording(path)?;
+    analyse(path, rec, o, geometry)
+}
+
+fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>) -> Result<(), Error> {
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(bad(path, format!("channel {idx} has a non-finite sample at index {i}")));
+    }
+    let (lo, hi) = x.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if lo == hi {
+        return Err(bad(path, format!("channel {idx} is constant ({lo}): nothing to analyse")));
+    }
+    // clipping: runs of 3+ samples stuck at the extreme value
+    let level = lo.abs().max(hi.abs()) * 0.9999;
+    let peak = lo.abs().max(hi.abs());
+    let (mut run, mut stuck) = (0usize, 0usize);
+    for v in x {
+        run = if v.abs() >= level { run + 1 } else { 0 };
+        stuck += usize::from(run >= 3);
+    }
+    if stuck as f64 > 1e-4 * x.len() as f64 {
+        warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
+    }
+    Ok(())
+}
+
+fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<Option<f64>, Error> {
+    if let Some(fs) = o.fs_hz {
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(JobError::Value {
+                what: "sample rate".into(),
+                message: format!("must be a positive number of Hz, got {fs}"),
+            }
+            .into());
+        }
+        return Ok(Some(fs));
+    }
+    match rec.sample_rate_hz {
+        Some(fs) if fs > 0.0 => Ok(Some(fs)),
+        Some(fs) => Err(bad(path, format!("sample rate {fs} Hz is not positive; give the sample rate"))),
+        None if o.fs_unknown => Ok(None),
+        None => Err(JobError::NoSampleRate { file: path.display().to_string(), for_speed: false }.into()),
+    }
+}
+
+fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+    let nch = rec.channels.len();
+    let n = rec.channels.first().map_or(0, Vec::len);
+    if nch == 0 || n < 2 {
+        return Err(bad(path, format!("{n} sample(s): far too short to analyse")));
+    }
+    let fs = sample_rate(path, &rec, o)?;
+    let check_index = |role: ChannelRole, c: usize| -> Result<usize, Error> {
+        if c == 0 || c > nch {
+            Err(JobError::Channel { file: path.display().to_string(), role, index: c, count: nch }.into())
+        } else {
+            Ok(c)
+        }
+    };
+    let tacho = o.tacho_channel.map(|c| check_index(ChannelRole::Tachometer, c)).transpose()?;
+    let channels: Vec<usize> = match o.channel {
+        Some(c) => vec![check_index(ChannelRole::Vibration, c)?],
+        // channels named as tachometers (gearvib's sidecar) are never vibration channels
+        None => (1..=nch).filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho")).collect(),
+    };
+    if channels.is_empty() {
+        return Err(bad(path, "no channel left to analyse besides the tachometer"));
+    }
+    let mut warnings = Vec::new();
+    let checks: Vec<Result<Vec<String>, Error>> = channels
+        .par_iter()
+        .map(|&c| {
+            let mut w = Vec::new();
+            check_channel(path, c, &rec.channels[c - 1], &mut w).map(|_| w)
+        })
+        .collect();
+    for c in checks {
+        warnings.extend(c?);
+    }
+    let mut fft = Fft::new();
+    // ---- speed
+    let (map, source, confidence) = if let Some(t) = tacho {
+        let pulses =
+            speed::tacho_pulses(&rec.channels[t - 1]).map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
+        (AngleMap::from_pulses(&pulses, o.pulses_per_rev.max(1)), SpeedSource::Tachometer, 1.0)
+    } else if let Some(hz) = o.shaft_hz {
+        let fs = fs
+            .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
+        (AngleMap::constant(fs / hz, 0.0, n), SpeedSource::Given, 1.0)
+    } else {
+        let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
+        let est = match geometry.and_then(|g| g.period_samples) {
+            Some(p) => speed::refine_near(&mut fft, &views, p, 0.03),
+            None => speed::estimate_period(&mut fft, &views, 16, n / o.min_revolutions.max(2)),
+        }
+        .map_err(|e| bad(path, e))?;
+        warnings.push(format!(
+            "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
+            est.period_samples, est.confidence
+        ));
+        (AngleMap::constant(est.period_samples, 0.0, n), SpeedSource::Estimated, est.confidence)
+    };
+    let period = map.mean_period_samples();
+    let points = (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16);
+    // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown)
+    let gears: Vec<(Shaft, f64, Option<usize>)> = match o.teeth {
+        Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
+        None => vec![(Shaft::Estimated, 1.0, geometry.and_then(|g| g.mesh_order))],
+    };
+    // one TSA per channel and gear, in parallel
+    let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
+    let tsas = jobs
+        .par_iter()
+        .map(|&(c, gi)| {
+            tsa::tsa(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions)
+                .map(|t| (c, gi, t))
+                .map_err(|e| bad(path, e))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    let mut teeth_source = if o.teeth.is_some() { TeethSource::Given } else { TeethSource::Baseline };
+    let mut gear_results = Vec::new();
+    let mut mesh_orders = Vec::new();
+    for (gi, (name, _, known)) in gears.iter().enumerate() {
+        let z = match known {
+            Some(z) => *z,
+            None => {
+                let z = mesh_family(&mut fft, tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()));
+                teeth_source = TeethSource::Estimated;
+                warnings.push(format!(
+                    "mesh order {z} estimated from the strongest harmonic family of the TSA spectrum; give the teeth when known"
+                ));
+                z
+            }
+        };
+        if z * 2 + 8 > points / 2 {
+            return Err(bad(path, format!("mesh order {z} needs more than {points} samples per revolution")));
+        }
+        mesh_orders.push(z);
+        for (c, _, t) in tsas.iter().filter(|t| t.1 == gi) {
+            gear_results.push(gear_indicators(&mut fft, *name, *c, z, t, o.shaft_orders));
+        }
+    }
+    // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now)
+    let shaft_hz = fs.map(|fs| fs / period);
+    let spectra = match fs {
+        Some(fs) => channels
+            .par_iter()
+            .map(|&c| {
+                let mut fft = Fft::new();
+                let x = &rec.channels[c - 1];
+                let amp = amplitude_spectrum(&mut fft, x, fs, AmplitudeOptions::default()).map_err(|e| bad(path, e))?;
+                let psd = welch_psd(&mut fft, x, fs, 4096).map_err(|e| bad(path, e))?;
+                Ok((c, amp, psd))
+            })
+            .collect::<Result<Vec<_>, Error>>()?,
+        None => Vec::new(),
+    };
+    let raw = channels
+        .par_iter()
+        .map(|&c| {
+            let x = &rec.channels[c - 1];
+            BTreeMap::from([("rms".to_string(), ind::rms(x)), ("kurtosis".to_string(), ind::kurtosis(x))])
+        })
+        .collect();
+    let shafts = match o.teeth {
+        Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
+        None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
+    };
+    let ratios: Vec<(Shaft, f64)> = gears.iter().map(|g| (g.0, g.1)).collect();
+    let mut d = Diagnosis {
+        file: path.display().to_string(),
+        sample_rate_hz: fs,
+        samples: n,
+        channels: channels.clone(),
+        shaft_hz: shafts,
+        shaft_period_samples: period,
+        speed_source: source,
+        speed_confidence: confidence,
+        mesh_hz: shaft_hz.map(|f| f * mesh_orders[0] as f64),
+        mesh_order: mesh_orders[0],
+        teeth_source,
+        mesh_harmonics: Vec::new(),
+        indicators: BTreeMap::new(),
+        gears: gear_results,
+        raw,
+        verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
+        comparison: None,
+        warnings,
+        spectra,
+    };
+    d.mesh_harmonics = mesh_harmonics(&d, channels[0], &ratios);
+    if let Some(g) = d.gears.first() {
+        d.indicators = g.indicators.clone();
+    }
+    Ok(d)
+}
+
+/// Mesh order: the family z (z >= 8) whose first harmonics hold the most TSA energy per harmonic, summed
+/// over channels.
+fn mesh_family<'a>(fft: &mut Fft, tsas: impl Iterator<Item = &'a [f64]>) -> usize {
+    let mut power: Vec<f64> = Vec::new();
+    for t in tsas {
+        let a = crate::signal::spectrum::periodic_amplitudes_with(fft, t);
+        let total: f64 = a.iter().skip(1).map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+        power.resize(a.len(), 0.0);
+        for (p, v) in power.iter_mut().zip(&a) {
+            *p += v * v / total;
+        }
+    }
+    let half = power.len().saturating_sub(1);
+    (8..=(half / 2).max(8))
+        .max_by(|&a, &b| {
+            let score = |z: usize| {
+                let h = (half / z).clamp(1, 4);
+                (1..=h).map(|k| power.get(k * z).copied().unwrap_or(0.0)).sum::<f64>() / h as f64
+            };
+            score(a).total_cmp(&score(b))
+        })
+        .unwrap_or(8)
+}
+
+fn gear_indicators(
+    fft: &mut Fft,
+    gear: Shaft,
+    channel: usize,
+    z: usize,
+    t: &tsa::Tsa,
+    shaft_orders: usize,
+) -> GearIndicators {
+    let x = &t.samples;
+    let Decomposition { amplitudes, regular, residual, difference } = tsa::decompose(fft, x, z, shaft_orders);
+    let mesh_amps: Vec<f64> =
+        (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let side = amplitudes[z - 1] + amplitudes[z + 1];
+    let mut m = BTreeMap::new();
+    m.insert("rms".into(), ind::rms(&centred));
+    m.insert("kurtosis".into(), ind::kurtosis(x));
+    m.insert("crest_factor".into(), ind::crest_factor(&centred));
+    m.insert("fm0".into(), ind::fm0(x, &mesh_amps));
+    m.insert("fm4".into(), ind::normalized_moment(&difference, 4));
+    m.insert("m6a".into(), ind::normalized_moment(&difference, 6));
+    m.insert("m8a".into(), ind::normalized_moment(&difference, 8));
+    m.insert("na4".into(), ind::kurtosis(&residual));
+    m.insert("er".into(), ind::energy_ratio(&difference, &regular));
+    m.insert("si".into(), side / 2.0);
+    m.insert("slf".into(), side / ind::rms(&centred));
+    m.insert("ser".into(), ind::sideband_energy_ratio(&amplitudes, z, 1));
+    GearIndicators {
+        gear,
+        channel,
+        mesh_order: z,
+        revolutions: t.revolutions,
+        indicators: m,
+        residual,
+        tsa_amplitudes: amplitudes,
+        tsa: x.clone(),
+    }
+}
+
+/// Mesh harmonics and sidebands (3 per shaft on each side) from the raw amplitude spectrum when the
+/// sample rate is known, else from the reference TSA's order spectrum.
+fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(Shaft, f64)]) -> Vec<MeshHarmonic> {
+    let z = d.mesh_order as f64;
+    let spectrum = d.spectra.iter().find(|s| s.0 == channel).map(|s| &s.1);
+    let tsa_amps = d.gears.iter().find(|g| g.channel == channel).map(|g| &g.tsa_amplitudes);
+    let shaft_hz = d.shaft_hz.reference();
+    let mut out = Vec::new();
+    for k in 1..=3usize {
+        let order = k as f64 * z;
+        let read = |o: f64| -> Option<(Option<f64>, f64)> {
+            match (spectrum, shaft_hz) {
+                (Some(s), Some(f1)) => {
+                    let f = o * f1;
+                    // within 1.5 bins only: a line of the other shaft can sit a few Hz away (3 f2 = 32.3 Hz
+                    // against f1 = 30 Hz for 14/39 teeth) and must not be taken for this one
+                    let df = s.freqs_hz.get(1).copied().unwrap_or(1.0);
+                    let (ff, a) = s.peak_near(f, 1.5 * df)?;
+                    Some((Some(ff), a))
+                }
+                _ => {
+                    let a = tsa_amps?;
+                    let i = o.round() as usize;
+                    ((o - o.round()).abs() < 1e-9 && i < a.len()).then(|| (None, a[i]))
+                }
+            }
+        };
+        let Some((f, a)) = read(order) else { break };
+        let mut sidebands = Vec::new();
+        for &(name, ratio) in shafts {
+            for i in 1..=3i32 {
+                for sign in [-1, 1] {
+                    let o = order + f64::from(sign * i) * ratio;
+                    if let Some((ff, aa)) = read(o) {
+                        sidebands.push(Sideband {
+                            offset: sign * i,
+                            shaft: name,
+                            frequency_hz: ff,
+                            order: o,
+                            amplitude: aa,
+                            resolved: true,
+                        });
+                    }
+                }
+            }
+        }
+        // lines of different shafts closer than the resolution (3 bins, in orders) cannot be told apart
+        let resolution = match (spectrum, shaft_hz) {
+            (Some(s), Some(f1)) => 3.0 * s.freqs_hz.get(1).copied().unwrap_or(1.0) / f1,
+            _ => 0.0,
+        };
+        // (shaft, order); `None` marks the mesh line itself
+        let nominal: Vec<(Option<Shaft>, f64)> = shafts
+            .iter()
+            .flat_map(|&(name, ratio)| {
+                (1..=3).flat_map(move |i| [-1.0, 1.0].map(|sg| (Some(name), order + sg * f64::from(i) * ratio)))
+            })
+            .chain(std::iter::once((None, order)))
+            .collect();
+        for sb in &mut sidebands {
+            sb.resolved = !nominal.iter().any(|(name, o)| *name != Some(sb.shaft) && (o - sb.order).abs() < resolution);
+        }
+        out.push(MeshHarmonic { k, frequency_hz: f, order, amplitude: a, sidebands });
+    }
+    out
+}

@@ -1,0 +1,100 @@
+//! Jobs: the library functions behind each command. Each takes a job description (paths and options,
+//! never command-line flags), does all the work, writes the files it was asked for, and returns typed
+//! results for the caller to print.
+//!
+//! - [`simulate`]: periodic steady state of a scene, its orders, optional signal file ([`synth`]) and report;
+//!   [`simulate::stability`] for the Floquet analysis alone.
+//! - [`sweep`]: Floquet analysis and line amplitudes over a parameter range (all cores).
+//! - [`bench`](mod@bench): speed against error of every solver.
+//! - [`diagnose`]: recordings -> speed, TSA, indicators, verdict against a baseline, model comparison.
+
+pub mod bench;
+pub mod diagnose;
+pub mod simulate;
+pub mod sweep;
+pub mod synth;
+
+/// The role a channel number plays in a request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChannelRole {
+    /// The vibration channel to analyse.
+    Vibration,
+    /// The tachometer channel.
+    Tachometer,
+}
+
+impl std::fmt::Display for ChannelRole {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Vibration => "channel",
+            Self::Tachometer => "tachometer channel",
+        })
+    }
+}
+
+/// Errors of the job layer: an input that does not fit the job, or a result that cannot be trusted.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// An input file cannot be used for this job.
+    #[error("{file}: {message}")]
+    Input {
+        /// The file.
+        file: String,
+        /// What is wrong, in terms of the file's content.
+        message: String,
+    },
+    /// A requested channel does not exist in the file.
+    #[error("{file}: {role} {index} does not exist: the file has {count} channel(s), numbered from 1")]
+    Channel {
+        /// The file.
+        file: String,
+        /// What the channel was asked for.
+        role: ChannelRole,
+        /// Requested 1-based index.
+        index: usize,
+        /// Channels in the file.
+        count: usize,
+    },
+    /// The recording has no sample rate and the job needs one.
+    #[error("{file}: no sample rate: the file has no time column and none was given{}", if *.for_speed { " (a given shaft speed in Hz needs it)" } else { "" })]
+    NoSampleRate {
+        /// The file.
+        file: String,
+        /// True when a given speed is what needs it.
+        for_speed: bool,
+    },
+    /// A given value is out of its meaningful range.
+    #[error("{what}: {message}")]
+    Value {
+        /// The quantity, in words ("sample rate", "shaft speed").
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A periodic solution or multipliers that cannot meet the scene's tolerance.
+    #[error("{file}: {message}")]
+    Untrusted {
+        /// Scene file.
+        file: String,
+        /// What was refused and why.
+        message: String,
+    },
+    /// Writing the signal would alias lines above half the sample rate.
+    #[error("{file}: {message}")]
+    Aliasing {
+        /// Output file.
+        file: String,
+        /// Which lines alias.
+        message: String,
+    },
+    /// A sweep parameter that the scene does not have.
+    #[error("{scene}: parameter \"{name}\": {message}")]
+    Parameter {
+        /// Scene file.
+        scene: String,
+        /// Parameter name as given.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+}

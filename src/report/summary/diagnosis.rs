@@ -1,0 +1,356 @@
+//! The diagnosis of one recording (`diagnose --json`, one object per recording).
+
+use crate::signal::Spectrum;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A shaft of the gear pair, or the shaft of an estimated period when the teeth are not known.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+pub enum Shaft {
+    /// The input (pinion) shaft.
+    #[serde(rename = "pinion")]
+    Pinion,
+    /// The output (wheel) shaft.
+    #[serde(rename = "wheel")]
+    Wheel,
+    /// The shaft whose period was estimated from the signal (teeth unknown).
+    #[serde(rename = "shaft of the estimated period")]
+    Estimated,
+}
+
+impl Shaft {
+    /// Name shown to people and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pinion => "pinion",
+            Self::Wheel => "wheel",
+            Self::Estimated => "shaft of the estimated period",
+        }
+    }
+}
+
+impl std::fmt::Display for Shaft {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Shaft frequencies in Hz (`null` when the sample rate is unknown): pinion and wheel when the teeth are
+/// known, else the one estimated shaft.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ShaftHz {
+    /// Both shafts of a pair with known teeth.
+    Pair {
+        /// Pinion (input) shaft, Hz.
+        pinion: Option<f64>,
+        /// Wheel (output) shaft, Hz.
+        wheel: Option<f64>,
+    },
+    /// The shaft of the estimated period, Hz.
+    Estimated {
+        /// Its frequency, Hz.
+        estimated_shaft: Option<f64>,
+    },
+}
+
+impl ShaftHz {
+    /// The reference shaft's frequency (the pinion, or the estimated shaft), Hz.
+    pub fn reference(&self) -> Option<f64> {
+        match *self {
+            Self::Pair { pinion, .. } => pinion,
+            Self::Estimated { estimated_shaft } => estimated_shaft,
+        }
+    }
+    /// The pinion's frequency when the teeth are known, Hz.
+    pub fn pinion(&self) -> Option<f64> {
+        match *self {
+            Self::Pair { pinion, .. } => pinion,
+            Self::Estimated { .. } => None,
+        }
+    }
+    /// (shaft, frequency) pairs in display order.
+    pub fn entries(&self) -> Vec<(&'static str, Option<f64>)> {
+        match *self {
+            Self::Pair { pinion, wheel } => vec![("pinion", pinion), ("wheel", wheel)],
+            Self::Estimated { estimated_shaft } => vec![("estimated_shaft", estimated_shaft)],
+        }
+    }
+}
+
+/// Where the shaft speed came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpeedSource {
+    /// Given by the user (rpm or Hz).
+    Given,
+    /// From tachometer pulses.
+    Tachometer,
+    /// Estimated from the signal's repetition period.
+    Estimated,
+}
+
+/// Where the teeth (mesh order) came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TeethSource {
+    /// Given by the user or by the comparison scene.
+    Given,
+    /// Taken from the baseline recording's estimate.
+    Baseline,
+    /// Estimated from the TSA spectrum.
+    Estimated,
+}
+
+/// Condition of a recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VerdictState {
+    /// No indicator beyond its limit.
+    Healthy,
+    /// One indicator beyond its first limit.
+    Suspect,
+    /// An indicator beyond its second limit, or several beyond their first.
+    Faulty,
+}
+
+impl VerdictState {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Healthy => "healthy",
+            Self::Suspect => "suspect",
+            Self::Faulty => "faulty",
+        }
+    }
+}
+
+/// The gear a verdict concerns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum VerdictGear {
+    /// The pinion.
+    #[serde(rename = "pinion")]
+    Pinion,
+    /// The wheel.
+    #[serde(rename = "wheel")]
+    Wheel,
+    /// The teeth were not given, so the gear cannot be named.
+    #[serde(rename = "unknown (teeth not given)")]
+    Unknown,
+    /// No gear (healthy).
+    #[serde(rename = "none")]
+    None,
+}
+
+impl VerdictGear {
+    /// Name shown to people and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pinion => "pinion",
+            Self::Wheel => "wheel",
+            Self::Unknown => "unknown (teeth not given)",
+            Self::None => "none",
+        }
+    }
+}
+
+impl From<Shaft> for VerdictGear {
+    fn from(s: Shaft) -> Self {
+        match s {
+            Shaft::Pinion => Self::Pinion,
+            Shaft::Wheel => Self::Wheel,
+            Shaft::Estimated => Self::Unknown,
+        }
+    }
+}
+
+/// A sideband line.
+#[derive(Clone, Debug, Serialize)]
+pub struct Sideband {
+    /// Offset in shaft orders (negative below the mesh line).
+    pub offset: i32,
+    /// Shaft whose sideband this is.
+    pub shaft: Shaft,
+    /// Frequency in Hz (`null` when the sample rate is unknown).
+    pub frequency_hz: Option<f64>,
+    /// Order of the reference shaft.
+    pub order: f64,
+    /// Peak amplitude.
+    pub amplitude: f64,
+    /// False when a line of the other shaft (or the mesh line) lies within three spectral bins: the Hann
+    /// main lobe then mixes them and the amplitude cannot be attributed to this shaft.
+    pub resolved: bool,
+}
+
+/// A mesh harmonic with its sidebands.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshHarmonic {
+    /// Harmonic number.
+    pub k: usize,
+    /// Frequency in Hz (`null` when unknown).
+    pub frequency_hz: Option<f64>,
+    /// Order of the reference shaft.
+    pub order: f64,
+    /// Peak amplitude.
+    pub amplitude: f64,
+    /// Sidebands labelled by shaft.
+    pub sidebands: Vec<Sideband>,
+}
+
+/// Indicators of one gear on one channel.
+#[derive(Clone, Debug, Serialize)]
+pub struct GearIndicators {
+    /// The gear's shaft.
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// Mesh order of this gear's shaft (its teeth).
+    pub mesh_order: usize,
+    /// Revolutions averaged in the TSA.
+    pub revolutions: usize,
+    /// Indicators keyed by lower-case name.
+    pub indicators: BTreeMap<String, f64>,
+    /// Residual signal (TSA without shaft and mesh lines) over one revolution.
+    #[serde(skip)]
+    pub residual: Vec<f64>,
+    /// One-sided amplitude spectrum of the TSA, by order of this shaft.
+    #[serde(skip)]
+    pub tsa_amplitudes: Vec<f64>,
+    /// TSA over one revolution, resampled to a power of two.
+    #[serde(skip)]
+    pub tsa: Vec<f64>,
+}
+
+/// The verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Condition.
+    pub state: VerdictState,
+    /// Gear concerned.
+    pub gear: VerdictGear,
+    /// Reasons in plain words.
+    pub reasons: Vec<String>,
+}
+
+/// One line of the model comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct ComparedLine {
+    /// Pinion order.
+    pub order: usize,
+    /// "14k+-i pinion" style label.
+    pub label: String,
+    /// Measured level relative to the measured first mesh line, dB.
+    pub measured_db: f64,
+    /// Model level relative to the model's first mesh line, dB.
+    pub model_db: f64,
+    /// measured - model, dB.
+    pub difference_db: f64,
+}
+
+/// Measured against modelled orders.
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    /// Scene file.
+    pub scene: String,
+    /// Speed used for the model, rpm.
+    pub model_speed_rpm: f64,
+    /// Measured / model amplitude at the first mesh line, after conversion to velocity.
+    pub scale_at_mesh: f64,
+    /// RMS over the compared lines of the dB difference (0 = the model explains the pattern exactly).
+    pub distance_db: f64,
+    /// Lines compared.
+    pub lines: Vec<ComparedLine>,
+    /// Lines the model misses (measured > model + 6 dB).
+    pub model_misses: Vec<String>,
+    /// Lines the model overpredicts (measured < model - 6 dB).
+    pub model_overpredicts: Vec<String>,
+}
+
+/// Result of diagnosing one recording (the JSON object of `diagnose --json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    /// Recording file.
+    pub file: String,
+    /// Sample rate in Hz (`null` when unknown).
+    pub sample_rate_hz: Option<f64>,
+    /// Samples per channel.
+    pub samples: usize,
+    /// Channels analysed (1-based).
+    pub channels: Vec<usize>,
+    /// Shaft frequencies in Hz (`null` entries when unknown).
+    pub shaft_hz: ShaftHz,
+    /// Shaft period in samples.
+    pub shaft_period_samples: f64,
+    /// Where the speed came from.
+    pub speed_source: SpeedSource,
+    /// Confidence of an estimated speed (autocorrelation at the period, 0..1); 1 when given.
+    pub speed_confidence: f64,
+    /// Mesh frequency in Hz (`null` when unknown).
+    pub mesh_hz: Option<f64>,
+    /// Mesh order of the pinion (or of the estimated shaft).
+    pub mesh_order: usize,
+    /// Where the teeth came from.
+    pub teeth_source: TeethSource,
+    /// Mesh harmonics with sidebands on the deciding channel.
+    pub mesh_harmonics: Vec<MeshHarmonic>,
+    /// Indicators of the deciding gear and channel.
+    pub indicators: BTreeMap<String, f64>,
+    /// Indicators per gear and channel.
+    pub gears: Vec<GearIndicators>,
+    /// Raw-signal RMS and kurtosis per channel (for reference only).
+    pub raw: Vec<BTreeMap<String, f64>>,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Model comparison, with `--scene`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub comparison: Option<Comparison>,
+    /// Warnings (clipping, estimated quantities).
+    pub warnings: Vec<String>,
+    /// Amplitude spectrum and Welch PSD per analysed channel (empty when the sample rate is unknown).
+    #[serde(skip)]
+    pub spectra: Vec<(usize, Spectrum, Spectrum)>,
+}
+
+impl Diagnosis {
+    /// Amplitude spectrum and Welch PSD per analysed channel (when the sample rate is known).
+    pub fn spectra(&self) -> &[(usize, Spectrum, Spectrum)] {
+        &self.spectra
+    }
+    /// TSA, its order amplitudes and the gear label of each gear and channel.
+    pub fn tsas(&self) -> impl Iterator<Item = (&GearIndicators, &[f64], &[f64])> {
+        self.gears.iter().map(|g| (g, g.tsa.as_slice(), g.tsa_amplitudes.as_slice()))
+    }
+}
+
+macro_rules! display_by_name {
+    ($($t:ty),*) => {$(
+        impl std::fmt::Display for $t {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    )*};
+}
+display_by_name!(VerdictState, VerdictGear, SpeedSource, TeethSource);
+
+impl SpeedSource {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Given => "given",
+            Self::Tachometer => "tachometer",
+            Self::Estimated => "estimated",
+        }
+    }
+}
+
+impl TeethSource {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Given => "given",
+            Self::Baseline => "baseline",
+            Self::Estimated => "estimated",
+        }
+    }
+}

@@ -1,0 +1,226 @@
+//! Scenes: one JSON file states one simulation (model, solver, output). Parsed with serde
+//! (`deny_unknown_fields`), then validated into typed model objects; every error names the file and the
+//! field. Units are in the field names (SI unless the name says otherwise).
+
+mod raw;
+mod validate;
+
+use crate::model::{GearPair, OutputQuantity, PressParams, SecondOrderSystem};
+use crate::solver::SolverOptions;
+use crate::system::PeriodicSystem;
+use raw::{ModelKind, RawScene};
+use serde::Deserialize;
+use validate::Validator;
+
+/// Errors reading or validating a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: cannot read scene: {message}")]
+    Io {
+        /// Scene path.
+        file: String,
+        /// OS message.
+        message: String,
+    },
+    /// JSON syntax, unknown or missing field, wrong type.
+    #[error("{file}: {message}")]
+    Json {
+        /// Scene path.
+        file: String,
+        /// serde_json's message with line and column.
+        message: String,
+    },
+    /// A value that is well-formed but physically meaningless.
+    #[error("{file}: field `{field}`: {message}")]
+    Invalid {
+        /// Scene path.
+        file: String,
+        /// Dotted path of the field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+// ---------- validated scene ----------
+
+/// The model a scene builds.
+#[derive(Clone, Debug)]
+pub enum Model {
+    /// Gear pair (Eqs 36-46).
+    GearPair(GearPair),
+    /// Forging-press cam mechanism (Eqs 32-35).
+    Press(PressParams, SecondOrderSystem),
+    /// Generic LTP system.
+    Ltp(SecondOrderSystem),
+}
+
+/// Slow sinusoidal speed fluctuation: speed(t) = nominal (1 + depth sin(2 pi f t)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedModulation {
+    /// Relative depth (0.01 = 1 %).
+    pub depth: f64,
+    /// Modulation frequency in Hz.
+    pub frequency_hz: f64,
+}
+
+/// Sample format of a written WAV file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WavFormat {
+    /// 32-bit IEEE float, values in the physical unit.
+    F32,
+    /// 16-bit integer, full scale = `full_scale` physical units.
+    I16,
+    /// 24-bit integer, full scale = `full_scale` physical units.
+    I24,
+}
+
+/// What `simulate` reports and writes.
+#[derive(Clone, Debug)]
+pub struct OutputOptions {
+    /// Output quantity.
+    pub quantity: OutputQuantity,
+    /// Frequency whose multiples are the orders (pinion rotation, press input shaft, 1/T), Hz.
+    pub base_hz: f64,
+    /// Name of the base ("pinion rotation").
+    pub base_name: String,
+    /// Highest order listed in `orders`.
+    pub max_order: f64,
+    /// Sample rate of a written signal, Hz.
+    pub sample_rate_hz: f64,
+    /// Duration of a written signal, s.
+    pub duration_s: f64,
+    /// RMS of white measurement noise added to the written signal (physical unit).
+    pub noise_rms: f64,
+    /// Seed of the noise generator.
+    pub seed: u64,
+    /// Optional speed fluctuation.
+    pub speed_modulation: Option<SpeedModulation>,
+    /// Add once-per-revolution tachometer channels.
+    pub tacho: bool,
+    /// WAV sample format.
+    pub wav_format: WavFormat,
+    /// Physical value mapped to integer full scale (integer WAV only).
+    pub full_scale: Option<f64>,
+    /// True when `sample_rate_hz` came from the scene rather than a default.
+    pub sample_rate_given: bool,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name (file stem when not given).
+    pub name: String,
+    /// Path it was read from.
+    pub file: String,
+    /// Model.
+    pub model: Model,
+    /// Solver options.
+    pub solver: SolverOptions,
+    /// Output options.
+    pub output: OutputOptions,
+    /// What was modelled and what was dropped, in plain words.
+    pub notes: Vec<String>,
+    /// The raw JSON, for parameter sweeps.
+    pub json: serde_json::Value,
+}
+
+impl Scene {
+    /// The model as a periodic system.
+    pub fn system(&self) -> &dyn PeriodicSystem {
+        match &self.model {
+            Model::GearPair(g) => g,
+            Model::Press(_, s) | Model::Ltp(s) => s,
+        }
+    }
+
+    /// Reads and validates a scene file.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file and field.
+    pub fn load(path: &str) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
+        // typed parse first, for messages with the field path and line/column
+        let mut de = serde_json::Deserializer::from_str(&text);
+        let raw: RawScene = serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(path, e))?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| SceneError::Json { file: path.to_string(), message: e.to_string() })?;
+        Self::from_raw(raw, value, path)
+    }
+
+    /// Validates a scene given as JSON (`file` is used in messages).
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the file and field.
+    pub fn from_value(value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
+        let raw: RawScene = serde_path_to_error::deserialize(value.clone()).map_err(|e| json_error(file, e))?;
+        Self::from_raw(raw, value, file)
+    }
+
+    fn from_raw(raw: RawScene, value: serde_json::Value, file: &str) -> Result<Self, SceneError> {
+        let v = Validator::new(file);
+        let solver = v.solver(&raw.solver)?;
+        let mut notes = Vec::new();
+        let stem = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+        let name = raw.name.clone().unwrap_or_else(|| stem.to_string());
+        let present = [
+            (ModelKind::GearPair, raw.gear_pair.is_some()),
+            (ModelKind::Press, raw.press.is_some()),
+            (ModelKind::Ltp, raw.ltp.is_some()),
+        ];
+        for (kind, is) in present {
+            if is && kind != raw.model {
+                return Err(v.err(kind.key(), format!("given, but `model` is \"{}\"", raw.model.key())));
+            }
+        }
+        let missing =
+            |key: &str| v.err(key, format!("missing: `model` is \"{key}\" so the `{key}` object is required"));
+        let (model, output) = match raw.model {
+            ModelKind::GearPair => {
+                let g = raw.gear_pair.as_ref().ok_or_else(|| missing("gear_pair"))?;
+                let gp = v.gear_pair(g, solver.tolerance, &mut notes)?;
+                let out = v.gear_output(&raw.output, &gp)?;
+                (Model::GearPair(gp), out)
+            }
+            ModelKind::Press => {
+                let p = raw.press.as_ref().ok_or_else(|| missing("press"))?;
+                let params = v.press(p)?;
+                let sys =
+                    params.system().map_err(|_| v.err("press.follower_mass_kg", "mass matrix is singular".into()))?;
+                let out = v.press_output(&raw.output, &params)?;
+                (Model::Press(params, sys), out)
+            }
+            ModelKind::Ltp => {
+                let l = raw.ltp.as_ref().ok_or_else(|| missing("ltp"))?;
+                let sys = v.ltp(l)?;
+                let out = v.ltp_output(&raw.output, &sys, l.period_s)?;
+                (Model::Ltp(sys), out)
+            }
+        };
+        let mut scene = Self { name, file: file.to_string(), model, solver, output, notes, json: value };
+        let sys = scene.system();
+        let period = sys.period_s();
+        let note = format!(
+            "period {:.6} s ({:.4} base revolutions), highest coefficient harmonic {}",
+            period,
+            period * scene.output.base_hz,
+            sys.max_harmonic()
+        );
+        scene.notes.insert(0, note);
+        Ok(scene)
+    }
+}
+
+fn json_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> SceneError {
+    let path = e.path().to_string();
+    let inner = e.into_inner();
+    let message = if path == "." || path == "?" || path.is_empty() {
+        inner.to_string()
+    } else {
+        format!("field `{path}`: {inner}")
+    };
+    SceneError::Json { file: file.to_string(), message }
+}

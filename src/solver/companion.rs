@@ -1,0 +1,101 @@
+//! The homogeneous companion x' = P(t) x over the period of P(t) alone, whose monodromy (by RK4 with two
+//! Richardson eliminations) gives the Floquet multipliers for solvers that do not step in time.
+
+use super::{RK4_STABILITY_LIMIT, SolverError, SolverOptions, max_rate, rk4};
+use crate::system::{PeriodicSystem, Side};
+use nalgebra::{DMatrix, DVector};
+
+/// P(t) over its own period with no forcing: the companion system whose monodromy gives the multipliers.
+struct Homogeneous<'a> {
+    sys: &'a dyn PeriodicSystem,
+    period_s: f64,
+}
+
+impl PeriodicSystem for Homogeneous<'_> {
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+    fn period_s(&self) -> f64 {
+        self.period_s
+    }
+    fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+        self.sys.eval_matrix(t, side, p);
+        f.fill(0.0);
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.sys.breakpoints().into_iter().filter(|&b| b < self.period_s * (1.0 - 1e-12)).collect()
+    }
+    fn max_harmonic(&self) -> usize {
+        let k = (self.sys.period_s() / self.period_s).round().max(1.0) as usize;
+        self.sys.max_harmonic() / k
+    }
+}
+
+/// Monodromy over the full period from the companion over the homogeneous period: Phi = Phi_h^k. The
+/// companion's tolerance is divided by k because relative multiplier errors grow k-fold.
+pub(super) fn companion_monodromy(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
+    let th = sys.homogeneous_period_s();
+    let k = (sys.period_s() / th).round().max(1.0) as usize;
+    let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
+    let (phi_h, est, steps) = romberg_monodromy(&hom, opts.tolerance / k as f64, opts.max_steps)?;
+    let mut phi = DMatrix::identity(sys.dim(), sys.dim());
+    for _ in 0..k {
+        phi = &phi_h * phi;
+    }
+    Ok((phi, est * k as f64, steps))
+}
+
+/// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
+/// h^4, h^5, ...): R1 = (16 Phi_2m - Phi_m) / 15 is fifth order, R2 = (32 R1(2m) - R1(m)) / 31 sixth order,
+/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate, relative to |Phi|, meets `tol`.
+fn romberg_monodromy(
+    sys: &dyn PeriodicSystem,
+    tol: f64,
+    max_steps: usize,
+) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
+    let period = sys.period_s();
+    let breaks = sys.breakpoints();
+    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
+    let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {
+        let r = rk4::monodromy(sys, &rk4::Grid::new(period, &breaks, steps));
+        if r.monodromy.iter().any(|v| !v.is_finite()) {
+            return Err(SolverError::NonFinite { what: format!("companion monodromy after {steps} steps") });
+        }
+        Ok(r.monodromy)
+    };
+    let (mut a, mut b) = (run(m)?, run(2 * m)?);
+    let mut previous: Option<DMatrix<f64>> = None;
+    let mut total = 3 * m;
+    loop {
+        let c = run(4 * m)?;
+        total += 4 * m;
+        let r1a = (&b * 16.0 - &a) / 15.0;
+        let r1b = (&c * 16.0 - &b) / 15.0;
+        let r2 = (&r1b * 32.0 - &r1a) / 31.0;
+        let scale = r2.amax().max(f64::MIN_POSITIVE);
+        // sixth order: the error of R2(m) is about |R2(m) - R2(m/2)| / (2^6 - 1); before a second R2 exists,
+        // the fifth-order |R2 - R1(2m)| bounds it
+        let est = match &previous {
+            Some(p) => (&r2 - p).amax() / scale / 63.0,
+            None => (&r2 - &r1b).amax() / scale,
+        };
+        if est <= tol {
+            return Ok((r2, est, total));
+        }
+        if 4 * m >= max_steps {
+            return Err(SolverError::ToleranceNotReached {
+                cond: f64::NAN,
+                tolerance: tol,
+                steps: 4 * m,
+                estimate: est,
+            });
+        }
+        m *= 2;
+        (a, b) = (b, c);
+        previous = Some(r2);
+    }
+}

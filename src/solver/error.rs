@@ -1,0 +1,47 @@
+//! Errors of the solver layer.
+
+/// Errors of the solver layer.
+#[derive(Debug, thiserror::Error)]
+pub enum SolverError {
+    /// A matrix or vector contained NaN or infinity.
+    #[error("non-finite values in {what}")]
+    NonFinite {
+        /// What was non-finite.
+        what: String,
+    },
+    /// The eigenvalue iteration did not converge.
+    #[error("eigenvalues of a {n}x{n} matrix did not converge (QR iteration limit reached)")]
+    EigenFailed {
+        /// Matrix size.
+        n: usize,
+    },
+    /// I - Phi is singular: a Floquet multiplier equals 1 and no unique periodic solution exists.
+    #[error("I - Phi is singular (a Floquet multiplier equals 1): no unique periodic solution")]
+    Singular,
+    /// The requested tolerance needs more steps than allowed.
+    #[error(
+        "the periodic solution cannot meet tolerance {tolerance:e}: {steps} steps (or harmonics) still leave an estimated error of {estimate:.2e}{}; raise solver.tolerance",
+        conditioning(*cond)
+    )]
+    ToleranceNotReached {
+        /// Condition number of I - Phi at the last attempt (NaN when unknown).
+        cond: f64,
+        /// Requested tolerance.
+        tolerance: f64,
+        /// Steps of the last attempt.
+        steps: usize,
+        /// Error estimate of the last attempt.
+        estimate: f64,
+    },
+    /// The requested method is not available for this system.
+    #[error("{0}")]
+    Unsupported(String),
+}
+
+fn conditioning(cond: f64) -> String {
+    if cond.is_finite() && cond > 1e4 {
+        format!(" because cond(I - Phi) = {cond:.2e}: a Floquet multiplier near +1 amplifies every error")
+    } else {
+        String::new()
+    }
+}

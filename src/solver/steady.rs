@@ -1,0 +1,228 @@
+//! The periodic steady state (Eq 21: (I - Phi) x0 = c_m) and the step-based solvers' tolerance loop by
+//! step doubling (Richardson: for a fourth-order method the error of the finer result is about
+//! |x_m - x_2m| / 15).
+
+use super::floquet::{Floquet, condition_number, floquet_warnings};
+use super::{Method, RK4_STABILITY_LIMIT, SolverError, SolverOptions, hill, max_rate, rk4};
+use crate::system::PeriodicSystem;
+use nalgebra::{DMatrix, DVector};
+
+/// The periodic solution over one period.
+#[derive(Clone, Debug)]
+pub enum Trajectory {
+    /// Node states of a step grid (node-major).
+    Grid {
+        /// Step grid.
+        grid: rk4::Grid,
+        /// States at the nodes.
+        states: Vec<f64>,
+        /// Scheme that produced them (partial steps use it too).
+        scheme: rk4::Scheme,
+    },
+    /// Fourier coefficients from harmonic balance.
+    Fourier(hill::HillSolution),
+}
+
+/// Periodic steady state with its Floquet analysis and accuracy report.
+#[derive(Clone, Debug)]
+pub struct SteadyState {
+    /// Method actually used (never `Auto`).
+    pub method: Method,
+    /// Why that method (for `auto`).
+    pub reason: String,
+    /// Period T in s.
+    pub period_s: f64,
+    /// Steps (or harmonics) used.
+    pub resolution: usize,
+    /// Estimated relative error of multipliers and periodic solution.
+    pub error_estimate: f64,
+    /// Monodromy matrix.
+    pub monodromy: DMatrix<f64>,
+    /// Floquet analysis.
+    pub floquet: Floquet,
+    /// Periodic initial state x0.
+    pub x0: DVector<f64>,
+    /// 2-norm condition number of I - Phi.
+    pub cond_i_minus_phi: f64,
+    /// Smallest step count above the explicit RK4 stability limit.
+    pub stability_limit_steps: usize,
+    /// True when the error estimate meets the tolerance and I - Phi is well enough conditioned.
+    pub trusted: bool,
+    /// Plain-language warnings (unstable, ill-conditioned, below the stability limit, ...).
+    pub warnings: Vec<String>,
+    /// The solution over one period.
+    pub trajectory: Trajectory,
+}
+
+impl SteadyState {
+    /// Samples the state at `times` (s, any real; reduced modulo T) into `out` (n per time).
+    pub fn states_at(&self, sys: &dyn PeriodicSystem, times: &[f64], out: &mut Vec<f64>) {
+        let n = sys.dim();
+        let mut st = rk4::Stepper::new(sys);
+        let mut x = vec![0.0; n];
+        out.clear();
+        out.reserve(times.len() * n);
+        for &t in times {
+            let tau = t.rem_euclid(self.period_s);
+            match &self.trajectory {
+                Trajectory::Grid { grid, states, scheme } => {
+                    if *scheme != rk4::Scheme::Rk4 {
+                        st = rk4::Stepper::with_scheme(sys, *scheme);
+                    }
+                    rk4::state_at(&mut st, grid, states, tau, &mut x)
+                }
+                Trajectory::Fourier(h) => h.state(tau, &mut x),
+            }
+            out.extend_from_slice(&x);
+        }
+    }
+}
+
+struct Attempt {
+    run: rk4::Rk4Run,
+    floquet: Floquet,
+    x0: DVector<f64>,
+    states: Vec<f64>,
+    cond: f64,
+}
+
+fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme) -> Result<Attempt, SolverError> {
+    let run = rk4::monodromy_with(sys, grid, scheme);
+    if run.monodromy.iter().chain(run.forcing.iter()).any(|v| !v.is_finite()) {
+        return Err(SolverError::NonFinite { what: format!("monodromy matrix after {} steps", grid.steps()) });
+    }
+    let floquet = Floquet::from_monodromy(&run.monodromy, sys.period_s())?;
+    let n = sys.dim();
+    let a = DMatrix::identity(n, n) - &run.monodromy;
+    let cond = condition_number(&a);
+    let x0 = a.lu().solve(&run.forcing).ok_or(SolverError::Singular)?;
+    if !cond.is_finite() || x0.iter().any(|v| !v.is_finite()) {
+        return Err(SolverError::Singular);
+    }
+    let states = rk4::trajectory_with(sys, grid, &x0, scheme);
+    Ok(Attempt { run, floquet, x0, states, cond })
+}
+
+/// Relative difference of two attempts, the second on the refined grid of the first.
+fn difference(coarse: &Attempt, fine: &Attempt, n: usize) -> f64 {
+    let mut worst: f64 = 0.0;
+    for c in 0..n {
+        let scale = fine.states.iter().skip(c).step_by(n).fold(0.0f64, |a, v| a.max(v.abs()));
+        let diff = (0..coarse.run.grid.nodes.len())
+            .map(|i| (coarse.states[i * n + c] - fine.states[2 * i * n + c]).abs())
+            .fold(0.0, f64::max);
+        if scale > 0.0 {
+            worst = worst.max(diff / scale);
+        }
+    }
+    // the monodromy itself, not its eigenvalues: nearly repeated multipliers (at a stability boundary) move
+    // like the square root of a perturbation, while Phi, its trace and |rho|max decisions do not
+    let scale = fine.run.monodromy.amax().max(f64::MIN_POSITIVE);
+    worst.max((&coarse.run.monodromy - &fine.run.monodromy).amax() / scale)
+}
+
+pub(super) fn solve_rk4(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+    reason: &str,
+) -> Result<SteadyState, SolverError> {
+    solve_steps(sys, opts, reason, rk4::Scheme::Rk4)
+}
+
+pub(super) fn solve_steps(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+    reason: &str,
+    scheme: rk4::Scheme,
+) -> Result<SteadyState, SolverError> {
+    let period = sys.period_s();
+    let breaks = sys.breakpoints();
+    let n = sys.dim();
+    let rate = max_rate(sys);
+    let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
+    let mut warnings = Vec::new();
+    let (grid, fine, estimate) = if let Some(steps) = opts.steps {
+        if steps < limit && scheme == rk4::Scheme::Rk4 {
+            warnings.push(format!(
+                "{steps} steps is below the explicit RK4 stability limit of {limit} steps (h |lambda|max > {RK4_STABILITY_LIMIT}): the result is not trustworthy"
+            ));
+        }
+        let grid = rk4::Grid::new(period, &breaks, steps);
+        let below = steps < limit && scheme == rk4::Scheme::Rk4;
+        let explain = |e: SolverError| {
+            if below {
+                SolverError::Unsupported(format!(
+                    "solver.steps = {steps} is below the explicit RK4 stability limit of {limit} steps and the product diverged ({e}); use at least {limit} steps or method magnus4/hill"
+                ))
+            } else {
+                e
+            }
+        };
+        let coarse = attempt(sys, &grid, scheme).map_err(explain)?;
+        let fine = attempt(sys, &grid.refined(), scheme).map_err(explain)?;
+        // error of the coarse result: |x_m - x_2m| (1 + 1/15)
+        let est = difference(&coarse, &fine, n) * 16.0 / 15.0;
+        (grid, coarse, est)
+    } else {
+        // an explicit scheme must start above its stability limit; Magnus is A-stable
+        let stable_start = if scheme == rk4::Scheme::Rk4 { 2 * limit } else { 0 };
+        let mut m = stable_start.max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1));
+        loop {
+            let grid = rk4::Grid::new(period, &breaks, m);
+            let coarse = attempt(sys, &grid, scheme)?;
+            let fine_grid = grid.refined();
+            let fine = attempt(sys, &fine_grid, scheme)?;
+            let est = difference(&coarse, &fine, n) / 15.0;
+            if est <= opts.tolerance {
+                break (fine_grid, fine, est);
+            }
+            if fine_grid.steps() >= opts.max_steps {
+                return Err(SolverError::ToleranceNotReached {
+                    cond: fine.cond,
+                    tolerance: opts.tolerance,
+                    steps: fine_grid.steps(),
+                    estimate: est,
+                });
+            }
+            let ratio = (est / opts.tolerance).powf(0.25) * 1.1;
+            let next = ((grid.steps() as f64) * ratio).ceil() as usize;
+            // at least double (the fine grid is already computed), never beyond the cap (the next fine grid
+            // doubles it); a cap below the doubling is caught by the check above on the next round
+            m = next.max(2 * grid.steps()).min((opts.max_steps / 2).max(grid.steps() + 1));
+        }
+    };
+    let roundoff = fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt();
+    let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
+    if roundoff > opts.tolerance {
+        warnings.push(format!(
+            "I - Phi is ill-conditioned (cond {:.3e}): rounding alone may cost {:.1e} relative error, above the tolerance",
+            fine.cond, roundoff
+        ));
+    }
+    if opts.steps.is_some() && estimate > opts.tolerance {
+        warnings.push(format!(
+            "with {} steps the estimated error {:.2e} is above the tolerance {:.1e}",
+            grid.steps(),
+            estimate,
+            opts.tolerance
+        ));
+        trusted = false;
+    }
+    let mut floquet = fine.floquet;
+    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), estimate, &mut warnings);
+    Ok(SteadyState {
+        method: if scheme == rk4::Scheme::Rk4 { Method::Rk4 } else { Method::Magnus },
+        reason: reason.to_string(),
+        period_s: period,
+        resolution: grid.steps(),
+        error_estimate: estimate,
+        monodromy: fine.run.monodromy,
+        floquet,
+        x0: fine.x0,
+        cond_i_minus_phi: fine.cond,
+        stability_limit_steps: limit,
+        trusted,
+        warnings,
+        trajectory: Trajectory::Grid { grid, states: fine.states, scheme },
+    })
+}
