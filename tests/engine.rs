@@ -113,17 +113,13 @@ fn rk4_product_converges_at_fourth_order() {
 }
 
 /// Mathieu y'' + (a - 2q cos 2t) y = 0 at q = 1 through the LTP scene form. Characteristic values from
-/// Abramowitz & Stegun Table 20.1 (q = 1): a0 = -0.4551386041, b1 = -0.1102488170, a1 = 1.8591080725,
-/// b2 = 3.9170247731, a2 = 4.3713009827. Stable: (a0, b1), (a1, b2), (a2, b3); unstable elsewhere.
+/// `data/reference/mathieu-q1.json` (Abramowitz & Stegun Table 20.1). Stable: (a0, b1), (a1, b2), (a2, b3);
+/// unstable elsewhere.
 #[test]
 fn mathieu_stability_both_sides_of_tabulated_boundaries() {
-    let bounds = [
-        (-0.4551386041, false),
-        (-0.1102488170, true),
-        (1.8591080725, false),
-        (3.9170247731, true),
-        (4.3713009827, false),
-    ];
+    let m = read_json(&repo("data/reference/mathieu-q1.json"));
+    let v = |k: &str| m[k].as_f64().unwrap();
+    let bounds = [(v("a0"), false), (v("b1"), true), (v("a1"), false), (v("b2"), true), (v("a2"), false)];
     // (boundary, whether the interval just below it is stable)
     let dir = temp_dir("mathieu");
     for (b, below_stable) in bounds {
@@ -179,8 +175,10 @@ fn press_lines(case: &str, quantity: &str) -> (f64, Vec<(f64, f64)>) {
 
 #[test]
 fn press_reproduces_table_2_and_symmetry() {
-    // Table 2 of the paper: |rho|max = 0.001992 (case 1), 0.001623 (case 2), with F = 0
-    for (case, want) in [("case1", 0.001992), ("case2", 0.001623)] {
+    // Table 2 of the paper (data/reference/paper-table2.json), with F = 0
+    let t2 = read_json(&repo("data/reference/paper-table2.json"));
+    for case in ["case1", "case2"] {
+        let want = t2[format!("rho_max_{case}")].as_f64().unwrap();
         let (rho, q1) = press_lines(case, "q1");
         assert!(rel(rho, want) < 0.005, "{case}: {rho} vs {want}");
         let (_, q2) = press_lines(case, "q2");

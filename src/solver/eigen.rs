@@ -39,8 +39,10 @@ fn rotation(n: usize, seed: u64) -> DMatrix<f64> {
 
 /// Parlett-Reinsch balancing by powers of 2 (a similarity, so eigenvalues are unchanged), at most 100
 /// sweeps and scale factors within 2^+-500 (nalgebra's version has no bound and can spin forever).
-pub fn balance(m: &mut DMatrix<f64>) {
+/// Returns the diagonal d of the similarity: the balanced matrix is D^-1 M D, D = diag(d).
+pub fn balance(m: &mut DMatrix<f64>) -> Vec<f64> {
     let n = m.nrows();
+    let mut d = vec![1.0; n];
     const RADIX: f64 = 2.0;
     for _ in 0..100 {
         let mut done = true;
@@ -66,6 +68,7 @@ pub fn balance(m: &mut DMatrix<f64>) {
             // column i scaled by f and row i by 1/f: keep it when the two norms shrink by 5 %
             if c * f + r / f < 0.95 * s {
                 done = false;
+                d[i] *= f;
                 for j in 0..n {
                     m[(i, j)] /= f;
                     m[(j, i)] *= f;
@@ -76,6 +79,7 @@ pub fn balance(m: &mut DMatrix<f64>) {
             break;
         }
     }
+    d
 }
 
 /// Eigenvalues of `m` (any finite square real matrix), sorted by decreasing modulus.

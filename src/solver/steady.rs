@@ -86,7 +86,7 @@ struct Attempt {
     cond: f64,
 }
 
-fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme) -> Result<Attempt, SolverError> {
+fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme, d: &[f64]) -> Result<Attempt, SolverError> {
     let run = rk4::monodromy_with(sys, grid, scheme);
     if run.monodromy.iter().chain(run.forcing.iter()).any(|v| !v.is_finite()) {
         return Err(SolverError::NonFinite { what: format!("monodromy matrix after {} steps", grid.steps()) });
@@ -94,7 +94,7 @@ fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme) -> R
     let floquet = Floquet::from_monodromy(&run.monodromy, sys.period_s())?;
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &run.monodromy;
-    let cond = condition_number(&a);
+    let cond = scaled_condition(&a, d);
     let x0 = a.lu().solve(&run.forcing).ok_or(SolverError::Singular)?;
     if !cond.is_finite() || x0.iter().any(|v| !v.is_finite()) {
         return Err(SolverError::Singular);
@@ -103,16 +103,44 @@ fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme) -> R
     Ok(Attempt { run, floquet, x0, states, cond })
 }
 
-/// Relative difference of two attempts, the second on the refined grid of the first.
-fn difference(coarse: &Attempt, fine: &Attempt, n: usize) -> f64 {
+/// Scales of the state components that make them comparable: the diagonal d of a balancing of |P(t)|
+/// averaged over the period (z = x / d is the balanced state). For a second-order model this divides each
+/// velocity by about its natural frequency, so metres and metres per second are not mixed in error
+/// measures and condition numbers.
+pub fn state_scales(sys: &dyn PeriodicSystem) -> Vec<f64> {
+    let n = sys.dim();
+    let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    let mut mean = DMatrix::<f64>::zeros(n, n);
+    let samples = 32;
+    for i in 0..samples {
+        sys.eval(sys.period_s() * i as f64 / samples as f64, crate::system::Side::Right, &mut p, &mut f);
+        mean += p.abs();
+    }
+    if mean.iter().any(|v| !v.is_finite()) {
+        return vec![1.0; n];
+    }
+    super::eigen::balance(&mut mean)
+}
+
+/// cond(I - Phi) in the balanced state: cond(D^-1 (I - Phi) D).
+pub fn scaled_condition(a: &DMatrix<f64>, d: &[f64]) -> f64 {
+    let n = a.nrows();
+    let scaled = DMatrix::from_fn(n, n, |i, j| a[(i, j)] * d[j] / d[i]);
+    condition_number(&scaled)
+}
+
+/// Largest change between two attempts (the second on the refined grid of the first) of the balanced
+/// state z = x / d, relative to the largest |z| over the period; and of the monodromy.
+fn difference(coarse: &Attempt, fine: &Attempt, d: &[f64]) -> f64 {
+    let n = d.len();
+    let scale = fine.states.chunks(n).flat_map(|x| x.iter().zip(d).map(|(v, s)| (v / s).abs())).fold(0.0, f64::max);
     let mut worst: f64 = 0.0;
-    for c in 0..n {
-        let scale = fine.states.iter().skip(c).step_by(n).fold(0.0f64, |a, v| a.max(v.abs()));
-        let diff = (0..coarse.run.grid.nodes.len())
-            .map(|i| (coarse.states[i * n + c] - fine.states[2 * i * n + c]).abs())
-            .fold(0.0, f64::max);
-        if scale > 0.0 {
-            worst = worst.max(diff / scale);
+    if scale > 0.0 {
+        for (i, xc) in coarse.states.chunks(n).enumerate() {
+            let xf = &fine.states[2 * i * n..(2 * i + 1) * n];
+            for c in 0..n {
+                worst = worst.max((xc[c] - xf[c]).abs() / d[c] / scale);
+            }
         }
     }
     // the monodromy itself, not its eigenvalues: nearly repeated multipliers (at a stability boundary) move
@@ -137,7 +165,7 @@ pub(super) fn solve_steps(
 ) -> Result<SteadyState, SolverError> {
     let period = sys.period_s();
     let breaks = sys.breakpoints();
-    let n = sys.dim();
+    let d = state_scales(sys);
     let rate = max_rate(sys);
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut warnings = Vec::new();
@@ -158,25 +186,30 @@ pub(super) fn solve_steps(
                 e
             }
         };
-        let coarse = attempt(sys, &grid, scheme).map_err(explain)?;
-        let fine = attempt(sys, &grid.refined(), scheme).map_err(explain)?;
+        let coarse = attempt(sys, &grid, scheme, &d).map_err(explain)?;
+        let fine = attempt(sys, &grid.refined(), scheme, &d).map_err(explain)?;
         // error of the coarse result: |x_m - x_2m| (1 + 1/15)
-        let est = difference(&coarse, &fine, n) * 16.0 / 15.0;
+        let est = difference(&coarse, &fine, &d) * 16.0 / 15.0;
         (grid, coarse, est)
     } else {
         // an explicit scheme must start above its stability limit; Magnus is A-stable
         let stable_start = if scheme == rk4::Scheme::Rk4 { 2 * limit } else { 0 };
         let mut m = stable_start.max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1));
+        let mut previous = f64::INFINITY;
         loop {
             let grid = rk4::Grid::new(period, &breaks, m);
-            let coarse = attempt(sys, &grid, scheme)?;
+            let coarse = attempt(sys, &grid, scheme, &d)?;
             let fine_grid = grid.refined();
-            let fine = attempt(sys, &fine_grid, scheme)?;
-            let est = difference(&coarse, &fine, n) / 15.0;
+            let fine = attempt(sys, &fine_grid, scheme, &d)?;
+            let est = difference(&coarse, &fine, &d) / 15.0;
             if est <= opts.tolerance {
                 break (fine_grid, fine, est);
             }
-            if fine_grid.steps() >= opts.max_steps {
+            // a fourth-order change shrinks 16-fold per doubling; one that no longer halves is rounding, which
+            // more steps only make worse: stop at once instead of running to the step cap
+            let stalled = est > 0.5 * previous && est < 1e-10;
+            previous = est;
+            if fine_grid.steps() >= opts.max_steps || stalled {
                 return Err(SolverError::ToleranceNotReached {
                     cond: fine.cond,
                     tolerance: opts.tolerance,
