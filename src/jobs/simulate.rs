@@ -4,10 +4,14 @@
 use super::JobError;
 use super::synth::{self, SignalInfo};
 use crate::Error;
+use crate::model::OutputQuantity;
 use crate::report::summary::{OrderLine, SimulateSummary, Simulation, StabilitySummary, to_json_line};
 use crate::scene::Scene;
+use crate::signal::spectrum::Fft;
 use crate::signal::spectrum::periodic_amplitudes;
-use crate::solver::{self, SteadyState};
+use crate::solver::hill::HillSolution;
+use crate::solver::{self, SteadyState, Trajectory};
+use nalgebra::Complex;
 use std::path::PathBuf;
 
 /// One `simulate` call.
@@ -163,24 +167,150 @@ pub fn output_at(scene: &Scene, steady: &SteadyState, times: &[f64]) -> Vec<f64>
     out
 }
 
+/// Complex Fourier coefficients Z_k, k = 0..=kmax, of the output quantity from a harmonic-balance
+/// solution: exact (z(t) = Re Z_0 + 2 Re sum Z_k e^{i k w t}); a derivative output is i k w times the
+/// coefficient of its state component.
+fn fourier_output(q: &OutputQuantity, sol: &HillSolution, kmax: usize) -> Vec<Complex<f64>> {
+    (0..=kmax)
+        .map(|k| match q {
+            OutputQuantity::Linear { weights, .. } => {
+                weights.iter().enumerate().map(|(c, w)| sol.coefficient(c, k) * *w).sum()
+            }
+            OutputQuantity::Derivative { index, .. } => {
+                sol.coefficient(*index, k) * Complex::new(0.0, k as f64 * sol.omega)
+            }
+        })
+        .collect()
+}
+
+/// Fourier coefficients Z_k, k = 0..=kmax, of the output of a time-stepped solution by Gauss-Legendre
+/// quadrature (4 points) on every step of the solver's own grid, so jumps of the coefficients (and kinks of
+/// the output) sit on step ends and the integrals keep the solver's fourth order; the samples are the
+/// solver's partial steps. Returns `None` for outputs that need x' (then the FFT of samples is used).
+fn stepped_output(scene: &Scene, steady: &SteadyState, kmax: usize) -> Option<Vec<Complex<f64>>> {
+    let Trajectory::Grid { grid, .. } = &steady.trajectory else { return None };
+    if scene.output.quantity.needs_derivative() {
+        return None;
+    }
+    const NODES: [f64; 4] =
+        [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
+    const WEIGHTS: [f64; 4] =
+        [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+    let mut times = Vec::with_capacity(4 * grid.steps());
+    let mut weights = Vec::with_capacity(4 * grid.steps());
+    for w in grid.nodes.windows(2) {
+        let (mid, half) = (0.5 * (w[0] + w[1]), 0.5 * (w[1] - w[0]));
+        for (x, g) in NODES.iter().zip(WEIGHTS) {
+            times.push(mid + half * x);
+            weights.push(half * g);
+        }
+    }
+    let values = output_at(scene, steady, &times);
+    let period = steady.period_s;
+    let w0 = 2.0 * std::f64::consts::PI / period;
+    let mut z = vec![Complex::new(0.0, 0.0); kmax + 1];
+    for ((t, wt), v) in times.iter().zip(&weights).zip(&values) {
+        let (s, c) = (w0 * t).sin_cos();
+        let step = Complex::new(c, -s);
+        let mut e = Complex::new(wt * v / period, 0.0);
+        for zk in z.iter_mut() {
+            *zk += e;
+            e *= step;
+        }
+    }
+    Some(z)
+}
+
+/// One-sided amplitudes of coefficients Z_k: |Z_0| and 2 |Z_k|.
+fn amplitudes(z: &[Complex<f64>]) -> Vec<f64> {
+    z.iter().enumerate().map(|(k, c)| if k == 0 { c.norm() } else { 2.0 * c.norm() }).collect()
+}
+
+/// Samples of z(t) at m equally spaced times of one period from its coefficients (inverse FFT).
+fn samples_from(z: &[Complex<f64>], m: usize) -> Vec<f64> {
+    let spec: Vec<(f64, f64)> =
+        (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
+    Fft::new().inverse(&spec, m)
+}
+
+/// The extreme of the output near sample `i` (sign +1 for a maximum, -1 for a minimum): golden-section
+/// search between the neighbouring samples on the exact solution, so peak-to-peak is not read off a grid.
+fn refine_extreme(scene: &Scene, steady: &SteadyState, samples: &[f64], i: usize, sign: f64) -> f64 {
+    let m = samples.len();
+    let dt = steady.period_s / m as f64;
+    let f = |t: f64| sign * output_at(scene, steady, &[t])[0];
+    let (mut a, mut b) = ((i as f64 - 1.0) * dt, (i as f64 + 1.0) * dt);
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..40 {
+        if fc > fd {
+            b = d;
+            (d, fd) = (c, fc);
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            (c, fc) = (d, fd);
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    sign * fc.max(fd).max(sign * samples[i])
+}
+
 /// Solves the scene and computes its output over one period and its order spectrum.
+///
+/// The orders come from the solver's own representation: the exact Fourier coefficients of harmonic
+/// balance, or fourth-order quadrature on the step grid of a time-stepping method, never from a DFT of
+/// samples that would alias a kinked output (a DFT of samples remains only for derivative outputs of
+/// time-stepped solutions, which the error estimate then includes). Peak-to-peak is refined between
+/// samples on the exact solution.
 ///
 /// # Errors
 /// Solver failures.
 pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
     let sys = scene.system();
-    let steady = solver::solve(sys, &scene.solver)?;
+    let mut steady = solver::solve(sys, &scene.solver)?;
     let period = steady.period_s;
     let revs = period * scene.output.base_hz;
     let kmax = (scene.output.max_order * revs + 1e-9).floor() as usize;
-    let m = samples_per_period(kmax.max(sys.max_harmonic()));
-    let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
-    let period_samples = output_at(scene, &steady, &times);
-    let amps = periodic_amplitudes(&period_samples);
-    let orders = (0..=kmax.min(m / 2))
+    let hill_h = match &steady.trajectory {
+        Trajectory::Fourier(sol) => sol.harmonics,
+        Trajectory::Grid { .. } => 0,
+    };
+    let m = samples_per_period(kmax.max(sys.max_harmonic()).max(hill_h / 4));
+    let (period_samples, amps) = match &steady.trajectory {
+        Trajectory::Fourier(sol) => {
+            let z = fourier_output(&scene.output.quantity, sol, kmax.max(hill_h).min(m / 2).max(kmax));
+            (samples_from(&z, m), amplitudes(&z))
+        }
+        Trajectory::Grid { .. } => {
+            let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
+            let samples = output_at(scene, &steady, &times);
+            let amps = match stepped_output(scene, &steady, kmax.min(m / 2)) {
+                Some(z) => amplitudes(&z),
+                None => {
+                    let a = periodic_amplitudes(&samples);
+                    // aliasing of a DFT of samples: the change when the samples are halved
+                    let half: Vec<f64> = samples.iter().step_by(2).copied().collect();
+                    let b = periodic_amplitudes(&half);
+                    let top = a.iter().skip(1).fold(0.0f64, |x, v| x.max(*v)).max(f64::MIN_POSITIVE);
+                    let alias = (1..=kmax.min(m / 4)).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max) / top;
+                    steady.error_estimate = steady.error_estimate.max(alias);
+                    a
+                }
+            };
+            (samples, amps)
+        }
+    };
+    let orders = (0..=kmax.min(amps.len() - 1))
         .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
         .collect();
     let rms = (period_samples.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-    let (lo, hi) = period_samples.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let argmax = (0..m).max_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
+    let argmin = (0..m).min_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
+    let hi = refine_extreme(scene, &steady, &period_samples, argmax, 1.0);
+    let lo = refine_extreme(scene, &steady, &period_samples, argmin, -1.0);
     Ok(Simulation { steady, period_samples, orders, rms, peak_to_peak: hi - lo })
 }

@@ -13,7 +13,7 @@
 
 use super::SolverError;
 use super::companion::companion_monodromy;
-use super::floquet::{Floquet, condition_number, floquet_warnings};
+use super::floquet::{Floquet, floquet_warnings};
 use super::steady::{SteadyState, Trajectory};
 use super::{Method, RK4_STABILITY_LIMIT, SolverOptions, max_rate};
 use crate::system::FourierForm;
@@ -64,6 +64,17 @@ pub struct HillSolution {
 }
 
 impl HillSolution {
+    /// Complex Fourier coefficient X_c(k), k >= 0, of state component c (c < N: y_c; c >= N: y'_{c-N} =
+    /// i k w Y_{c-N}(k)), so that x_c(t) = Re X_c(0) + 2 Re sum_k X_c(k) e^{i k w t}. Zero beyond H.
+    pub fn coefficient(&self, c: usize, k: usize) -> Complex<f64> {
+        let n = self.coeffs.len();
+        if k > self.harmonics || c >= 2 * n {
+            return Complex::new(0.0, 0.0);
+        }
+        let y = self.coeffs[c % n][self.harmonics + k];
+        if c < n { y } else { y * Complex::new(0.0, k as f64 * self.omega) }
+    }
+
     /// State [y; y'] at time t.
     pub fn state(&self, t: f64, out: &mut [f64]) {
         let n = self.coeffs.len();
@@ -348,7 +359,7 @@ pub(super) fn solve_steady(
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &monodromy;
-    let cond = condition_number(&a);
+    let cond = super::steady::scaled_condition(&a, &super::steady::state_scales(sys));
     let mut x0 = DVector::zeros(n);
     sol.state(0.0, x0.as_mut_slice());
     let mut warnings = Vec::new();
@@ -360,7 +371,8 @@ pub(super) fn solve_steady(
     if roundoff > opts.tolerance {
         trusted = false;
         warnings.push(format!(
-            "I - Phi is ill-conditioned (cond {cond:.3e}): a multiplier is near +1 and rounding may cost {roundoff:.1e} relative error"
+            "I - Phi is ill-conditioned (cond {cond:.3e} on the balanced state{}): rounding may cost {roundoff:.1e} relative error",
+            super::floquet::nearest_to_one(&floquet)
         ));
     }
     let mut floquet = floquet;

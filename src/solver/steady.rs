@@ -228,8 +228,10 @@ pub(super) fn solve_steps(
     let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
     if roundoff > opts.tolerance {
         warnings.push(format!(
-            "I - Phi is ill-conditioned (cond {:.3e}): rounding alone may cost {:.1e} relative error, above the tolerance",
-            fine.cond, roundoff
+            "I - Phi is ill-conditioned (cond {:.3e} on the balanced state{}): rounding alone may cost {:.1e} relative error, above the tolerance",
+            fine.cond,
+            super::floquet::nearest_to_one(&fine.floquet),
+            roundoff
         ));
     }
     if opts.steps.is_some() && estimate > opts.tolerance {
