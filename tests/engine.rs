@@ -354,3 +354,23 @@ fn explicit_steps_below_stability_limit_warn() {
     assert!(ss.warnings.iter().any(|w| w.contains("stability limit")));
     assert!(!ss.trusted);
 }
+
+#[test]
+fn every_bundled_scene_meets_three_tolerances_without_refusal() {
+    // once refused: light damping at its own 1e-8, fig8a at 1e-12 (cond of an unscaled I - Phi ~ w0^2)
+    let mut paths: Vec<_> = std::fs::read_dir(repo("data/scenes")).unwrap().map(|e| e.unwrap().path()).collect();
+    paths.sort();
+    assert!(paths.len() >= 10);
+    for p in &paths {
+        for tol in [1e-6, 1e-8, 1e-10] {
+            let mut v = read_json(p.to_str().unwrap());
+            v["solver"]["tolerance"] = tol.into();
+            let scene = Scene::from_value(v, p.to_str().unwrap()).unwrap();
+            let sim = gearvib::jobs::simulate::simulate(&scene).unwrap();
+            let s = &sim.steady;
+            assert!(s.trusted, "{p:?} at {tol:e}: {:?}", s.warnings);
+            assert!(s.error_estimate <= tol, "{p:?} at {tol:e}: estimate {:e}", s.error_estimate);
+            assert!(!s.warnings.iter().any(|w| w.contains("near +1")), "{p:?}: {:?}", s.warnings);
+        }
+    }
+}

@@ -161,3 +161,17 @@ fn solver_choices_that_cannot_work() {
         &["stability limit"],
     );
 }
+
+#[test]
+fn mass_matrix_not_positive_definite() {
+    // a negative mass once gave an "unstable" answer with exit 0
+    let z = r#"[[{"mean": 0.0}]]"#;
+    let json = ltp_scene(1.0, r#"[[{"mean": -1.0}]]"#, z, r#"[[{"mean": 4.0}]]"#, r#"[{"mean": 1.0}]"#, "{}");
+    check("negmass-ltp", &json, &["ltp.mass", "positive definite"]);
+    // an asymmetric mass matrix
+    let m = r#"[[{"mean": 1.0}, {"mean": 0.5}], [{"mean": 0.0}, {"mean": 1.0}]]"#;
+    let z2 = r#"[[{"mean": 0.0}, {"mean": 0.0}], [{"mean": 0.0}, {"mean": 0.0}]]"#;
+    let k2 = r#"[[{"mean": 1.0}, {"mean": 0.0}], [{"mean": 0.0}, {"mean": 1.0}]]"#;
+    let json = ltp_scene(1.0, m, z2, k2, r#"[{"mean": 0.0}, {"mean": 0.0}]"#, "{}");
+    check("asym-ltp", &json, &["ltp.mass", "symmetric positive definite"]);
+}

@@ -279,6 +279,11 @@ impl PeriodicSystem for GearPair {
         p[(1, 0)] = -self.stiffness(t, side) / m;
         p[(1, 1)] = -self.c_z / m;
     }
+    fn piecewise_constant(&self) -> bool {
+        matches!(self.params.mesh, MeshStiffness::Piecewise(_))
+            && self.params.pinion_errors.is_constant()
+            && self.params.wheel_errors.is_constant()
+    }
     fn breakpoints(&self) -> Vec<f64> {
         self.breakpoints.clone()
     }

@@ -34,10 +34,17 @@ pub enum BuildError {
         /// Time in s.
         t: f64,
     },
+    /// M(t) is not symmetric positive definite at time t (a negative mass or inertia, or an asymmetric
+    /// mass matrix): kinetic energy must be positive.
+    MassNotPositiveDefinite {
+        /// Time in s.
+        t: f64,
+    },
 }
 
 impl SecondOrderSystem {
-    /// Builds the system and checks sizes and that M(t) is invertible at 64 sample times per period.
+    /// Builds the system and checks sizes and that M(t) is invertible, symmetric and positive definite at
+    /// 64 sample times per period.
     ///
     /// # Errors
     /// [`BuildError`] on mismatched sizes or a singular mass matrix.
@@ -75,6 +82,11 @@ impl SecondOrderSystem {
             let ok = scale > 0.0 && lu.u().diagonal().iter().all(|d| d.abs() > 1e-12 * scale);
             if !ok {
                 return Err(BuildError::SingularMass { t });
+            }
+            let m = sys.matrix(&sys.mass, t, Side::Right);
+            let symmetric = (0..dof).all(|r| (0..r).all(|c| (m[(r, c)] - m[(c, r)]).abs() <= 1e-12 * scale));
+            if !symmetric || m.cholesky().is_none() {
+                return Err(BuildError::MassNotPositiveDefinite { t });
             }
         }
         if sys.mass.iter().all(Coefficient::is_constant) {
@@ -125,6 +137,10 @@ impl PeriodicSystem for SecondOrderSystem {
             }
             f[n + i] = solved[(i, 2 * n)];
         }
+    }
+    fn piecewise_constant(&self) -> bool {
+        let flat = |c: &Coefficient| matches!(c, Coefficient::Piecewise(_)) || c.is_constant();
+        self.mass.iter().chain(&self.damping).chain(&self.stiffness).chain(&self.forcing).all(flat)
     }
     fn breakpoints(&self) -> Vec<f64> {
         self.breakpoints.clone()

@@ -394,6 +394,10 @@ impl Validator<'_> {
             model::second_order::BuildError::SingularMass { t } => {
                 self.err("ltp.mass", format!("mass matrix is singular at t = {t:.6} s"))
             }
+            model::second_order::BuildError::MassNotPositiveDefinite { t } => self.err(
+                "ltp.mass",
+                format!("mass matrix is not symmetric positive definite at t = {t:.6} s (masses must be positive)"),
+            ),
             model::second_order::BuildError::Size { what, expected, got } => {
                 self.err(&format!("ltp.{what}"), format!("has {got} entries, expected {expected}"))
             }

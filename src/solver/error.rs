@@ -40,7 +40,9 @@ pub enum SolverError {
 
 fn conditioning(cond: f64) -> String {
     if cond.is_finite() && cond > 1e4 {
-        format!(" because cond(I - Phi) = {cond:.2e} on the balanced state: a Floquet multiplier near +1 amplifies every error")
+        format!(
+            " because cond(I - Phi) = {cond:.2e} on the balanced state: a Floquet multiplier near +1 amplifies every error"
+        )
     } else {
         String::new()
     }

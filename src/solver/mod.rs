@@ -126,6 +126,12 @@ pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadySta
                     .into(),
             ),
             Some(_) => solve_rk4(sys, opts, "auto: solver.steps fixes a step count, so the step-based rk4 product"),
+            None if sys.piecewise_constant() && opts.steps.is_none() => solve_steps(
+                sys,
+                opts,
+                "auto: coefficients are piecewise constant, so magnus4 (exact exponentials) with one step per piece is exact",
+                rk4::Scheme::Magnus4,
+            ),
             None => {
                 // stiff when the explicit stability limit alone asks for far more steps than the coefficients'
                 // resolution: then the A-stable Magnus scheme, else the cheaper rk4 product

@@ -47,6 +47,11 @@ pub trait PeriodicSystem: Sync {
     fn fourier_form(&self) -> Option<FourierForm> {
         None
     }
+    /// True when P(t) and f(t) are constant between breakpoints: then exact exponentials per piece (the
+    /// Magnus scheme) solve the system exactly with one step per piece.
+    fn piecewise_constant(&self) -> bool {
+        false
+    }
     /// Highest harmonic of 1/T in the coefficients (a lower bound on the resolution a solver needs).
     fn max_harmonic(&self) -> usize;
     /// Period of P(t) alone in s (the period divided by a whole number): the monodromy over T is the
