@@ -368,7 +368,7 @@ pub(super) fn solve_steady(
     // harmonic balance solves (I - Phi)-like systems in the frequency domain: near a multiplier of 1 the
     // Hill matrix is nearly singular in the same way
     let roundoff = cond * f64::EPSILON * 100.0;
-    let estimate = estimate.max(roundoff);
+    let estimate = estimate.max(100.0 * f64::EPSILON);
     if roundoff > opts.tolerance {
         trusted = false;
         warnings.push(format!(

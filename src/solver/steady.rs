@@ -229,8 +229,9 @@ pub(super) fn solve_steps(
         }
     };
     let roundoff = fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt();
-    // the reported error bounds rounding too (an exact scheme's step-doubling change can be below it)
-    let estimate = estimate.max(roundoff);
+    // the reported error bounds the product's own rounding too (an exact scheme's step-doubling change can
+    // be below it); the amplification by cond(I - Phi) is judged separately just below
+    let estimate = estimate.max(10.0 * f64::EPSILON * (grid.steps() as f64).sqrt());
     let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
     if roundoff > opts.tolerance {
         warnings.push(format!(
