@@ -282,7 +282,12 @@ fn sweep(out: &mut dyn Write, job: &jobs::sweep::SweepJob, json: bool) -> Result
             b.inc(1);
         }
     };
-    let done = jobs::sweep::run(job, &tick)?;
+    let estimate = |secs: f64| {
+        if secs > 2.0 || bar.is_some() {
+            eprintln!("gearvib: {} points, estimated run time {secs:.1} s", job.steps);
+        }
+    };
+    let done = jobs::sweep::run(job, &jobs::sweep::Progress { estimate: &estimate, tick: &tick })?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }

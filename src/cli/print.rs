@@ -132,13 +132,15 @@ pub fn bench(w: &mut dyn Write, all: &BenchReport) -> io::Result<()> {
 
 /// The text form of `sweep` (at most about 40 rows).
 pub fn sweep(w: &mut dyn Write, s: &SweepSummary) -> io::Result<()> {
-    writeln!(w, "{:>14} {:>14} {:>8}  lines", s.param, "|rho|max", "stable")?;
+    writeln!(w, "{:>14} {:>14} {:>8} {:>8}  lines", s.param, "|rho|max", "stable", "trusted")?;
     let stride = (s.points.len() / 40).max(1);
     for p in s.points.iter().step_by(stride) {
         match (p.rho_max, &p.error) {
             (Some(r), _) => {
                 let lines: Vec<String> = p.lines.iter().map(|l| format!("{}={:.3e}", l.0, l.1)).collect();
-                writeln!(w, "{:>14.6} {:>14.6e} {:>8}  {}", p.value, r, p.stable.unwrap_or(false), lines.join(" "))?;
+                let trusted = if p.trusted { "yes" } else { "NO" };
+                let stable = p.stable.unwrap_or(false);
+                writeln!(w, "{:>14.6} {:>14.6e} {:>8} {:>8}  {}", p.value, r, stable, trusted, lines.join(" "))?;
             }
             (None, e) => writeln!(w, "{:>14.6} failed: {}", p.value, e.clone().unwrap_or_default())?,
         }

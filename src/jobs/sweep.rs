@@ -40,19 +40,40 @@ pub struct SweepOutcome {
 ///
 /// # Errors
 /// Unreadable scene, unknown parameter, bad range, unwritable outputs.
-pub fn run(job: &SweepJob, tick: &(dyn Fn() + Sync)) -> Result<SweepOutcome, Error> {
+pub fn run(job: &SweepJob, progress: &Progress<'_>) -> Result<SweepOutcome, Error> {
     let scene = Scene::load(&job.scene.display().to_string())?;
     let field = resolve(&scene, &job.param)?;
-    let points = sweep(&scene, &field, job.from, job.to, job.steps, tick)?;
+    let partial = match &job.report {
+        Some(dir) => {
+            crate::io::create_dir(dir)?;
+            Some(dir.join("sweep.partial.jsonl"))
+        }
+        None => None,
+    };
+    let points = sweep(&scene, &field, (job.from, job.to, job.steps), partial.as_deref(), progress)?;
+    if let Some(p) = &partial {
+        let _ = std::fs::remove_file(p); // complete: sweep.json replaces the partial record
+    }
+    let failed: Vec<&SweepPoint> = points.iter().filter(|p| p.error.is_some()).collect();
+    if failed.len() == points.len() {
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: format!(
+                "every one of the {} sweep points failed; the first: {}",
+                points.len(),
+                failed[0].error.clone().unwrap_or_default()
+            ),
+        }
+        .into());
+    }
     let summary = SweepSummary { param: field.clone(), points, scene: scene.name.clone() };
     let mut images = job.images.clone();
     if let Some(dir) = &job.report {
-        crate::io::create_dir(dir)?;
         crate::io::write_atomic(&dir.join("sweep.json"), crate::report::summary::to_json_line(&summary).as_bytes())?;
         images.push(dir.join(format!("stability-map-{}.png", scene.name)));
     }
     for img in &images {
-        crate::report::figures::stability_map(img, &scene.name, &field, &field, &summary.points)?;
+        crate::report::figures::stability_map(img, &scene.name, &field, scene.output.quantity.unit(), &summary.points)?;
     }
     Ok(SweepOutcome { summary, images })
 }
@@ -107,18 +128,27 @@ fn pointer<'a>(v: &'a serde_json::Value, path: &str) -> Option<&'a serde_json::V
     v.pointer(&json_pointer(path))
 }
 
-/// Runs the sweep: `steps` values evenly from `from` to `to`; `tick` is called after each point.
+/// What a sweep tells its caller while it runs.
+pub struct Progress<'a> {
+    /// Called once after the first point, with the estimated run time of the whole sweep in s.
+    pub estimate: &'a (dyn Fn(f64) + Sync),
+    /// Called after each point.
+    pub tick: &'a (dyn Fn() + Sync),
+}
+
+/// Runs the sweep: `steps` values evenly from `from` to `to` (`range` = (from, to, steps)). Each finished
+/// point is appended to `partial` (JSON Lines) when given, so an interrupted sweep keeps what it computed.
 ///
 /// # Errors
-/// Bad range or parameter.
+/// Bad range or parameter; the partial file cannot be written.
 pub fn sweep(
     scene: &Scene,
     path: &str,
-    from: f64,
-    to: f64,
-    steps: usize,
-    tick: &(dyn Fn() + Sync),
+    range: (f64, f64, usize),
+    partial: Option<&std::path::Path>,
+    progress: &Progress<'_>,
 ) -> Result<Vec<SweepPoint>, Error> {
+    let (from, to, steps) = range;
     if !(from.is_finite() && to.is_finite() && (2..=1_000_000).contains(&steps)) {
         return Err(JobError::Value {
             what: "sweep range".into(),
@@ -131,14 +161,31 @@ pub fn sweep(
         _ => None,
     };
     let values: Vec<f64> = (0..steps).map(|i| from + (to - from) * i as f64 / (steps - 1) as f64).collect();
-    let points = values
-        .par_iter()
-        .map(|&value| {
-            let p = point(scene, path, value, z1);
-            tick();
-            p
-        })
-        .collect();
+    let log = match partial {
+        Some(p) => Some(std::sync::Mutex::new(std::io::BufWriter::new(
+            std::fs::File::create(p).map_err(|e| crate::io::DataError::io(p, format!("cannot write: {e}")))?,
+        ))),
+        None => None,
+    };
+    let record = |p: &SweepPoint| {
+        if let Some(log) = &log {
+            use std::io::Write;
+            let mut w = log.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let _ = writeln!(w, "{}", crate::report::summary::to_json_line(p)).and_then(|_| w.flush());
+        }
+        (progress.tick)();
+    };
+    // the first point alone, timed, gives the run-time estimate
+    let started = std::time::Instant::now();
+    let first = point(scene, path, values[0], z1);
+    (progress.estimate)(started.elapsed().as_secs_f64() * steps as f64 / rayon::current_num_threads().max(1) as f64);
+    record(&first);
+    let mut points = vec![first];
+    points.par_extend(values[1..].par_iter().map(|&value| {
+        let p = point(scene, path, value, z1);
+        record(&p);
+        p
+    }));
     Ok(points)
 }
 

@@ -368,45 +368,90 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
     Ok(out)
 }
 
-/// Stability map: |rho|max against the parameter (unstable ranges shaded) and the line amplitudes.
+/// Axis label of a swept scene field from its name's unit suffix: `gear_pair.speed_rpm` -> `speed [rpm]`.
+pub fn parameter_label(path: &str) -> String {
+    let last = path.rsplit('.').next().unwrap_or(path);
+    let suffixes = [
+        ("_rpm", "rpm"),
+        ("_n_per_m", "N/m"),
+        ("_kg_m2", "kg m^2"),
+        ("_m_per_rad", "m/rad"),
+        ("_n_m_per_rad", "N m/rad"),
+        ("_hz", "Hz"),
+        ("_kg", "kg"),
+        ("_rad", "rad"),
+        ("_n", "N"),
+        ("_m", "m"),
+        ("_s", "s"),
+        ("_ratio", "-"),
+    ];
+    for (suffix, unit) in suffixes {
+        if let Some(name) = last.strip_suffix(suffix) {
+            let name = if suffix == "_ratio" { last } else { name };
+            return format!("{} [{unit}]", name.replace('_', " "));
+        }
+    }
+    last.replace('_', " ")
+}
+
+/// Ranges of unstable points as bands reaching half a step to each side, so a single unstable point shows.
+fn unstable_bands(points: &[SweepPoint]) -> Vec<Band> {
+    let span = match (points.first(), points.last()) {
+        (Some(a), Some(b)) => (b.value - a.value).abs(),
+        _ => 0.0,
+    };
+    // at least 0.4 % of the axis wide, so that one unstable point among thousands is visible
+    let step = if points.len() > 1 { (points[1].value - points[0].value).abs() } else { 0.0 }.max(0.004 * span);
+    let mut bands: Vec<Band> = Vec::new();
+    for p in points.iter().filter(|p| p.stable == Some(false)) {
+        let (from, to) = (p.value - 0.5 * step, p.value + 0.5 * step);
+        match bands.last_mut() {
+            Some(b) if from <= b.to + 1e-9 * step.max(1e-300) => b.to = to,
+            _ => bands.push(Band { from, to }),
+        }
+    }
+    bands
+}
+
+/// Stability map of a sweep: the margin |1 - |rho|max| on a log axis (stable and unstable points in their
+/// own colours, untrusted points marked), unstable ranges shaded, and the steady-state line amplitudes.
 ///
 /// # Errors
-/// No usable point, or write failures.
+/// Empty data or a failed write.
 pub fn stability_map(
     path: &Path,
     scene: &str,
     param: &str,
-    unit_label: &str,
+    amplitude_unit: &str,
     points: &[SweepPoint],
 ) -> Result<(), ReportError> {
+    let x_label = parameter_label(param);
     let ok: Vec<&SweepPoint> = points.iter().filter(|p| p.rho_max.is_some()).collect();
-    let rho: Vec<(f64, f64)> = ok.iter().map(|p| (p.value, p.rho_max.unwrap_or(f64::NAN))).collect();
-    let mut bands = Vec::new();
-    let mut start: Option<f64> = None;
-    for w in points.windows(2) {
-        let unstable = |p: &SweepPoint| p.stable == Some(false);
-        if unstable(&w[0]) && start.is_none() {
-            start = Some(w[0].value);
-        }
-        if start.is_some() && !unstable(&w[1]) {
-            bands.push(Band { from: start.take().unwrap_or(w[0].value), to: w[0].value });
-        }
-    }
-    if let (Some(s), Some(last)) = (start, points.last()) {
-        bands.push(Band { from: s, to: last.value });
-    }
+    let margin = |p: &&SweepPoint| (p.value, (1.0 - p.rho_max.unwrap_or(f64::NAN)).abs().max(1e-16));
+    let stable: Vec<(f64, f64)> = ok.iter().filter(|p| p.stable == Some(true)).map(margin).collect();
+    let unstable: Vec<(f64, f64)> = ok.iter().filter(|p| p.stable != Some(true)).map(margin).collect();
+    let untrusted: Vec<(f64, f64)> = ok.iter().filter(|p| !p.trusted).map(margin).collect();
+    let bands = unstable_bands(points);
     let (lo, hi) = (points.first().map_or(0.0, |p| p.value), points.last().map_or(1.0, |p| p.value));
-    let one: Vec<(f64, f64)> = vec![(lo, 1.0), (hi, 1.0)];
+    let mut series = vec![Series { name: "stable: 1 - |rho|max".into(), points: stable, style: Style::Line, color: 0 }];
+    if !unstable.is_empty() {
+        series.push(Series { name: "unstable: |rho|max - 1".into(), points: unstable, style: Style::Points, color: 1 });
+    }
+    if !untrusted.is_empty() {
+        series.push(Series {
+            name: "untrusted (error above the tolerance)".into(),
+            points: untrusted,
+            style: Style::Points,
+            color: 3,
+        });
+    }
     let top = Chart {
-        title: format!("{scene}: stability map over {param} (shaded: unstable, |rho|max > 1)"),
-        x_label: unit_label.into(),
-        y_label: "|rho|max (Floquet)".into(),
+        title: format!("{scene}: Floquet stability margin over {x_label} (shaded: unstable)"),
+        x_label: x_label.clone(),
+        y_label: "|1 - |rho|max|".into(),
         y_log: true,
         x_range: Some((lo, hi)),
-        series: vec![
-            Series { name: "|rho|max".into(), points: rho, style: Style::Line, color: 0 },
-            Series { name: "stability limit |rho| = 1".into(), points: one, style: Style::Line, color: 1 },
-        ],
+        series,
         bands: bands.clone(),
         ..Default::default()
     };
@@ -423,7 +468,7 @@ pub fn stability_map(
                 .filter(|q| q.1 > 0.0)
                 .collect(),
             style: Style::Line,
-            color: i + 2,
+            color: i + 4,
         })
         .filter(|s| !s.points.is_empty())
         .collect();
@@ -431,8 +476,12 @@ pub fn stability_map(
     if !series.is_empty() {
         charts.push(Chart {
             title: "steady-state line amplitudes (stable points only)".into(),
-            x_label: unit_label.into(),
-            y_label: "amplitude [output unit]".into(),
+            x_label,
+            y_label: if amplitude_unit.is_empty() {
+                "amplitude".into()
+            } else {
+                format!("amplitude [{amplitude_unit}]")
+            },
             y_log: true,
             x_range: Some((lo, hi)),
             series,
