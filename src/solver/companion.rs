@@ -33,19 +33,29 @@ impl PeriodicSystem for Homogeneous<'_> {
 
 /// Monodromy over the full period from the companion over the homogeneous period: Phi = Phi_h^k. The
 /// companion's tolerance is divided by k because relative multiplier errors grow k-fold.
-pub(super) fn companion_monodromy(
-    sys: &dyn PeriodicSystem,
-    opts: &SolverOptions,
-) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
+/// The companion's monodromy over the full period and what it cost.
+pub(super) struct Companion {
+    /// Monodromy matrix over the full period.
+    pub monodromy: DMatrix<f64>,
+    /// Estimated relative error of the monodromy.
+    pub error: f64,
+    /// RK4 steps taken in all.
+    pub steps: usize,
+    /// Largest |eigenvalue| of P(t), 1/s (computed once here, reused by the caller).
+    pub rate: f64,
+}
+
+pub(super) fn companion_monodromy(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<Companion, SolverError> {
     let th = sys.homogeneous_period_s();
     let k = (sys.period_s() / th).round().max(1.0) as usize;
     let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
-    let (phi_h, est, steps) = romberg_monodromy(&hom, opts.tolerance / k as f64, opts.max_steps)?;
+    let rate = max_rate(&hom);
+    let (phi_h, est, steps) = romberg_monodromy(&hom, rate, opts.tolerance / k as f64, opts.max_steps)?;
     let mut phi = DMatrix::identity(sys.dim(), sys.dim());
     for _ in 0..k {
         phi = &phi_h * phi;
     }
-    Ok((phi, est * k as f64, steps))
+    Ok(Companion { monodromy: phi, error: est * k as f64, steps, rate })
 }
 
 /// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
@@ -53,12 +63,13 @@ pub(super) fn companion_monodromy(
 /// and |R2 - R1(2m)| estimates the error. m doubles until the estimate, relative to |Phi|, meets `tol`.
 fn romberg_monodromy(
     sys: &dyn PeriodicSystem,
+    rate: f64,
     tol: f64,
     max_steps: usize,
 ) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
     let period = sys.period_s();
     let breaks = sys.breakpoints();
-    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
     let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {
         let r = rk4::monodromy(sys, &rk4::Grid::new(period, &breaks, steps));

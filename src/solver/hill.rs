@@ -15,7 +15,7 @@ use super::SolverError;
 use super::companion::companion_monodromy;
 use super::floquet::{Floquet, floquet_warnings};
 use super::steady::{SteadyState, Trajectory};
-use super::{Method, RK4_STABILITY_LIMIT, SolverOptions, max_rate};
+use super::{Method, RK4_STABILITY_LIMIT, SolverOptions};
 use crate::system::FourierForm;
 use crate::system::PeriodicSystem;
 use nalgebra::Complex;
@@ -354,7 +354,8 @@ pub(super) fn solve_steady(
         }
         None => solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?,
     };
-    let (monodromy, phi_err, companion_steps) = companion_monodromy(sys, opts)?;
+    let companion = companion_monodromy(sys, opts)?;
+    let (monodromy, phi_err, companion_steps) = (companion.monodromy, companion.error, companion.steps);
     let period = sys.period_s();
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
     let n = sys.dim();
@@ -378,7 +379,7 @@ pub(super) fn solve_steady(
     }
     let mut floquet = floquet;
     floquet_warnings(&mut floquet, opts.tolerance.max(phi_err), phi_err, &mut warnings);
-    let limit = (period * max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    let limit = (period * companion.rate / RK4_STABILITY_LIMIT).ceil() as usize;
     Ok(SteadyState {
         method: Method::Hill,
         reason: format!(

@@ -102,9 +102,25 @@ impl<'a> Stepper<'a> {
         Self { sys, scheme, n, p: [m(), m(), m()], f: [v(), v(), v()], k: Vec::new(), acc: Vec::new(), tmp: Vec::new() }
     }
 
-    /// k = h (P W + f s), W column-major n x cols.
+    /// k = h (P W + f s), W column-major n x cols. Large systems use nalgebra's blocked matrix product;
+    /// small ones (the gear pair's n = 2) a plain loop, which is faster there.
     fn stage(&mut self, which: usize, h: f64, w: &[f64], s: &[f64]) {
         let n = self.n;
+        let cols = s.len();
+        if n >= 8 {
+            let wv = nalgebra::DMatrixView::from_slice(w, n, cols);
+            let mut out = nalgebra::DMatrixViewMut::from_slice(&mut self.k, n, cols);
+            out.gemm(h, &self.p[which], &wv, 0.0);
+            let f = &self.f[which];
+            for (col, &sc) in s.iter().enumerate() {
+                if sc != 0.0 {
+                    for row in 0..n {
+                        out[(row, col)] += h * f[row] * sc;
+                    }
+                }
+            }
+            return;
+        }
         let (p, f) = (self.p[which].as_slice(), self.f[which].as_slice());
         let out = &mut self.k;
         for (col, &sc) in s.iter().enumerate() {
