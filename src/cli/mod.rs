@@ -110,6 +110,10 @@ fn restate_for_flags(e: Error) -> Error {
         Error::Job(JobError::Aliasing { file, message }) => {
             Error::Job(JobError::Aliasing { file, message: format!("{message} or pass --allow-aliasing") })
         }
+        Error::Job(JobError::Value { what, message }) if what == "sample rate" => CliError::flag("--fs", message),
+        Error::Job(JobError::Value { what, message }) if what == "shaft speed" => {
+            CliError::flag("--rpm/--shaft-hz", message)
+        }
         Error::Job(JobError::Parameter { scene, name, message }) => {
             CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
         }
@@ -199,6 +203,21 @@ fn positive(flag: &str, v: f64) -> Result<f64, Error> {
 
 /// The diagnose job the flags describe.
 fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> {
+    if a.fs.is_some() && a.fs_unknown {
+        return Err(CliError::flag("--fs", "conflicts with --fs-unknown: give the sample rate or say it is unknown"));
+    }
+    if a.tacho_channel.is_some() && (a.rpm.is_some() || a.shaft_hz.is_some()) {
+        return Err(CliError::flag(
+            "--tacho-channel",
+            "conflicts with --rpm/--shaft-hz: the speed comes from the tachometer or is given, not both",
+        ));
+    }
+    if a.channel.is_some() && a.channel == a.tacho_channel {
+        return Err(CliError::flag(
+            &format!("--channel {}", a.channel.unwrap_or(0)),
+            "is also the --tacho-channel: tachometer pulses are not a vibration signal",
+        ));
+    }
     let shaft_hz = match (a.rpm, a.shaft_hz) {
         (Some(r), _) => Some(positive("--rpm", r)? / 60.0),
         (_, Some(h)) => Some(positive("--shaft-hz", h)?),

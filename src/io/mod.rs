@@ -37,6 +37,57 @@ impl DataError {
     }
 }
 
+/// Identity of a file: (device, inode) on Unix, the canonical path elsewhere.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    #[cfg(not(unix))]
+    Path(PathBuf),
+}
+
+fn file_id(path: &Path) -> Option<FileId> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let m = std::fs::metadata(path).ok()?;
+        Some(FileId::Inode(m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        std::fs::canonicalize(path).ok().map(FileId::Path)
+    }
+}
+
+/// Every file this process has read as an input; outputs are checked against them.
+static INPUTS: std::sync::Mutex<Vec<(FileId, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+
+/// Records `path` as an input of this run: no output may then replace it (by name, symlink or hard link).
+pub fn register_input(path: &Path) {
+    if let Some(id) = file_id(path) {
+        let mut inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !inputs.iter().any(|(i, _)| *i == id) {
+            inputs.push((id, path.to_path_buf()));
+        }
+    }
+}
+
+/// Refuses an output path that is one of this run's inputs.
+///
+/// # Errors
+/// [`DataError::Io`] naming both paths.
+pub fn check_output(dest: &Path) -> Result<(), DataError> {
+    let Some(id) = file_id(dest) else { return Ok(()) }; // a file that does not exist is no input
+    let inputs = INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    match inputs.iter().find(|(i, _)| *i == id) {
+        Some((_, input)) => Err(DataError::io(
+            dest,
+            format!("refusing to overwrite an input of this run ({}): choose another output path", input.display()),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// A file being written under a temporary name next to its destination; `commit` renames it into place,
 /// dropping it without `commit` removes it (no half-written output is ever left under the final name).
 pub struct AtomicFile {
@@ -49,8 +100,10 @@ impl AtomicFile {
     /// Reserves `dest`, writing to `dest.<pid>.tmp`.
     ///
     /// # Errors
-    /// The temporary file cannot be created (missing directory, no permission).
+    /// `dest` is an input of this run ([`check_output`]), or the temporary file cannot be created (missing
+    /// directory, no permission).
     pub fn create(dest: &Path) -> Result<(Self, std::fs::File), DataError> {
+        check_output(dest)?;
         let mut name = dest.file_name().map(|n| n.to_os_string()).unwrap_or_default();
         name.push(format!(".{}.tmp", std::process::id()));
         let tmp = dest.with_file_name(name);
@@ -110,6 +163,8 @@ pub struct Recording {
 /// # Errors
 /// [`DataError`] naming the file and what is wrong.
 pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
+    register_input(path);
+    register_input(&sidecar::path_of(path));
     match extension(path).as_deref() {
         Some("wav") => {
             let mut rec = wav::read(path)?;

@@ -1,5 +1,6 @@
-//! WAV files through hound: every format hound reads (8/16/24/32-bit integer, 32-bit float), any channel
-//! count; writing 32-bit float or 16/24-bit integer with a stated full scale.
+//! WAV files: a RIFF reader of its own (8/16/24/32-bit integer PCM, 32/64-bit float, WAVE_FORMAT_EXTENSIBLE,
+//! any channel count, odd-sized chunks with their pad byte) and writing through hound (32-bit float or
+//! 16/24-bit integer with a stated full scale).
 
 use super::{AtomicFile, DataError, Recording};
 use std::path::Path;
@@ -91,122 +92,165 @@ impl WavOut {
     }
 }
 
-/// Reads all channels. Integer data is scaled to [-1, 1) (divided by 2^(bits-1)); float data is kept.
-/// Memory is reserved from the file's real size, never from the header's claim.
-///
-/// # Errors
-/// Unreadable, malformed or truncated files, named with hound's reason.
-pub fn read(path: &Path) -> Result<Recording, DataError> {
-    let file_len = std::fs::metadata(path).map_err(|e| DataError::io(path, e))?.len();
-    let mut reader =
-        hound::WavReader::open(path).map_err(|e| DataError::format(path, format!("not a readable WAV file: {e}")))?;
-    let spec = reader.spec();
-    let nch = spec.channels as usize;
-    let bytes_per_sample = spec.bits_per_sample.div_ceil(8).max(1) as u64;
-    let claimed = reader.duration() as u64;
-    let possible = file_len / (bytes_per_sample * nch as u64);
-    let frames = claimed.min(possible) as usize;
-    let mut channels: Vec<Vec<f32>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
-    let plain = matches!(
-        (spec.sample_format, spec.bits_per_sample),
-        (hound::SampleFormat::Float, 32) | (hound::SampleFormat::Int, 16)
-    );
-    if plain && spec.bits_per_sample == 8 * bytes_per_sample as u16 {
-        // fast path: the data chunk is little-endian f32 or i16, read in bulk
-        return read_plain(path, reader, spec, claimed, channels);
-    }
-    let truncated = |e: hound::Error, i: usize| DataError::format(path, format!("data ends early at sample {i}: {e}"));
-    match spec.sample_format {
-        hound::SampleFormat::Float => {
-            for (i, s) in reader.samples::<f32>().enumerate() {
-                channels[i % nch].push(s.map_err(|e| truncated(e, i))?);
-            }
-        }
-        hound::SampleFormat::Int => {
-            let scale = 1.0 / (1u64 << (spec.bits_per_sample - 1)) as f64;
-            for (i, s) in reader.samples::<i32>().enumerate() {
-                channels[i % nch].push((f64::from(s.map_err(|e| truncated(e, i))?) * scale) as f32);
-            }
-        }
-    }
-    let len = channels.iter().map(Vec::len).min().unwrap_or(0);
-    for c in &mut channels {
-        c.truncate(len);
-    }
-    let names = (1..=nch).map(|i| format!("ch{i}")).collect();
-    Ok(Recording { channels, sample_rate_hz: Some(f64::from(spec.sample_rate)), names })
+/// Sample encodings the reader understands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Encoding {
+    /// Unsigned 8-bit PCM (offset 128).
+    U8,
+    /// Signed little-endian PCM of 2, 3 or 4 bytes.
+    Int(usize),
+    /// IEEE float, 4 bytes.
+    F32,
+    /// IEEE float, 8 bytes.
+    F64,
 }
 
-fn read_plain(
+impl Encoding {
+    fn width(self) -> usize {
+        match self {
+            Self::U8 => 1,
+            Self::Int(w) => w,
+            Self::F32 => 4,
+            Self::F64 => 8,
+        }
+    }
+    /// Decodes one sample (`b` has `width` bytes); integers scaled to [-1, 1) by 2^(bits-1).
+    fn decode(self, b: &[u8]) -> f32 {
+        match self {
+            Self::U8 => (f32::from(b[0]) - 128.0) / 128.0,
+            Self::Int(2) => f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0,
+            Self::Int(3) => ((i32::from_le_bytes([0, b[0], b[1], b[2]]) >> 8) as f64 / 8_388_608.0) as f32,
+            Self::Int(_) => (f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])) / 2_147_483_648.0) as f32,
+            Self::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            Self::F64 => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f32,
+        }
+    }
+}
+
+/// The fmt chunk: channels, rate and encoding (PCM, IEEE float or WAVE_FORMAT_EXTENSIBLE with either).
+fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError> {
+    if c.len() < 16 {
+        return Err(DataError::format(path, format!("fmt chunk of {} bytes is too short (16 needed)", c.len())));
+    }
+    let u16_at = |i: usize| u16::from_le_bytes([c[i], c[i + 1]]);
+    let mut tag = u16_at(0);
+    let channels = usize::from(u16_at(2));
+    let rate = u32::from_le_bytes([c[4], c[5], c[6], c[7]]);
+    let bits = u16_at(14);
+    if tag == 0xFFFE && c.len() >= 26 {
+        tag = u16_at(24); // the sub-format GUID starts with the format tag
+    }
+    let enc = match (tag, bits) {
+        (1, 8) => Encoding::U8,
+        (1, 16) => Encoding::Int(2),
+        (1, 24) => Encoding::Int(3),
+        (1, 32) => Encoding::Int(4),
+        (3, 32) => Encoding::F32,
+        (3, 64) => Encoding::F64,
+        _ => {
+            return Err(DataError::format(
+                path,
+                format!(
+                    "unsupported WAV sample format (tag {tag}, {bits} bits): expected 8/16/24/32-bit PCM or 32/64-bit float"
+                ),
+            ));
+        }
+    };
+    if channels == 0 {
+        return Err(DataError::format(path, "fmt chunk: 0 channels"));
+    }
+    if rate == 0 {
+        return Err(DataError::format(path, "fmt chunk: sample rate 0 Hz"));
+    }
+    Ok((channels, rate, enc))
+}
+
+/// Reads a WAV file into f32 channels (integer formats scaled to [-1, 1)). A RIFF parser of its own: chunks
+/// of odd size are followed by their pad byte (as the RIFF rules say), unknown chunks are skipped, a data
+/// chunk longer than the file is read as far as the file goes (with the whole frames kept). Memory is
+/// reserved from the bytes the file really holds, never from a header's claim, and read in blocks of at
+/// most 1 MiB whatever the channel count.
+///
+/// # Errors
+/// Not a RIFF/WAVE file, no fmt or data chunk, an unsupported encoding, no whole frame.
+pub fn read(path: &Path) -> Result<Recording, DataError> {
+    use std::io::{Read, Seek, SeekFrom};
+    let file = std::fs::File::open(path).map_err(|e| DataError::io(path, e))?;
+    let file_len = file.metadata().map_err(|e| DataError::io(path, e))?.len();
+    let mut r = std::io::BufReader::new(file);
+    let mut head = [0u8; 12];
+    r.read_exact(&mut head).map_err(|_| DataError::format(path, "not a WAV file: shorter than a RIFF header"))?;
+    if &head[0..4] != b"RIFF" || &head[8..12] != b"WAVE" {
+        return Err(DataError::format(path, "not a WAV file: no RIFF/WAVE header"));
+    }
+    let mut pos = 12u64;
+    let mut fmt: Option<(usize, u32, Encoding)> = None;
+    loop {
+        let mut ch = [0u8; 8];
+        if r.read_exact(&mut ch).is_err() {
+            return Err(DataError::format(path, "not a readable WAV file: no data chunk"));
+        }
+        let size = u64::from(u32::from_le_bytes([ch[4], ch[5], ch[6], ch[7]]));
+        pos += 8;
+        match &ch[0..4] {
+            b"fmt " => {
+                let len = size.min(file_len.saturating_sub(pos)).min(1024) as usize;
+                let mut c = vec![0u8; len];
+                r.read_exact(&mut c).map_err(|_| DataError::format(path, "fmt chunk truncated"))?;
+                fmt = Some(parse_fmt(path, &c)?);
+                let skip = size + (size & 1) - len as u64;
+                r.seek(SeekFrom::Current(skip as i64)).map_err(|e| DataError::io(path, e))?;
+            }
+            b"data" => {
+                let (nch, rate, enc) =
+                    fmt.ok_or_else(|| DataError::format(path, "not a readable WAV file: data chunk before fmt chunk"))?;
+                let available = size.min(file_len.saturating_sub(pos));
+                let channels = read_frames(path, &mut r, available, nch, enc)?;
+                let names = (1..=nch).map(|i| format!("ch{i}")).collect();
+                return Ok(Recording { channels, sample_rate_hz: Some(f64::from(rate)), names });
+            }
+            _ => {
+                r.seek(SeekFrom::Current((size + (size & 1)) as i64)).map_err(|e| DataError::io(path, e))?;
+            }
+        }
+        pos += size + (size & 1);
+        if pos >= file_len {
+            return Err(DataError::format(path, "not a readable WAV file: no data chunk"));
+        }
+    }
+}
+
+/// Whole frames of `nch` channels from `bytes` bytes of the data chunk.
+fn read_frames(
     path: &Path,
-    reader: hound::WavReader<std::io::BufReader<std::fs::File>>,
-    spec: hound::WavSpec,
-    claimed_frames: u64,
-    mut channels: Vec<Vec<f32>>,
-) -> Result<Recording, DataError> {
-    use std::io::Read;
-    let nch = spec.channels as usize;
-    let width = (spec.bits_per_sample / 8) as usize;
-    let total = claimed_frames as usize * nch * width;
-    let mut inner = reader.into_inner();
-    let mut buf = vec![0u8; (1 << 16) * width * nch];
-    let (mut done, mut slot) = (0usize, 0usize);
-    while done < total {
-        let want = buf.len().min(total - done);
-        let got = inner.read(&mut buf[..want]).map_err(|e| DataError::io(path, e))?;
-        if got == 0 {
-            return Err(DataError::format(path, format!("data ends early at sample {}: file truncated", done / width)));
-        }
-        let whole = got - got % width;
-        let decode = |b: &[u8]| {
-            if width == 4 {
-                f32::from_le_bytes([b[0], b[1], b[2], b[3]])
-            } else {
-                f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0
-            }
-        };
-        let mut bytes = &buf[..whole];
-        // finish a frame left open by the previous read, then whole frames channel by channel
-        while slot != 0 && !bytes.is_empty() {
-            channels[slot].push(decode(&bytes[..width]));
-            slot = (slot + 1) % nch;
-            bytes = &bytes[width..];
-        }
-        let frame = width * nch;
-        let full = bytes.len() / frame * frame;
-        for f in bytes[..full].chunks_exact(frame) {
+    r: &mut impl std::io::Read,
+    bytes: u64,
+    nch: usize,
+    enc: Encoding,
+) -> Result<Vec<Vec<f32>>, DataError> {
+    let width = enc.width();
+    let frame = width * nch;
+    let frames = (bytes / frame as u64) as usize;
+    if frames == 0 {
+        return Err(DataError::format(
+            path,
+            format!("the data chunk holds {bytes} bytes, not one whole frame of {nch} channel(s) x {width} bytes"),
+        ));
+    }
+    let mut channels: Vec<Vec<f32>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
+    let per_block = ((1usize << 20) / frame).max(1);
+    let mut buf = vec![0u8; per_block * frame];
+    let mut left = frames;
+    while left > 0 {
+        let n = left.min(per_block);
+        let block = &mut buf[..n * frame];
+        r.read_exact(block).map_err(|e| DataError::io(path, e))?;
+        for f in block.chunks_exact(frame) {
             for (c, b) in channels.iter_mut().zip(f.chunks_exact(width)) {
-                c.push(decode(b));
+                c.push(enc.decode(b));
             }
         }
-        for b in bytes[full..].chunks_exact(width) {
-            channels[slot].push(decode(b));
-            slot = (slot + 1) % nch;
-        }
-        if whole != got {
-            // keep the partial sample for the next read
-            let rest = got - whole;
-            buf.copy_within(whole..got, 0);
-            let more = inner.read(&mut buf[rest..width]).map_err(|e| DataError::io(path, e))?;
-            if more < width - rest {
-                return Err(DataError::format(path, "data ends in the middle of a sample: file truncated"));
-            }
-            let b = &buf[..width];
-            let v = if width == 4 {
-                f32::from_le_bytes([b[0], b[1], b[2], b[3]])
-            } else {
-                f32::from(i16::from_le_bytes([b[0], b[1]])) / 32768.0
-            };
-            channels[slot].push(v);
-            slot = (slot + 1) % nch;
-            done += width;
-        }
-        done += whole;
+        left -= n;
     }
-    let len = channels.iter().map(Vec::len).min().unwrap_or(0);
-    for c in &mut channels {
-        c.truncate(len);
-    }
-    let names = (1..=nch).map(|i| format!("ch{i}")).collect();
-    Ok(Recording { channels, sample_rate_hz: Some(f64::from(spec.sample_rate)), names })
+    Ok(channels)
 }

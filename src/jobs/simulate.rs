@@ -104,6 +104,7 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
     let mut report_files = Vec::new();
     if let Some(dir) = &job.report {
         crate::io::create_dir(dir)?;
+        crate::io::check_output(&dir.join("simulate.json"))?;
         report_files = crate::report::figures::simulation(&scene, &sim, dir)?;
         crate::io::write_atomic(&dir.join("simulate.json"), to_json_line(&summary).as_bytes())?;
     }
@@ -134,6 +135,7 @@ pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
     let mut report_files = Vec::new();
     if let Some(dir) = &job.report {
         crate::io::create_dir(dir)?;
+        crate::io::check_output(&dir.join("stability.json"))?;
         report_files.push(crate::report::figures::multipliers(&scene, &steady, dir)?);
         crate::io::write_atomic(&dir.join("stability.json"), to_json_line(&summary).as_bytes())?;
     }

@@ -156,6 +156,8 @@ pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: 
         }
         .into());
     }
+    crate::io::check_output(out)?;
+    crate::io::check_output(&crate::io::sidecar::path_of(out))?;
     let o = &scene.output;
     let highest = o.max_order * o.base_hz * (1.0 + o.speed_modulation.map_or(0.0, |m| m.depth));
     if o.sample_rate_hz < 2.0 * highest {

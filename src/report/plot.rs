@@ -145,9 +145,17 @@ pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Res
     for c in charts {
         data_range(c)?;
     }
+    crate::io::check_output(path).map_err(|e| match e {
+        crate::io::DataError::Io { path, message } | crate::io::DataError::Format { path, message } => {
+            ReportError::Write { path, message }
+        }
+    })?;
     let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
     name.push(format!(".{}.tmp.png", std::process::id()));
     let tmp = path.with_file_name(name);
+    // a plain OS message for a missing directory or no permission (plotters would wrap it in debug text)
+    std::fs::File::create(&tmp)
+        .map_err(|e| ReportError::Write { path: path.display().to_string(), message: format!("cannot write: {e}") })?;
     let result = (|| -> Result<(), ReportError> {
         let root = BitMapBackend::new(&tmp, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw_err(path, e))?;

@@ -141,6 +141,7 @@ impl Scene {
     /// # Errors
     /// [`SceneError`] naming the file and field.
     pub fn load(path: &str) -> Result<Self, SceneError> {
+        crate::io::register_input(std::path::Path::new(path));
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
         // typed parse first, for messages with the field path and line/column

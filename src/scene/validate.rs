@@ -9,6 +9,11 @@ use crate::solver::SolverOptions;
 use crate::system::{Coefficient, FourierSeries, PeriodicSystem, PiecewiseConstant};
 use std::f64::consts::PI;
 
+/// Largest accepted mesh damping ratio (critical damping is 1).
+const MAX_DAMPING_RATIO: f64 = 10.0;
+/// Largest accepted ratio between the mesh natural frequency and the mesh frequency (either way).
+const MAX_FREQUENCY_RATIO: f64 = 1e5;
+
 pub(super) struct Validator<'a> {
     file: &'a str,
 }
@@ -203,6 +208,15 @@ impl Validator<'_> {
         let f = "gear_pair";
         self.positive(&format!("{f}.speed_rpm"), g.speed_rpm)?;
         self.non_negative(&format!("{f}.damping_ratio"), g.damping_ratio)?;
+        if g.damping_ratio > MAX_DAMPING_RATIO {
+            return Err(self.err(
+                &format!("{f}.damping_ratio"),
+                format!(
+                    "{} is beyond any gear mesh (critical damping is 1; at most {MAX_DAMPING_RATIO})",
+                    g.damping_ratio
+                ),
+            ));
+        }
         self.finite(&format!("{f}.static_deflection_m"), g.static_deflection_m)?;
         self.gear(&format!("{f}.pinion"), &g.pinion)?;
         self.gear(&format!("{f}.wheel"), &g.wheel)?;
@@ -262,6 +276,7 @@ impl Validator<'_> {
             crack,
         };
         let gp = GearPair::new(params);
+        self.plausible_natural_frequency(g, &gp)?;
         if gp.mesh_cycles_per_period() > 200_000 {
             return Err(self.err(
                 &format!("{f}.wheel.teeth"),
@@ -281,6 +296,29 @@ impl Validator<'_> {
             gp.mesh_cycles_per_period()
         ));
         Ok(gp)
+    }
+
+    /// The mesh's natural frequency must be a finite, sensible multiple of the mesh frequency: an inertia
+    /// or base radius off by many orders of magnitude gives a mode no scene needs (and step grids beyond any
+    /// memory). The gear with the smaller J / rb^2 sets the reduced mass and is named.
+    fn plausible_natural_frequency(&self, g: &RawGearPair, gp: &GearPair) -> Result<(), SceneError> {
+        let f0 = gp.natural_frequency_rad_s() / (2.0 * PI);
+        let ratio = f0 / gp.mesh_hz();
+        if ratio.is_finite() && (1.0 / MAX_FREQUENCY_RATIO..=MAX_FREQUENCY_RATIO).contains(&ratio) {
+            return Ok(());
+        }
+        let m1 = g.pinion.inertia_kg_m2 / g.pinion.base_radius_m.powi(2);
+        let m2 = g.wheel.inertia_kg_m2 / g.wheel.base_radius_m.powi(2);
+        let gear = if !(m1 >= m2) { "pinion" } else { "wheel" };
+        let gear =
+            if ratio < 1.0 / MAX_FREQUENCY_RATIO { if gear == "pinion" { "wheel" } else { "pinion" } } else { gear };
+        Err(self.err(
+            &format!("gear_pair.{gear}.inertia_kg_m2"),
+            format!(
+                "with gear_pair.{gear}.base_radius_m and the mean mesh stiffness it gives a mesh natural frequency of {f0:.3e} Hz, {ratio:.1e} times the mesh frequency {:.3e} Hz (allowed 1e-5 .. 1e5): check the inertias, base radii and stiffness",
+                gp.mesh_hz()
+            ),
+        ))
     }
 
     pub(super) fn press(&self, p: &RawPress) -> Result<PressParams, SceneError> {
@@ -390,7 +428,7 @@ impl Validator<'_> {
             .enumerate()
             .map(|(i, e)| self.entry(&format!("ltp.forcing[{i}]"), e, period))
             .collect::<Result<Vec<_>, _>>()?;
-        SecondOrderSystem::new(period, mass, damping, stiffness, forcing).map_err(|e| match e {
+        let sys = SecondOrderSystem::new(period, mass, damping, stiffness, forcing).map_err(|e| match e {
             model::second_order::BuildError::SingularMass { t } => {
                 self.err("ltp.mass", format!("mass matrix is singular at t = {t:.6} s"))
             }
@@ -401,7 +439,20 @@ impl Validator<'_> {
             model::second_order::BuildError::Size { what, expected, got } => {
                 self.err(&format!("ltp.{what}"), format!("has {got} entries, expected {expected}"))
             }
-        })
+        })?;
+        // modes that turn more than 1e6 times per period need more RK4 steps than any scene should ask for
+        let rate = crate::solver::max_rate(&sys);
+        let turns = rate * period / (2.0 * PI);
+        if !turns.is_finite() || turns > 1e6 {
+            let field = if rate.is_finite() && rate < 1e6 { "ltp.period_s" } else { "ltp.stiffness" };
+            return Err(self.err(
+                field,
+                format!(
+                    "the fastest mode (|lambda| = {rate:.3e} 1/s) turns {turns:.2e} times per period of {period:.3e} s (at most 1e6): check period_s and the mass, damping and stiffness entries"
+                ),
+            ));
+        }
+        Ok(sys)
     }
 
     pub(super) fn common_output(

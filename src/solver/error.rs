@@ -33,6 +33,21 @@ pub enum SolverError {
         /// Error estimate of the last attempt.
         estimate: f64,
     },
+    /// The work the system needs is beyond the stated budget: refused before anything is allocated.
+    #[error(
+        "the system's fastest mode (|lambda| = {rate:.3e} 1/s, {hz:.3e} Hz) needs about {needed:.2e} RK4 steps per period of {period_s:.3e} s, beyond the limit of {limit}: a mass, inertia or radius far too small, or a stiffness, damping or period far too large",
+        hz = rate / (2.0 * std::f64::consts::PI)
+    )]
+    TooMuchWork {
+        /// Largest |eigenvalue| of P(t), 1/s.
+        rate: f64,
+        /// Period in s.
+        period_s: f64,
+        /// Steps the explicit stability limit asks for.
+        needed: f64,
+        /// The step limit.
+        limit: usize,
+    },
     /// The requested method is not available for this system.
     #[error("{0}")]
     Unsupported(String),

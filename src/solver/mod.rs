@@ -105,6 +105,26 @@ pub fn max_rate(sys: &dyn PeriodicSystem) -> f64 {
     best
 }
 
+/// Refuses, before any grid is allocated, a system whose explicit stability limit alone asks for more RK4
+/// steps per period than `max_steps` (every method but a pure Magnus run needs an RK4 product somewhere:
+/// the multiplier companion of harmonic balance, the rk4 product itself). Non-finite coefficients are
+/// refused too.
+///
+/// # Errors
+/// [`SolverError::TooMuchWork`] or [`SolverError::NonFinite`].
+pub fn check_work(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<(), SolverError> {
+    let rate = max_rate(sys);
+    if !rate.is_finite() {
+        return Err(SolverError::NonFinite { what: "coefficients of the system (P(t))".into() });
+    }
+    let needed = sys.period_s() * rate / RK4_STABILITY_LIMIT;
+    let explicit_needed = opts.method != Method::Magnus;
+    if explicit_needed && 8.0 * needed > opts.max_steps as f64 {
+        return Err(SolverError::TooMuchWork { rate, period_s: sys.period_s(), needed, limit: opts.max_steps });
+    }
+    Ok(())
+}
+
 /// RK4's stability interval along the imaginary and negative real axes is about 2.78.
 pub const RK4_STABILITY_LIMIT: f64 = 2.78;
 
@@ -114,6 +134,7 @@ pub const RK4_STABILITY_LIMIT: f64 = 2.78;
 /// [`SolverError`] when the monodromy is non-finite, its eigenvalues fail, I - Phi is exactly singular,
 /// or the tolerance cannot be reached within `max_steps`.
 pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadyState, SolverError> {
+    check_work(sys, opts)?;
     match opts.method {
         Method::Rk4 => solve_rk4(sys, opts, "requested"),
         Method::Hill => hill::solve_steady(sys, opts, "requested".into()),

@@ -188,12 +188,47 @@ fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>)
     Ok(())
 }
 
+/// Fewest samples per shaft revolution a TSA can use (the resampling keeps at least 64 points).
+pub const MIN_SAMPLES_PER_REV: f64 = 64.0;
+
+/// A given shaft speed must fit the recording: enough samples per revolution, enough revolutions. Checked
+/// before anything is sized from it.
+fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_revs: usize) -> Result<(), Error> {
+    let per_rev = fs / hz;
+    if !(per_rev >= MIN_SAMPLES_PER_REV) {
+        return Err(JobError::Value {
+            what: "shaft speed".into(),
+            message: format!(
+                "{hz:.6e} Hz gives {per_rev:.3e} samples per revolution at the {fs} Hz sample rate of {}; at least {MIN_SAMPLES_PER_REV} are needed: the speed is far too high for this recording (rpm given as Hz?)",
+                path.display()
+            ),
+        }
+        .into());
+    }
+    let revs = n as f64 / per_rev;
+    if revs < min_revs as f64 {
+        return Err(JobError::Value {
+            what: "shaft speed".into(),
+            message: format!(
+                "{hz:.6} Hz gives only {revs:.2} revolutions in the {n} samples of {}; the time-synchronous average needs at least {min_revs}: is the speed too low, or the recording too short?",
+                path.display()
+            ),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// Accepted sample rates, Hz: from sub-hertz loggers to the fastest vibration front ends.
+pub const SAMPLE_RATE_RANGE_HZ: (f64, f64) = (0.1, 100e6);
+
 fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<Option<f64>, Error> {
     if let Some(fs) = o.fs_hz {
-        if !(fs.is_finite() && fs > 0.0) {
+        let (lo, hi) = SAMPLE_RATE_RANGE_HZ;
+        if !(fs.is_finite() && (lo..=hi).contains(&fs)) {
             return Err(JobError::Value {
                 what: "sample rate".into(),
-                message: format!("must be a positive number of Hz, got {fs}"),
+                message: format!("must be between {lo} Hz and {hi:e} Hz, got {fs:e} Hz"),
             }
             .into());
         }
@@ -250,6 +285,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     } else if let Some(hz) = o.shaft_hz {
         let fs = fs
             .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
+        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
         (AngleMap::constant(fs / hz, 0.0, n), SpeedSource::Given, 1.0)
     } else {
         let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();

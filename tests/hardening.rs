@@ -1,0 +1,183 @@
+//! Inputs that once broke gearvib (`tests/fixtures/bad-inputs/`, copied from the shared collection and
+//! never deleted) and the flag and path cases of the hardening campaign: one clear line on stderr, exit 2,
+//! no panic, no allocation beyond what the input holds (runs under a 2 GB address-space limit), inputs
+//! never modified.
+
+mod common;
+use common::*;
+use std::process::Command;
+
+/// Runs gearvib under `ulimit -v 2000000` (2 GB of address space): a buffer sized by a header's claim
+/// (4.29 GB) or by an absurd flag aborts there instead of quietly succeeding on a large machine.
+fn limited(args: &[&str]) -> Run {
+    let mut cmd = String::from("ulimit -v 2000000; exec \"$0\"");
+    for i in 1..=args.len() {
+        cmd.push_str(&format!(" \"${i}\""));
+    }
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(&cmd)
+        .arg(env!("CARGO_BIN_EXE_gearvib"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("sh runs");
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+const HEALTHY: &str = "data/recordings/gear-z14z39-fs10kHz-healthy.wav";
+
+#[test]
+fn absurd_scenes_are_refused_naming_the_field() {
+    for (file, field) in [
+        ("scene-damping-ratio-1e12.json", "gear_pair.damping_ratio"),
+        ("scene-pinion-inertia-1e-320.json", "gear_pair.pinion.inertia_kg_m2"),
+        ("scene-wheel-inertia-1e-300.json", "gear_pair.wheel.inertia_kg_m2"),
+        ("scene-wheel-base-radius-1e32.json", "gear_pair.wheel"),
+        ("scene-ltp-stiffness-cos-1e32.json", "ltp.stiffness"),
+        ("scene-ltp-period-1e12.json", "ltp.period_s"),
+    ] {
+        let path = format!("tests/fixtures/bad-inputs/{file}");
+        for cmd in ["simulate", "stability"] {
+            let run = limited(&[cmd, &path, "--json"]);
+            assert_one_line_error(&run, &[file, field]);
+        }
+    }
+}
+
+#[test]
+fn wav_headers_claiming_thousands_of_channels_allocate_only_what_the_file_holds() {
+    for file in ["wav-header-claims-16383-channels-f32.wav", "wav-header-claims-32767-channels-i16.wav"] {
+        let path = format!("tests/fixtures/bad-inputs/{file}");
+        let run = limited(&["diagnose", &path, "--json"]);
+        // the file holds two frames of all those channels: read, then refused as unanalysable
+        assert_one_line_error(&run, &[file]);
+        assert!(!run.stderr.contains("memory allocation"), "{}", run.stderr);
+    }
+}
+
+#[test]
+fn wav_with_an_odd_sized_chunk_and_its_pad_byte_is_read() {
+    // scipy reads it as 8000 frames, 2 channels, float32
+    let rec = gearvib::io::read_recording(std::path::Path::new(&repo(
+        "tests/fixtures/bad-inputs/wav-valid-odd-sized-chunk-padded.wav",
+    )))
+    .unwrap();
+    assert_eq!(rec.channels.len(), 2);
+    assert_eq!(rec.channels[0].len(), 8000);
+    assert_eq!(rec.sample_rate_hz, Some(10000.0));
+    assert!(rec.channels.iter().flatten().all(|v| v.is_finite()));
+}
+
+#[test]
+fn absurd_speeds_and_rates_are_refused() {
+    for (args, needles) in [
+        (&["--rpm", "1e308"][..], &["--rpm/--shaft-hz", "samples per revolution"][..]),
+        (&["--shaft-hz", "1e308"], &["--rpm/--shaft-hz", "samples per revolution"]),
+        (&["--shaft-hz", "18446744073709551616"], &["--rpm/--shaft-hz", "samples per revolution"]),
+        (&["--rpm", "1e12"], &["--rpm/--shaft-hz", "far too high"]),
+        (&["--shaft-hz", "1e12"], &["--rpm/--shaft-hz", "far too high"]),
+        (&["--shaft-hz", "1e7"], &["--rpm/--shaft-hz", "far too high"]),
+        (&["--rpm", "60"], &["--rpm/--shaft-hz", "1.00 revolutions", "at least 8"]),
+        (&["--fs", "1e308"], &["--fs", "between"]),
+        (&["--fs", "1e-308"], &["--fs", "between"]),
+        (&["--fs", "1e12"], &["--fs", "between"]),
+        (&["--fs", "10000", "--fs-unknown"], &["--fs", "conflicts with --fs-unknown"]),
+        (&["--rpm", "1800", "--tacho-channel", "2"], &["--tacho-channel", "conflicts"]),
+        (&["--channel", "2", "--tacho-channel", "2"], &["--channel 2", "tacho"]),
+        (&["--channel", "9"], &["--channel 9", "3 channel(s)"]),
+    ] {
+        let mut a = vec!["diagnose", HEALTHY];
+        a.extend_from_slice(args);
+        let run = limited(&a);
+        assert_one_line_error(&run, needles);
+        assert!(!run.stderr.contains("panicked") && !run.stderr.contains("internal error"), "{args:?}");
+    }
+}
+
+fn md5ish(path: &std::path::Path) -> Vec<u8> {
+    std::fs::read(path).unwrap()
+}
+
+#[test]
+fn outputs_never_replace_inputs() {
+    let dir = temp_dir("no-overwrite");
+    let scene = std::fs::read_to_string(repo("data/scenes/paper-gear-fig8a.json")).unwrap();
+    for name in ["sig.wav.json", "s.csv", "simulate.json", "stability.json", "s2.json", "r-diagnosis.json"] {
+        std::fs::write(dir.join(name), &scene).unwrap();
+    }
+    std::fs::copy(repo(HEALTHY), dir.join("r.wav")).unwrap();
+    std::fs::copy(repo(&format!("{HEALTHY}.json")), dir.join("r.wav.json")).unwrap();
+    std::fs::copy(repo(HEALTHY), dir.join("h.wav")).unwrap();
+    let before: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), md5ish(&p)))
+        .collect();
+    let d = dir.to_str().unwrap();
+    let p = |n: &str| dir.join(n).to_string_lossy().into_owned();
+    let cases: Vec<Vec<String>> = vec![
+        vec!["simulate".into(), p("sig.wav.json"), "-o".into(), p("sig.wav")],
+        vec!["simulate".into(), p("s.csv"), "-o".into(), p("s.csv")],
+        vec!["simulate".into(), p("simulate.json"), "--report".into(), d.into()],
+        vec!["stability".into(), p("stability.json"), "--report".into(), d.into()],
+        vec![
+            "sweep".into(),
+            p("s2.json"),
+            "--param".into(),
+            "speed".into(),
+            "--from".into(),
+            "1000".into(),
+            "--to".into(),
+            "2000".into(),
+            "--steps".into(),
+            "3".into(),
+            "-o".into(),
+            p("s2.json"),
+        ],
+        vec![
+            "diagnose".into(),
+            p("r.wav"),
+            "--teeth".into(),
+            "14,39".into(),
+            "--tacho-channel".into(),
+            "2".into(),
+            "--scene".into(),
+            p("r-diagnosis.json"),
+            "--report".into(),
+            d.into(),
+        ],
+    ];
+    for c in &cases {
+        let args: Vec<&str> = c.iter().map(String::as_str).collect();
+        let run = gearvib(&args);
+        assert_one_line_error(&run, &["refusing to overwrite an input"]);
+    }
+    for (name, bytes) in before {
+        assert_eq!(md5ish(&dir.join(&name)), bytes, "{name} was modified");
+    }
+}
+
+#[test]
+fn a_missing_output_directory_is_one_plain_line() {
+    let run = gearvib(&[
+        "sweep",
+        &repo("data/scenes/paper-gear-fig8a.json"),
+        "--param",
+        "speed",
+        "--from",
+        "1000",
+        "--to",
+        "2000",
+        "--steps",
+        "3",
+        "-o",
+        "no/such/dir/map.png",
+    ]);
+    assert_one_line_error(&run, &["no/such/dir/map.png", "No such file or directory"]);
+    assert!(!run.stderr.contains("ImageError") && !run.stderr.contains("Os {"), "{}", run.stderr);
+}
