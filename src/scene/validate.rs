@@ -309,7 +309,7 @@ impl Validator<'_> {
         }
         let m1 = g.pinion.inertia_kg_m2 / g.pinion.base_radius_m.powi(2);
         let m2 = g.wheel.inertia_kg_m2 / g.wheel.base_radius_m.powi(2);
-        let gear = if !(m1 >= m2) { "pinion" } else { "wheel" };
+        let gear = if m1.is_nan() || m1 < m2 { "pinion" } else { "wheel" };
         let gear =
             if ratio < 1.0 / MAX_FREQUENCY_RATIO { if gear == "pinion" { "wheel" } else { "pinion" } } else { gear };
         Err(self.err(

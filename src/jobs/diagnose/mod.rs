@@ -195,7 +195,7 @@ pub const MIN_SAMPLES_PER_REV: f64 = 64.0;
 /// before anything is sized from it.
 fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_revs: usize) -> Result<(), Error> {
     let per_rev = fs / hz;
-    if !(per_rev >= MIN_SAMPLES_PER_REV) {
+    if per_rev.is_nan() || per_rev < MIN_SAMPLES_PER_REV {
         return Err(JobError::Value {
             what: "shaft speed".into(),
             message: format!(
