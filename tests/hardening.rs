@@ -181,3 +181,33 @@ fn a_missing_output_directory_is_one_plain_line() {
     assert_one_line_error(&run, &["no/such/dir/map.png", "No such file or directory"]);
     assert!(!run.stderr.contains("ImageError") && !run.stderr.contains("Os {"), "{}", run.stderr);
 }
+
+#[test]
+fn csv_with_a_byte_order_mark_keeps_its_first_row_and_huge_values_are_out_of_range() {
+    let dir = temp_dir("csv-readers");
+    let rows: String = (0..20).map(|i| format!("{}\n", (i as f64 * 0.3).sin())).collect();
+    let bom = write(&dir, "bom.csv", &format!("\u{feff}{rows}"));
+    let rec = gearvib::io::read_recording(std::path::Path::new(&bom)).unwrap();
+    assert_eq!(rec.channels[0].len(), 20, "the first row is data, not a header");
+    assert_eq!(rec.channels[0][0], 0.0);
+    let huge = write(&dir, "huge.csv", "1.0\n2.0\n1e308\n3.0\n");
+    let e = gearvib::io::read_recording(std::path::Path::new(&huge)).unwrap_err().to_string();
+    assert!(e.contains("line 3") && e.contains("out of range"), "{e}");
+}
+
+#[test]
+fn nonsense_signal_requests_are_refused_and_leave_no_file() {
+    let dir = temp_dir("nonsense-signal");
+    let mut v = read_json(&repo("data/scenes/paper-gear-fig8a.json"));
+    v["output"] = serde_json::json!({"noise_rms": 1e308, "sample_rate_hz": 20000.0, "duration_s": 0.01});
+    let inf = write(&dir, "inf.json", &v.to_string());
+    let out = dir.join("inf.wav");
+    let run = gearvib(&["simulate", &inf, "-o", out.to_str().unwrap()]);
+    assert_one_line_error(&run, &["inf.json", "beyond 32-bit float range", "noise_rms"]);
+    v["output"] = serde_json::json!({"duration_s": 1e-9, "sample_rate_hz": 20000.0});
+    let short = write(&dir, "short.json", &v.to_string());
+    let run = gearvib(&["simulate", &short, "-o", dir.join("short.wav").to_str().unwrap()]);
+    assert_one_line_error(&run, &["short.json", "output.duration_s", "at least 2"]);
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left.len(), 2, "only the two scenes remain: {left:?}");
+}

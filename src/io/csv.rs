@@ -31,9 +31,13 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     let mut columns: Vec<Vec<f64>> = Vec::new();
     let mut ncols = 0;
     let mut field = String::new();
+    // first value per column beyond the f32 range of the stored channels: (line, text)
+    let mut overflow: Vec<Option<(usize, String)>> = Vec::new();
     for (idx, line) in reader.lines().enumerate() {
         let lineno = idx + 1;
         let line = line.map_err(|e| DataError::format(path, format!("line {lineno}: {e}")))?;
+        // a UTF-8 byte-order mark (spreadsheet exports) is no part of the first field
+        let line = if idx == 0 { line.trim_start_matches('\u{feff}') } else { line.as_str() };
         let line = line.trim_end_matches('\r');
         if line.trim().is_empty() {
             continue;
@@ -47,6 +51,7 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
             let numeric = fields.iter().all(|f| parse(f, d, &mut field).is_some());
             ncols = fields.len();
             columns = vec![Vec::new(); ncols];
+            overflow = vec![None; ncols];
             if !numeric {
                 header = Some(fields.iter().map(|f| f.trim().trim_matches('"').to_string()).collect());
                 continue;
@@ -65,6 +70,9 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
                     format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim()),
                 ));
             }
+            if v.abs() > f64::from(f32::MAX) && overflow[c].is_none() {
+                overflow[c] = Some((lineno, f.trim().to_string()));
+            }
             columns[c].push(v);
         }
     }
@@ -74,6 +82,14 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
     }
     let names = header.clone().unwrap_or_else(|| (1..=ncols).map(|i| format!("ch{i}")).collect());
     let time_col = header.as_ref().and_then(|h| h.iter().position(|n| is_time_name(n)));
+    if let Some((c, (lineno, text))) =
+        overflow.iter().enumerate().find_map(|(c, o)| o.clone().filter(|_| Some(c) != time_col).map(|o| (c, o)))
+    {
+        return Err(DataError::format(
+            path,
+            format!("line {lineno}, column {}: {text} is out of range for 32-bit samples (|x| > 3.4e38)", c + 1),
+        ));
+    }
     let mut sample_rate_hz = None;
     if let Some(tc) = time_col {
         sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);

@@ -185,6 +185,17 @@ pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: 
         }
         .into());
     }
+    let frames = (o.sample_rate_hz * o.duration_s).round();
+    if frames < 2.0 {
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: format!(
+                "field `output.duration_s`: {} s at {} Hz gives {frames} samples; a signal needs at least 2",
+                o.duration_s, o.sample_rate_hz
+            ),
+        }
+        .into());
+    }
     if o.sample_rate_hz.round() != o.sample_rate_hz && ext.as_deref() == Some("wav") {
         return Err(JobError::Input {
             file: scene.file.clone(),
@@ -272,6 +283,17 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         buf.clear();
         for (i, v) in values.iter().enumerate() {
             let noisy = if o.noise_rms > 0.0 { v + o.noise_rms * noise.gauss() } else { *v };
+            if noisy.is_nan() || noisy.abs() > f64::from(f32::MAX) {
+                return Err(JobError::Input {
+                    file: scene.file.clone(),
+                    message: format!(
+                        "the signal reaches {noisy:e} at sample {}, beyond 32-bit float range: check output.noise_rms ({}) and the model",
+                        start + i as u64,
+                        o.noise_rms
+                    ),
+                }
+                .into());
+            }
             buf.push(noisy);
             for (_, ratio) in &shafts {
                 let rev = times[i] * o.base_hz * ratio;
