@@ -211,3 +211,38 @@ fn nonsense_signal_requests_are_refused_and_leave_no_file() {
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 2, "only the two scenes remain: {left:?}");
 }
+
+/// Scenes that once ran for minutes with no answer: now a refusal with the work estimate (or the field),
+/// or an answer from the cheaper solver.
+#[test]
+fn huge_coefficient_counts_are_estimated_before_solving() {
+    let dir = temp_dir("huge-counts");
+    let base = read_json(&repo("data/scenes/paper-gear-fig8a.json"));
+    let mut mesh = base.clone();
+    let h: Vec<serde_json::Value> = (0..1000).map(|_| serde_json::json!({"amplitude_n_per_m": 1e3})).collect();
+    mesh["gear_pair"]["mesh_stiffness"] = serde_json::json!({"fourier": {"mean_n_per_m": 8e8, "harmonics": h}});
+    let p = write(&dir, "mesh1000.json", &mesh.to_string());
+    assert_one_line_error(&gearvib(&["simulate", &p]), &["mesh1000.json", "floating-point operations", "budget"]);
+
+    let mut press = read_json(&repo("data/scenes/paper-press-case1.json"));
+    press["press"]["cam_cos_m_per_rad"] = serde_json::json!(vec![1e-9; 100_000]);
+    let p = write(&dir, "press.json", &press.to_string());
+    assert_one_line_error(&gearvib(&["simulate", &p]), &["press.cam_cos_m_per_rad", "at most 1000"]);
+
+    // one pinion error of order 100000: harmonic balance decouples it into residue classes
+    let mut order = base.clone();
+    order["gear_pair"]["pinion"]["errors"] = serde_json::json!([{"order": 100000, "amplitude_m": 1e-6}]);
+    let p = write(&dir, "order.json", &order.to_string());
+    let run = gearvib(&["simulate", &p, "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+
+    // 1000 cos terms in an ltp stiffness: harmonic balance is over budget, auto takes the rk4 product
+    let cos = vec![1e-3; 1000];
+    let ltp = serde_json::json!({"model": "ltp", "ltp": {"period_s": 1.0, "mass": [[{"mean": 1.0}]],
+        "damping": [[{"mean": 0.1}]], "stiffness": [[{"mean": 4.0, "cos": cos}]], "forcing": [{"mean": 1.0}]}});
+    let p = write(&dir, "ltp.json", &ltp.to_string());
+    let run = gearvib(&["simulate", &p, "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(v["method"], "rk4");
+}

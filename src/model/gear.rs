@@ -284,6 +284,13 @@ impl PeriodicSystem for GearPair {
             && self.params.pinion_errors.is_constant()
             && self.params.wheel_errors.is_constant()
     }
+    fn eval_terms(&self) -> usize {
+        let mesh = match &self.params.mesh {
+            MeshStiffness::Fourier(s) => s.harmonics() + 1,
+            MeshStiffness::Piecewise(p) => p.starts.len(),
+        };
+        mesh + self.params.pinion_errors.harmonics() + self.params.wheel_errors.harmonics() + 1
+    }
     fn breakpoints(&self) -> Vec<f64> {
         self.breakpoints.clone()
     }

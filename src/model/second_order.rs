@@ -167,6 +167,13 @@ impl PeriodicSystem for SecondOrderSystem {
             forcing: series(&self.forcing)?,
         })
     }
+    fn eval_terms(&self) -> usize {
+        let terms = |c: &Coefficient| match c {
+            Coefficient::Fourier(s) => s.harmonics() + 1,
+            Coefficient::Piecewise(p) => p.starts.len(),
+        };
+        self.mass.iter().chain(&self.damping).chain(&self.stiffness).chain(&self.forcing).map(terms).sum()
+    }
     fn max_harmonic(&self) -> usize {
         self.mass
             .iter()

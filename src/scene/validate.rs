@@ -9,6 +9,8 @@ use crate::solver::SolverOptions;
 use crate::system::{Coefficient, FourierSeries, PeriodicSystem, PiecewiseConstant};
 use std::f64::consts::PI;
 
+/// Most cam coefficients of a press scene (a real cam profile needs tens).
+const MAX_CAM_COEFFICIENTS: usize = 1000;
 /// Largest accepted mesh damping ratio (critical damping is 1).
 const MAX_DAMPING_RATIO: f64 = 10.0;
 /// Largest accepted ratio between the mesh natural frequency and the mesh frequency (either way).
@@ -326,6 +328,15 @@ impl Validator<'_> {
         let cos = p.cam_cos_m_per_rad.clone();
         for (i, x) in cos.iter().chain(&p.cam_sin_m_per_rad).enumerate() {
             self.finite(&format!("{f}.cam coefficient {i}"), *x)?;
+        }
+        let count = cos.len().max(p.cam_sin_m_per_rad.len());
+        if count > MAX_CAM_COEFFICIENTS {
+            return Err(self.err(
+                &format!("{f}.cam_cos_m_per_rad"),
+                format!(
+                    "{count} cam coefficients, at most {MAX_CAM_COEFFICIENTS}: the press equations multiply the cam series, so the work grows with the square of their number"
+                ),
+            ));
         }
         if cos.is_empty() && p.cam_sin_m_per_rad.is_empty() {
             return Err(self.err(&format!("{f}.cam_cos_m_per_rad"), "at least one cam coefficient is needed".into()));

@@ -105,6 +105,33 @@ pub fn max_rate(sys: &dyn PeriodicSystem) -> f64 {
     best
 }
 
+/// Work budget in floating-point operations (about 10 s on one core of the development machine): a solve
+/// estimated above it is refused with the estimate, or (for `auto`) handed to a cheaper method.
+pub const WORK_BUDGET_FLOPS: f64 = 1e10;
+
+/// Estimated work of harmonic balance (see [`hill::work_estimate`]); infinite without a Fourier form.
+pub fn hill_work(sys: &dyn PeriodicSystem) -> f64 {
+    sys.fourier_form().map_or(f64::INFINITY, |f| hill::work_estimate(&f, sys.max_harmonic()))
+}
+
+/// Estimated work of the step-based tolerance loop: at least 4 K steps (and twice the explicit stability
+/// limit), two grids per attempt, about three attempts, three evaluations of `eval_terms` per step plus
+/// the block product n^2 (n + 1).
+pub fn step_work(sys: &dyn PeriodicSystem) -> f64 {
+    let n = sys.dim() as f64;
+    let limit = sys.period_s() * max_rate(sys) / RK4_STABILITY_LIMIT;
+    let steps = (4.0 * sys.max_harmonic() as f64).max(2.0 * limit).max(64.0);
+    let per_step = 3.0 * (4.0 * sys.eval_terms() as f64 + n * n * (n + 1.0) * 2.0);
+    steps * 6.0 * 3.0 * per_step
+}
+
+fn too_much(what: &str, flops: f64) -> SolverError {
+    SolverError::Unsupported(format!(
+        "{what} would take about {flops:.1e} floating-point operations (~{:.0} s), beyond the budget of {WORK_BUDGET_FLOPS:.0e}: reduce the number of harmonics or error terms, or the period",
+        flops / 1e9
+    ))
+}
+
 /// Refuses, before any grid is allocated, a system whose explicit stability limit alone asks for more RK4
 /// steps per period than `max_steps` (every method but a pure Magnus run needs an RK4 product somewhere:
 /// the multiplier companion of harmonic balance, the rk4 product itself). Non-finite coefficients are
@@ -135,11 +162,30 @@ pub const RK4_STABILITY_LIMIT: f64 = 2.78;
 /// or the tolerance cannot be reached within `max_steps`.
 pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadyState, SolverError> {
     check_work(sys, opts)?;
+    let (hill_cost, step_cost) = (hill_work(sys), step_work(sys));
+    let free = opts.steps.is_none() && opts.harmonics.is_none();
+    match opts.method {
+        Method::Hill if free && hill_cost.is_finite() && hill_cost > WORK_BUDGET_FLOPS => {
+            return Err(too_much("harmonic balance", hill_cost));
+        }
+        Method::Rk4 | Method::Magnus if free && step_cost > WORK_BUDGET_FLOPS => {
+            return Err(too_much("time stepping", step_cost));
+        }
+        Method::Auto if free && hill_cost > WORK_BUDGET_FLOPS && step_cost > WORK_BUDGET_FLOPS => {
+            return Err(too_much("the cheapest solver", hill_cost.min(step_cost)));
+        }
+        _ => {}
+    }
     match opts.method {
         Method::Rk4 => solve_rk4(sys, opts, "requested"),
         Method::Hill => hill::solve_steady(sys, opts, "requested".into()),
         Method::Magnus => solve_steps(sys, opts, "requested", rk4::Scheme::Magnus4),
         Method::Auto => match sys.fourier_form() {
+            Some(_) if opts.steps.is_none() && hill_cost > WORK_BUDGET_FLOPS => solve_rk4(
+                sys,
+                opts,
+                "auto: harmonic balance would exceed the work budget with this many coefficient harmonics, so the rk4 product",
+            ),
             Some(_) if opts.steps.is_none() => hill::solve_steady(
                 sys,
                 opts,

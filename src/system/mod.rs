@@ -52,6 +52,11 @@ pub trait PeriodicSystem: Sync {
     fn piecewise_constant(&self) -> bool {
         false
     }
+    /// Terms summed by one evaluation of P(t) and f(t) (Fourier terms and table pieces over all entries): the
+    /// cost of one `eval`, for work estimates before solving.
+    fn eval_terms(&self) -> usize {
+        self.dim() * self.dim() * (self.max_harmonic() + 1)
+    }
     /// Highest harmonic of 1/T in the coefficients (a lower bound on the resolution a solver needs).
     fn max_harmonic(&self) -> usize;
     /// Period of P(t) alone in s (the period divided by a whole number): the monodromy over T is the
