@@ -246,3 +246,37 @@ fn huge_coefficient_counts_are_estimated_before_solving() {
     let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
     assert_eq!(v["method"], "rk4");
 }
+
+#[test]
+fn interrupted_writes_leave_no_temporary_and_stale_ones_are_swept() {
+    let dir = temp_dir("interrupt");
+    let mut v = read_json(&repo("data/scenes/gear-z14z39-healthy.json"));
+    v["output"]["duration_s"] = 600.0.into();
+    let scene = write(&dir, "long.json", &v.to_string());
+    let out = dir.join("big.wav");
+    // a temporary of a process that no longer runs (pid beyond the kernel's pid_max)
+    let stale = dir.join("big.wav.4194305.tmp");
+    std::fs::write(&stale, b"left by a killed run").unwrap();
+    for signal in ["TERM", "INT", "HUP"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_gearvib"))
+            .args(["simulate", &scene, "-o", out.to_str().unwrap()])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        // wait until the temporary exists (the write has started), then interrupt
+        let started = std::time::Instant::now();
+        let tmp = dir.join(format!("big.wav.{}.tmp", child.id()));
+        while !tmp.exists() && started.elapsed().as_secs() < 30 {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        assert!(tmp.exists(), "the write started");
+        let kill = Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status().unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert!(!status.success(), "{signal}: interrupted");
+        assert!(!tmp.exists(), "{signal}: the temporary was removed");
+        assert!(!out.exists(), "{signal}: no half-written output under the final name");
+    }
+    assert!(!stale.exists(), "the stale temporary of a dead process was swept");
+}

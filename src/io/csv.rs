@@ -185,9 +185,9 @@ impl CsvOut {
     ///
     /// # Errors
     /// Flushing or renaming fails.
-    pub fn finish(mut self) -> Result<(), DataError> {
+    pub fn finish(mut self) -> Result<AtomicFile, DataError> {
         self.out.flush().map_err(|e| DataError::io(&self.path, e))?;
         drop(self.out);
-        self.guard.commit()
+        Ok(self.guard)
     }
 }

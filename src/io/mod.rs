@@ -88,6 +88,49 @@ pub fn check_output(dest: &Path) -> Result<(), DataError> {
     }
 }
 
+/// Temporary files of this process not yet renamed into place (removed on SIGINT, SIGTERM, SIGHUP).
+static TEMPS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Records a temporary file that [`remove_temporaries`] must delete if the process is interrupted.
+pub fn register_temp(path: &Path) {
+    TEMPS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(path.to_path_buf());
+}
+
+/// Forgets a temporary file (renamed into place or removed).
+pub fn unregister_temp(path: &Path) {
+    TEMPS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).retain(|p| p != path);
+}
+
+/// Deletes every temporary file still open: called from the binary's signal handler.
+pub fn remove_temporaries() {
+    for p in TEMPS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).drain(..) {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Removes `NAME.<pid>.tmp` siblings of `dest` left by processes that no longer run (a killed run; on
+/// Linux, where /proc tells which processes live).
+fn sweep_stale_temps(dest: &Path) {
+    let (Some(dir), Some(name)) = (dest.parent(), dest.file_name().and_then(|n| n.to_str())) else { return };
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(rest) = file.to_str().and_then(|f| f.strip_prefix(name)).and_then(|r| r.strip_prefix('.')) else {
+            continue;
+        };
+        let pid = rest.strip_suffix(".tmp").or_else(|| rest.strip_suffix(".tmp.png"));
+        if let Some(pid) = pid.and_then(|p| p.parse::<u32>().ok()) {
+            if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
 /// A file being written under a temporary name next to its destination; `commit` renames it into place,
 /// dropping it without `commit` removes it (no half-written output is ever left under the final name).
 pub struct AtomicFile {
@@ -104,10 +147,12 @@ impl AtomicFile {
     /// directory, no permission).
     pub fn create(dest: &Path) -> Result<(Self, std::fs::File), DataError> {
         check_output(dest)?;
+        sweep_stale_temps(dest);
         let mut name = dest.file_name().map(|n| n.to_os_string()).unwrap_or_default();
         name.push(format!(".{}.tmp", std::process::id()));
         let tmp = dest.with_file_name(name);
         let file = std::fs::File::create(&tmp).map_err(|e| DataError::io(dest, format!("cannot write: {e}")))?;
+        register_temp(&tmp);
         Ok((Self { tmp, dest: dest.to_path_buf(), done: false }, file))
     }
 
@@ -122,6 +167,7 @@ impl AtomicFile {
     /// The rename fails.
     pub fn commit(mut self) -> Result<(), DataError> {
         std::fs::rename(&self.tmp, &self.dest).map_err(|e| DataError::io(&self.dest, e))?;
+        unregister_temp(&self.tmp);
         self.done = true;
         Ok(())
     }
@@ -131,8 +177,19 @@ impl Drop for AtomicFile {
     fn drop(&mut self) {
         if !self.done {
             let _ = std::fs::remove_file(&self.tmp);
+            unregister_temp(&self.tmp);
         }
     }
+}
+
+/// Writes `bytes` to a temporary file for `dest`, not yet renamed: commit the guard to put it in place.
+///
+/// # Errors
+/// Creating or writing fails.
+pub fn write_uncommitted(dest: &Path, bytes: &[u8]) -> Result<AtomicFile, DataError> {
+    let (guard, mut f) = AtomicFile::create(dest)?;
+    f.write_all(bytes).and_then(|_| f.sync_all()).map_err(|e| DataError::io(dest, e))?;
+    Ok(guard)
 }
 
 /// Writes `bytes` to `dest` atomically.

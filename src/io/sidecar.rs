@@ -2,7 +2,7 @@
 //! Reading restores physical units of integer WAV files (`full_scale`) and the channel names (tachometer
 //! channels are named "tacho ...").
 
-use super::{DataError, write_atomic};
+use super::{AtomicFile, DataError, write_uncommitted};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -63,14 +63,15 @@ pub fn path_of(signal: &Path) -> PathBuf {
     PathBuf::from(side)
 }
 
-/// Writes the sidecar of `signal` atomically (pretty-printed JSON).
+/// Writes the sidecar of `signal` (pretty-printed JSON) under a temporary name: commit the guard to put it
+/// in place.
 ///
 /// # Errors
 /// The file cannot be written.
-pub fn write(signal: &Path, info: &Sidecar) -> Result<(), DataError> {
+pub fn write(signal: &Path, info: &Sidecar) -> Result<AtomicFile, DataError> {
     let side = path_of(signal);
     let text = serde_json::to_string_pretty(info).map_err(|e| DataError::format(&side, e.to_string()))?;
-    write_atomic(&side, text.as_bytes())
+    write_uncommitted(&side, text.as_bytes())
 }
 
 /// Reads the sidecar of `signal`: `None` when there is none or it is not a gearvib sidecar (a file of the

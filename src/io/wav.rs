@@ -81,14 +81,14 @@ impl WavOut {
         Ok(())
     }
 
-    /// Finishes the header and renames the file into place; returns the number of clipped samples.
+    /// Finishes the header; the file stays under its temporary name until the returned guard is committed
+    /// (so a signal and its sidecar can be put in place together). Returns the clipped sample count too.
     ///
     /// # Errors
-    /// Finalising or renaming fails.
-    pub fn finish(self) -> Result<u64, DataError> {
+    /// Finalising fails.
+    pub fn finish(self) -> Result<(AtomicFile, u64), DataError> {
         self.writer.finalize().map_err(|e| DataError::io(&self.path, e))?;
-        self.guard.commit()?;
-        Ok(self.clipped)
+        Ok((self.guard, self.clipped))
     }
 }
 

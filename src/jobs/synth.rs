@@ -306,12 +306,9 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         }
         start += len as u64;
     }
-    let clipped = match sink {
+    let (signal_guard, clipped) = match sink {
         Sink::Wav(w) => w.finish()?,
-        Sink::Csv(c) => {
-            c.finish()?;
-            0
-        }
+        Sink::Csv(c) => (c.finish()?, 0),
     };
     if clipped > 0 {
         warnings.push(format!(
@@ -338,7 +335,15 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         evaluation: eval.describe(),
         warnings,
     };
-    crate::io::sidecar::write(out, &info)?;
+    // the pair as a unit: both temporaries written, then the signal renamed and the sidecar last; a
+    // sidecar that cannot be put in place takes the signal with it (an integer WAV without its full scale
+    // would read wrong)
+    let sidecar_guard = crate::io::sidecar::write(out, &info)?;
+    signal_guard.commit()?;
+    if let Err(e) = sidecar_guard.commit() {
+        let _ = std::fs::remove_file(out);
+        return Err(e.into());
+    }
     Ok(info)
 }
 

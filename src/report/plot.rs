@@ -156,6 +156,7 @@ pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Res
     // a plain OS message for a missing directory or no permission (plotters would wrap it in debug text)
     std::fs::File::create(&tmp)
         .map_err(|e| ReportError::Write { path: path.display().to_string(), message: format!("cannot write: {e}") })?;
+    crate::io::register_temp(&tmp);
     let result = (|| -> Result<(), ReportError> {
         let root = BitMapBackend::new(&tmp, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
@@ -166,14 +167,16 @@ pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Res
         root.present().map_err(|e| draw_err(path, e))?;
         Ok(())
     })();
-    match result {
+    let done = match result {
         Ok(()) => std::fs::rename(&tmp, path)
             .map_err(|e| ReportError::Write { path: path.display().to_string(), message: e.to_string() }),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
+        Err(e) => Err(e),
+    };
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
+    crate::io::unregister_temp(&tmp);
+    done
 }
 
 fn draw_err(path: &Path, e: impl std::fmt::Display) -> ReportError {
