@@ -206,7 +206,8 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> Result<(), DataError> {
 /// Multi-channel signal read from a file, one `Vec` per channel.
 #[derive(Clone, Debug)]
 pub struct Recording {
-    /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1)), kept
+    /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1); a channel
+    /// not asked for is empty), kept
     /// as f32 so that a long multi-channel recording needs about the memory of its file.
     pub channels: Vec<Vec<f32>>,
     /// Sample rate in Hz (`None` when a CSV has no time column and none was given).
@@ -220,15 +221,34 @@ pub struct Recording {
 /// # Errors
 /// [`DataError`] naming the file and what is wrong.
 pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
+    read_recording_channels(path, None)
+}
+
+/// [`read_recording`] keeping only the 0-based channels in `keep` (WAV: the others are not even decoded and
+/// stay empty; CSV: all are parsed, the others dropped).
+///
+/// # Errors
+/// As [`read_recording`].
+pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, DataError> {
     register_input(path);
     register_input(&sidecar::path_of(path));
     match extension(path).as_deref() {
         Some("wav") => {
-            let mut rec = wav::read(path)?;
+            let mut rec = wav::read_channels(path, keep)?;
             apply_sidecar(path, &mut rec);
             Ok(rec)
         }
-        Some("csv") | Some("txt") | Some("tsv") => csv::read(path),
+        Some("csv") | Some("txt") | Some("tsv") => {
+            let mut rec = csv::read(path)?;
+            if let Some(k) = keep {
+                for (i, c) in rec.channels.iter_mut().enumerate() {
+                    if !k.contains(&i) {
+                        *c = Vec::new();
+                    }
+                }
+            }
+            Ok(rec)
+        }
         _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
     }
 }

@@ -174,6 +174,15 @@ fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError>
 /// # Errors
 /// Not a RIFF/WAVE file, no fmt or data chunk, an unsupported encoding, no whole frame.
 pub fn read(path: &Path) -> Result<Recording, DataError> {
+    read_channels(path, None)
+}
+
+/// [`read`] keeping only the 0-based channels in `keep` (the others are left empty, so a long recording of
+/// which one channel is analysed needs the memory of that channel alone).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, DataError> {
     use std::io::{Read, Seek, SeekFrom};
     let file = std::fs::File::open(path).map_err(|e| DataError::io(path, e))?;
     let file_len = file.metadata().map_err(|e| DataError::io(path, e))?.len();
@@ -205,7 +214,7 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
                 let (nch, rate, enc) =
                     fmt.ok_or_else(|| DataError::format(path, "not a readable WAV file: data chunk before fmt chunk"))?;
                 let available = size.min(file_len.saturating_sub(pos));
-                let channels = read_frames(path, &mut r, available, nch, enc)?;
+                let channels = read_frames(path, &mut r, available, nch, enc, keep)?;
                 let names = (1..=nch).map(|i| format!("ch{i}")).collect();
                 return Ok(Recording { channels, sample_rate_hz: Some(f64::from(rate)), names });
             }
@@ -227,6 +236,7 @@ fn read_frames(
     bytes: u64,
     nch: usize,
     enc: Encoding,
+    keep: Option<&[usize]>,
 ) -> Result<Vec<Vec<f32>>, DataError> {
     let width = enc.width();
     let frame = width * nch;
@@ -237,7 +247,9 @@ fn read_frames(
             format!("the data chunk holds {bytes} bytes, not one whole frame of {nch} channel(s) x {width} bytes"),
         ));
     }
-    let mut channels: Vec<Vec<f32>> = (0..nch).map(|_| Vec::with_capacity(frames)).collect();
+    let wanted: Vec<bool> = (0..nch).map(|c| keep.is_none_or(|k| k.contains(&c))).collect();
+    let mut channels: Vec<Vec<f32>> =
+        wanted.iter().map(|&w| if w { Vec::with_capacity(frames) } else { Vec::new() }).collect();
     let per_block = ((1usize << 20) / frame).max(1);
     let mut buf = vec![0u8; per_block * frame];
     let mut left = frames;
@@ -246,8 +258,10 @@ fn read_frames(
         let block = &mut buf[..n * frame];
         r.read_exact(block).map_err(|e| DataError::io(path, e))?;
         for f in block.chunks_exact(frame) {
-            for (c, b) in channels.iter_mut().zip(f.chunks_exact(width)) {
-                c.push(enc.decode(b));
+            for ((c, b), w) in channels.iter_mut().zip(f.chunks_exact(width)).zip(&wanted) {
+                if *w {
+                    c.push(enc.decode(b));
+                }
             }
         }
         left -= n;

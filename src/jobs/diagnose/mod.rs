@@ -162,7 +162,11 @@ pub struct Geometry {
 /// # Errors
 /// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
 pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
-    let rec = io::read_recording(path)?;
+    // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
+    // needs the memory of those channels alone)
+    let keep: Option<Vec<usize>> =
+        o.channel.map(|c| std::iter::once(c).chain(o.tacho_channel).map(|c| c.saturating_sub(1)).collect());
+    let rec = io::read_recording_channels(path, keep.as_deref())?;
     analyse(path, rec, o, geometry)
 }
 
@@ -244,11 +248,6 @@ fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<Option<f64>,
 
 fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
     let nch = rec.channels.len();
-    let n = rec.channels.first().map_or(0, Vec::len);
-    if nch == 0 || n < 2 {
-        return Err(bad(path, format!("{n} sample(s): far too short to analyse")));
-    }
-    let fs = sample_rate(path, &rec, o)?;
     let check_index = |role: ChannelRole, c: usize| -> Result<usize, Error> {
         if c == 0 || c > nch {
             Err(JobError::Channel { file: path.display().to_string(), role, index: c, count: nch }.into())
@@ -262,6 +261,11 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         // channels named as tachometers (gearvib's sidecar) are never vibration channels
         None => (1..=nch).filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho")).collect(),
     };
+    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    if nch == 0 || n < 2 {
+        return Err(bad(path, format!("{n} sample(s): far too short to analyse")));
+    }
+    let fs = sample_rate(path, &rec, o)?;
     if channels.is_empty() {
         return Err(bad(path, "no channel left to analyse besides the tachometer"));
     }
