@@ -308,13 +308,18 @@ pub fn solve(
         let next_h = ((h as f64 * growth).ceil() as usize).max(h + 1);
         let next = solve_order(form, next_h)?;
         let change = difference(&prev, &next);
-        // spectral convergence is geometric: the larger H's error is about change * (change / last change);
-        // ten times that is the estimate, and the plain change when no rate is known yet
+        // spectral convergence is geometric with a rate r = change / last change per growth step: the larger
+        // H's error is about change r / (1 - r); three times that is the estimate. Without a rate yet (the
+        // first change) nothing is accepted: the plain change bounds the smaller H, and would overstate the
+        // larger one's error by orders of magnitude.
         let est = match last_change {
-            Some(c) if change < c => (10.0 * change * change / c).min(change),
+            Some(c) if change < c => {
+                let r = change / c;
+                (3.0 * change * r / (1.0 - r)).min(change)
+            }
             _ => change,
         };
-        if est <= tolerance {
+        if est <= tolerance && last_change.is_some() {
             return Ok((next, est));
         }
         last_change = Some(change);
