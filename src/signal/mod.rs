@@ -86,4 +86,30 @@ impl Spectrum {
         let hi = self.freqs_hz.partition_point(|&f| f <= f_hz + width_hz.max(df));
         (lo..hi).map(|i| (self.freqs_hz[i], self.values[i])).max_by(|a, b| a.1.total_cmp(&b.1))
     }
+
+    /// The sinusoid within `width_hz` of `f_hz` of a Hann-windowed amplitude spectrum, corrected for
+    /// scalloping: from the peak bin k and its larger neighbour, alpha = A(k +- 1) / A(k) gives the offset
+    /// delta = (2 alpha - 1) / (alpha + 1) bins (exact for the Hann main lobe), and the amplitude is
+    /// A(k) / W(delta) with W(d) = sinc(d) / (1 - d^2), the window's normalised response (a line midway
+    /// between bins otherwise reads 0.85 of its amplitude). Returns (frequency in Hz, amplitude).
+    pub fn hann_line_near(&self, f_hz: f64, width_hz: f64) -> Option<(f64, f64)> {
+        let df = self.freqs_hz.get(1).map_or(1.0, |f1| f1 - self.freqs_hz[0]);
+        let lo = self.freqs_hz.partition_point(|&f| f < f_hz - width_hz.max(df));
+        let hi = self.freqs_hz.partition_point(|&f| f <= f_hz + width_hz.max(df));
+        let k = (lo..hi).max_by(|&a, &b| self.values[a].total_cmp(&self.values[b]))?;
+        let a = self.values[k];
+        if k == 0 || k + 1 >= self.values.len() || a <= 0.0 {
+            return Some((self.freqs_hz[k], a));
+        }
+        let (left, right) = (self.values[k - 1], self.values[k + 1]);
+        let (alpha, sign) = if right >= left { (right / a, 1.0) } else { (left / a, -1.0) };
+        let delta = ((2.0 * alpha - 1.0) / (alpha + 1.0)).clamp(0.0, 0.5);
+        let response = if delta == 0.0 {
+            1.0
+        } else {
+            let x = std::f64::consts::PI * delta;
+            x.sin() / x / (1.0 - delta * delta)
+        };
+        Some((self.freqs_hz[k] + sign * delta * df, a / response))
+    }
 }

@@ -480,7 +480,7 @@ fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(Shaft, f64)]) -> Vec
                     // within 1.5 bins only: a line of the other shaft can sit a few Hz away (3 f2 = 32.3 Hz
                     // against f1 = 30 Hz for 14/39 teeth) and must not be taken for this one
                     let df = s.freqs_hz.get(1).copied().unwrap_or(1.0);
-                    let (ff, a) = s.peak_near(f, 1.5 * df)?;
+                    let (ff, a) = s.hann_line_near(f, 1.5 * df)?;
                     Some((Some(ff), a))
                 }
                 _ => {
