@@ -246,3 +246,19 @@ fn rectangular_stiffness_recording_matches_its_scene() {
     assert!(c["distance_db"].as_f64().unwrap() < 1.0, "{c}");
     assert!((c["scale_at_mesh"].as_f64().unwrap() - 1.0).abs() < 0.02, "{c}");
 }
+
+#[test]
+fn sidecar_tacho_is_used_and_pulse_channels_are_never_vibration() {
+    let rec = repo("data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav");
+    // no speed and no --tacho-channel: the sidecar's "tacho pinion" channel gives the speed
+    let run = gearvib(&["diagnose", &rec, "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(v["speed_source"], "tachometer");
+    assert_eq!(v["channels"], serde_json::json!([1]), "the wheel tacho is not analysed either");
+    // the unit comes from the sidecar (dq/dt in m/s)
+    assert_eq!(v["unit"], "m/s");
+    // a pulse channel asked for as vibration (once FAULTY from M6A = 135 on the pulses)
+    let run = gearvib(&["diagnose", &rec, "--channel", "2"]);
+    assert_one_line_error(&run, &["channel 2", "pulse train"]);
+}

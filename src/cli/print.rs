@@ -66,7 +66,8 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             keys.iter().map(|k| format!("{:>10.4}", g.indicators.get(*k).copied().unwrap_or(f64::NAN))).collect();
         writeln!(w, "  {:<10} {:>3} {vals}", g.gear.name().chars().take(10).collect::<String>(), g.channel)?;
     }
-    writeln!(w, "mesh harmonics (channel {}):", d.channels[0])?;
+    let unit = if d.unit.is_empty() { "unit of the file" } else { d.unit.as_str() };
+    writeln!(w, "mesh harmonics (channel {}, amplitudes in {unit}):", d.channels[0])?;
     for h in &d.mesh_harmonics {
         let f = h.frequency_hz.map_or("-".into(), |f| format!("{f:.2} Hz"));
         let mut sb = h.sidebands.iter().filter(|s| s.resolved).cloned().collect::<Vec<_>>();

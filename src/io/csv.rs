@@ -95,14 +95,14 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
         sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);
     }
     // channels are kept as f32 (see `Recording`); each f64 column is dropped as soon as it is converted
-    let (names, channels) = names
+    let (names, channels): (Vec<String>, Vec<Vec<f32>>) = names
         .into_iter()
         .zip(columns)
         .enumerate()
         .filter(|(i, _)| Some(*i) != time_col)
         .map(|(_, (name, col))| (name, col.into_iter().map(|v| v as f32).collect()))
         .unzip();
-    Ok(Recording { channels, sample_rate_hz, names })
+    Ok(Recording { units: vec![String::new(); channels.len()], channels, sample_rate_hz, names })
 }
 
 fn parse(f: &str, delim: char, buf: &mut String) -> Option<f64> {

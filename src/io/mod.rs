@@ -214,6 +214,8 @@ pub struct Recording {
     pub sample_rate_hz: Option<f64>,
     /// Channel names (CSV header or "ch1", ...).
     pub names: Vec<String>,
+    /// Physical unit of each channel when known (from gearvib's sidecar), else empty.
+    pub units: Vec<String>,
 }
 
 /// Reads a WAV or CSV file by its extension.
@@ -271,6 +273,8 @@ fn apply_sidecar(path: &Path, rec: &mut Recording) {
     for (name, c) in rec.names.iter_mut().zip(&side.channels) {
         name.clone_from(&c.name);
     }
+    rec.units = side.channels.iter().map(|c| c.unit.clone()).collect();
+    rec.units.resize(rec.names.len(), String::new());
 }
 
 /// Creates a directory (and its parents) for outputs.

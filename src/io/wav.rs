@@ -216,7 +216,12 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, D
                 let available = size.min(file_len.saturating_sub(pos));
                 let channels = read_frames(path, &mut r, available, nch, enc, keep)?;
                 let names = (1..=nch).map(|i| format!("ch{i}")).collect();
-                return Ok(Recording { channels, sample_rate_hz: Some(f64::from(rate)), names });
+                return Ok(Recording {
+                    channels,
+                    sample_rate_hz: Some(f64::from(rate)),
+                    units: vec![String::new(); nch],
+                    names,
+                });
             }
             _ => {
                 r.seek(SeekFrom::Current((size + (size & 1)) as i64)).map_err(|e| DataError::io(path, e))?;

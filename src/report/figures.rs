@@ -268,7 +268,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                 g.gear, g.revolutions
             ),
             x_label: format!("{} angle [deg]", g.gear),
-            y_label: "TSA [recording unit]".into(),
+            y_label: format!("TSA [{}]", unit_or(&d.unit)),
             series: vec![Series {
                 name: "TSA".into(),
                 points: t.iter().enumerate().map(|(i, v)| (360.0 * i as f64 / t.len() as f64, *v)).collect(),
@@ -336,7 +336,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         let chart = Chart {
             title: format!("{stem}: spectrum, channel {ch}; verdict {} ({})", d.verdict.state, d.verdict.gear),
             x_label: "frequency [Hz]".into(),
-            y_label: "amplitude [recording unit]".into(),
+            y_label: format!("amplitude [{}]", unit_or(&d.unit)),
             y_log: true,
             x_range: Some((0.0, max_f * 1.25)),
             y_range: Some((peak * 1e-5, peak * 10.0)),
@@ -366,6 +366,11 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     Ok(out)
+}
+
+/// The unit of a recording for axis labels: "unit of the file" when the file does not say.
+fn unit_or(unit: &str) -> &str {
+    if unit.is_empty() { "unit of the file" } else { unit }
 }
 
 /// Axis label of a swept scene field from its name's unit suffix: `gear_pair.speed_rpm` -> `speed [rpm]`.

@@ -164,10 +164,35 @@ pub struct Geometry {
 pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
     // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
     // needs the memory of those channels alone)
+    let sidecar_tacho = (o.tacho_channel.is_none() && o.shaft_hz.is_none())
+        .then(|| io::sidecar::read(path))
+        .flatten()
+        .and_then(|side| side.channels.iter().position(|c| c.name == PINION_TACHO).map(|i| i + 1));
+    let tacho = o.tacho_channel.or(sidecar_tacho);
     let keep: Option<Vec<usize>> =
-        o.channel.map(|c| std::iter::once(c).chain(o.tacho_channel).map(|c| c.saturating_sub(1)).collect());
+        o.channel.map(|c| std::iter::once(c).chain(tacho).map(|c| c.saturating_sub(1)).collect());
     let rec = io::read_recording_channels(path, keep.as_deref())?;
-    analyse(path, rec, o, geometry)
+    analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+}
+
+/// Name of the pinion's tachometer channel in gearvib's sidecar: used for the speed when no speed and no
+/// tachometer channel are given.
+pub const PINION_TACHO: &str = "tacho pinion";
+
+/// True when a channel holds at most two distinct levels over its first 200 000 samples: a tachometer
+/// pulse train, never a vibration signal.
+fn looks_like_pulses(x: &[f32]) -> bool {
+    let mut levels: Vec<u32> = Vec::with_capacity(3);
+    for v in x.iter().take(200_000) {
+        let b = v.to_bits();
+        if !levels.contains(&b) {
+            levels.push(b);
+            if levels.len() > 2 {
+                return false;
+            }
+        }
+    }
+    levels.len() == 2
 }
 
 fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>) -> Result<(), Error> {
@@ -256,10 +281,32 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         }
     };
     let tacho = o.tacho_channel.map(|c| check_index(ChannelRole::Tachometer, c)).transpose()?;
+    let mut warnings = Vec::new();
     let channels: Vec<usize> = match o.channel {
-        Some(c) => vec![check_index(ChannelRole::Vibration, c)?],
-        // channels named as tachometers (gearvib's sidecar) are never vibration channels
-        None => (1..=nch).filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho")).collect(),
+        Some(c) => {
+            let c = check_index(ChannelRole::Vibration, c)?;
+            if looks_like_pulses(&rec.channels[c - 1]) {
+                return Err(bad(
+                    path,
+                    format!(
+                        "channel {c} holds two levels only, a tachometer pulse train: it is not analysed as vibration"
+                    ),
+                ));
+            }
+            vec![c]
+        }
+        // channels named as tachometers (gearvib's sidecar) or holding two levels are never vibration
+        None => (1..=nch)
+            .filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho"))
+            .filter(|&c| {
+                let pulses = looks_like_pulses(&rec.channels[c - 1]);
+                if pulses {
+                    warnings
+                        .push(format!("channel {c} holds two levels only (a pulse train): not analysed as vibration"));
+                }
+                !pulses
+            })
+            .collect(),
     };
     let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
     if nch == 0 || n < 2 {
@@ -269,7 +316,6 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     if channels.is_empty() {
         return Err(bad(path, "no channel left to analyse besides the tachometer"));
     }
-    let mut warnings = Vec::new();
     let checks: Vec<Result<Vec<String>, Error>> = channels
         .par_iter()
         .map(|&c| {
@@ -389,6 +435,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         raw,
         verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
         comparison: None,
+        unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
         warnings,
         spectra,
     };

@@ -304,6 +304,8 @@ pub struct Diagnosis {
     /// Model comparison, with `--scene`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Comparison>,
+    /// Physical unit of the analysed signal (from the sidecar; empty when the file does not say).
+    pub unit: String,
     /// Warnings (clipping, estimated quantities).
     pub warnings: Vec<String>,
     /// Amplitude spectrum and Welch PSD per analysed channel (empty when the sample rate is unknown).
