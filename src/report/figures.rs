@@ -301,13 +301,15 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             style: Style::Line,
             color: 4,
         }];
-        // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured
+        // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured, and
+        // neither are sidebands under 3x the local noise floor: a marker on the floor would read as a detection
         let side = |shaft: Shaft| -> Vec<(f64, f64)> {
             d.mesh_harmonics
                 .iter()
                 .flat_map(|h| h.sidebands.iter())
                 .filter(|s| s.shaft == shaft && s.resolved)
                 .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
+                .filter(|&(f, a)| a > DETECTION_OVER_FLOOR * noise_floor(amp, f))
                 .collect()
         };
         let shafts = match d.shaft_hz {
@@ -318,7 +320,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             let pts = side(shaft);
             if !pts.is_empty() {
                 series.push(Series {
-                    name: format!("{shaft} sidebands (+-1..3 {shaft} orders, resolved only)"),
+                    name: format!("{shaft} sidebands +-1..3 (detected)"),
                     points: pts,
                     style: Style::Points,
                     color: 1 + i,
@@ -366,6 +368,25 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     Ok(out)
+}
+
+/// A sideband is drawn as detected only above this multiple of the local noise floor (about 10 dB).
+const DETECTION_OVER_FLOOR: f64 = 3.0;
+
+/// Median of the amplitude spectrum within 40 bins of `f_hz`, leaving out the 4 bins nearest to it: the
+/// local noise floor (lines are sparse, so the median sits on the floor between them).
+fn noise_floor(s: &crate::signal::Spectrum, f_hz: f64) -> f64 {
+    let df = s.freqs_hz.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    let k = (f_hz / df).round() as isize;
+    let mut v: Vec<f64> = (k - 40..=k + 40)
+        .filter(|i| (i - k).abs() > 4 && *i >= 0 && (*i as usize) < s.values.len())
+        .map(|i| s.values[i as usize])
+        .collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 /// The unit of a recording for axis labels: "unit of the file" when the file does not say.
