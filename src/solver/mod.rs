@@ -70,7 +70,8 @@ impl Method {
 pub struct SolverOptions {
     /// Method.
     pub method: Method,
-    /// Relative accuracy asked of the multipliers and the periodic solution.
+    /// Accuracy asked of the periodic solution (relative to its largest value in the balanced state) and of
+    /// the monodromy matrix and multipliers (relative to max(|Phi|, 1): against the unit circle).
     pub tolerance: f64,
     /// Fixed step count for a step-based method.
     pub steps: Option<usize>,
