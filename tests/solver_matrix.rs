@@ -1,6 +1,6 @@
 //! Every solver on the gear scenes at two tolerances, against a converged reference from a different
 //! method at a much tighter tolerance: the result within the tolerance, the estimate honest (it bounds the
-//! true error and, for the step-based methods, overstates it by at most 30x), no refusal. Errors are
+//! true error and, for the step-based methods, overstates it by at most 50x), no refusal. Errors are
 //! measured on the balanced state over 256 times of the period.
 
 mod common;
@@ -26,13 +26,27 @@ fn error(a: &[f64], reference: &[f64], d: &[f64]) -> f64 {
 
 #[test]
 fn every_solver_on_the_gear_scenes() {
-    for name in [
-        "paper-gear-fig8a",
-        "hard-gear-light-damping",
-        "gear-z14z39-rectangular-stiffness",
-        "gear-z14z39-cracked-pinion-tooth3",
-    ] {
-        let scene = Scene::load(&repo(&format!("data/scenes/{name}.json"))).unwrap();
+    // (scene, speed and damping ratio overrides): the mesh at twice the natural frequency (principal
+    // parametric resonance, 7451 rpm) is stable with zeta 0.024 and inside the first tongue with 0.002
+    let cases: [(&str, Option<(f64, f64)>); 6] = [
+        ("paper-gear-fig8a", None),
+        ("hard-gear-light-damping", None),
+        ("gear-z14z39-rectangular-stiffness", None),
+        ("gear-z14z39-cracked-pinion-tooth3", None),
+        ("hard-gear-light-damping", Some((7451.0, 0.024))),
+        ("hard-gear-light-damping", Some((7451.0, 0.002))),
+    ];
+    for (file, edit) in cases {
+        let mut v = read_json(&repo(&format!("data/scenes/{file}.json")));
+        if let Some((rpm, zeta)) = edit {
+            v["gear_pair"]["speed_rpm"] = rpm.into();
+            v["gear_pair"]["damping_ratio"] = zeta.into();
+        }
+        let name = match edit {
+            Some((_, z)) => format!("{file} at 2 w0, zeta {z}"),
+            None => file.to_string(),
+        };
+        let scene = Scene::from_value(v, &name).unwrap();
         let sys = scene.system();
         let d = state_scales(sys);
         let smooth = sys.fourier_form().is_some();
@@ -49,6 +63,9 @@ fn every_solver_on_the_gear_scenes() {
                 let s = solve(sys, &SolverOptions { method, tolerance: tol, ..Default::default() })
                     .unwrap_or_else(|e| panic!("{name} {method:?} {tol:e}: {e}"));
                 assert!(s.trusted, "{name} {method:?} {tol:e}: {:?}", s.warnings);
+                if let Some((_, zeta)) = edit {
+                    assert_eq!(s.floquet.stable, zeta > 0.01, "{name}: |rho|max {}", s.floquet.rho_max);
+                }
                 let err = error(&states(sys, &s), &want, &d);
                 eprintln!("{name:<36} {method:?} {tol:e}: true {err:.2e}, estimate {:.2e}", s.error_estimate);
                 // within the tolerance (10x: the estimate is asymptotic)
@@ -56,10 +73,22 @@ fn every_solver_on_the_gear_scenes() {
                 // honest: the estimate bounds the true error (the reference's own error, 1e-11, is the floor
                 // of what can be measured)
                 assert!(
-                    err <= 3.0 * s.error_estimate.max(1e-11),
+                    err <= s.error_estimate.max(1e-11),
                     "{name} {method:?} {tol:e}: {err:e} vs {:e}",
                     s.error_estimate
                 );
+                // and not far above it for the step-based methods, whose estimate is of the state itself
+                // (harmonic balance's estimate also covers the multipliers from its rk4 companion, which
+                // dominate at 1e-8 while its state is exact to 1e-12). Measured: 2-17x, and 35-36x for rk4
+                // inside the first tongue (zeta 0.002), where the monodromy's change dominates the state's;
+                // 50x is the bound tested (the goal of 30x is not met there)
+                if method != Method::Hill {
+                    assert!(
+                        s.error_estimate <= 50.0 * err.max(1e-11),
+                        "{name} {method:?} {tol:e}: estimate {:e} vs {err:e}",
+                        s.error_estimate
+                    );
+                }
             }
         }
     }
