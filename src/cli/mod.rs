@@ -136,8 +136,21 @@ fn list(files: &[PathBuf]) -> String {
     files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ")
 }
 
+/// Runs `work` under a spinner on a terminal (cleared when done): a long solve is never silent.
+fn with_spinner<T>(message: &str, work: impl FnOnce() -> T) -> T {
+    let pb = progress::spinner();
+    if let Some(pb) = &pb {
+        pb.set_message(message.to_string());
+    }
+    let out = work();
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    out
+}
+
 fn stability(out: &mut dyn Write, job: &jobs::simulate::StabilityJob, json: bool) -> Result<u8, Error> {
-    let done = jobs::simulate::stability(job)?;
+    let done = with_spinner("solving", || jobs::simulate::stability(job))?;
     warn_all(&done.summary.warnings);
     if json {
         json_line(out, &done.summary)?;
@@ -151,7 +164,7 @@ fn stability(out: &mut dyn Write, job: &jobs::simulate::StabilityJob, json: bool
 }
 
 fn simulate(out: &mut dyn Write, job: &jobs::simulate::SimulateJob, json: bool) -> Result<u8, Error> {
-    let done = jobs::simulate::run(job)?;
+    let done = with_spinner("solving and writing", || jobs::simulate::run(job))?;
     warn_all(&done.summary.stability.warnings);
     if let Some(info) = &done.signal {
         warn_all(&info.warnings);
@@ -254,7 +267,7 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
 
 fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
     let job = diagnose_job(a)?;
-    let done = jobs::diagnose::run(&job)?;
+    let done = with_spinner("diagnosing", || jobs::diagnose::run(&job))?;
     if !a.json && !done.report_files.is_empty() {
         writeln!(out, "report: {}", list(&done.report_files)).map_err(CliError::from)?;
     }
