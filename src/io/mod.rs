@@ -62,6 +62,12 @@ fn file_id(path: &Path) -> Option<FileId> {
 /// Every file this process has read as an input; outputs are checked against them.
 static INPUTS: std::sync::Mutex<Vec<(FileId, PathBuf)>> = std::sync::Mutex::new(Vec::new());
 
+/// Starts a new run: forgets the inputs of the previous one (a library user calling several jobs in one
+/// process may well write one job's output over an earlier job's input).
+pub fn begin_run() {
+    INPUTS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clear();
+}
+
 /// Records `path` as an input of this run: no output may then replace it (by name, symlink or hard link).
 pub fn register_input(path: &Path) {
     if let Some(id) = file_id(path) {

@@ -38,6 +38,7 @@ pub struct BenchOutcome {
 /// # Errors
 /// A scene cannot be loaded, a reference cannot be computed, or the report cannot be written.
 pub fn run(job: &BenchJob, progress: &dyn Fn(&str)) -> Result<BenchOutcome, Error> {
+    crate::io::begin_run();
     let paths: Vec<PathBuf> =
         if job.scenes.is_empty() { DEFAULT_SCENES.iter().map(PathBuf::from).collect() } else { job.scenes.clone() };
     let loaded = paths.iter().map(|p| Scene::load(&p.display().to_string())).collect::<Result<Vec<_>, _>>()?;

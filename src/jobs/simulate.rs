@@ -74,6 +74,7 @@ fn scene_error(scene: &Scene, e: impl std::fmt::Display) -> Error {
 /// # Errors
 /// Unreadable or invalid scene, a solver failure, an untrusted result, unwritable outputs.
 pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
+    crate::io::begin_run();
     let scene = Scene::load(&job.scene.display().to_string())?;
     if let Some(out) = &job.output {
         synth::check_request(&scene, out, job.allow_aliasing, &mut Vec::new())?;
@@ -117,6 +118,7 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
 /// # Errors
 /// Unreadable or invalid scene, a solver failure, an untrusted result, unwritable outputs.
 pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
+    crate::io::begin_run();
     let scene = Scene::load(&job.scene.display().to_string())?;
     let steady = solver::solve(scene.system(), &scene.solver).map_err(|e| scene_error(&scene, e))?;
     let summary = StabilitySummary::new(&scene, &steady);

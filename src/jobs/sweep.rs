@@ -41,6 +41,7 @@ pub struct SweepOutcome {
 /// # Errors
 /// Unreadable scene, unknown parameter, bad range, unwritable outputs.
 pub fn run(job: &SweepJob, progress: &Progress<'_>) -> Result<SweepOutcome, Error> {
+    crate::io::begin_run();
     let scene = Scene::load(&job.scene.display().to_string())?;
     let field = resolve(&scene, &job.param)?;
     let partial = match &job.report {

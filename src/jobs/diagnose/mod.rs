@@ -62,6 +62,7 @@ pub struct DiagnoseOutcome {
 /// # Errors
 /// Any recording, the baseline or the scene cannot be read or analysed; the report cannot be written.
 pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
+    crate::io::begin_run();
     let opts = &job.options;
     let baseline = job.baseline.as_deref().map(|b| diagnose(b, opts, None)).transpose()?;
     let geometry = baseline.as_ref().map(|b| Geometry {
