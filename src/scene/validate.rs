@@ -452,7 +452,7 @@ impl Validator<'_> {
             }
         })?;
         // modes that turn more than 1e6 times per period need more RK4 steps than any scene should ask for
-        let rate = crate::solver::max_rate(&sys);
+        let rate = crate::solver::rate_at(&sys, 4);
         let turns = rate * period / (2.0 * PI);
         if !turns.is_finite() || turns > 1e6 {
             let field = if rate.is_finite() && rate < 1e6 { "ltp.period_s" } else { "ltp.stiffness" };

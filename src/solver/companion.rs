@@ -1,7 +1,7 @@
 //! The homogeneous companion x' = P(t) x over the period of P(t) alone, whose monodromy (by RK4 with two
 //! Richardson eliminations) gives the Floquet multipliers for solvers that do not step in time.
 
-use super::{RK4_STABILITY_LIMIT, SolverError, SolverOptions, max_rate, rk4};
+use super::{RK4_STABILITY_LIMIT, SolverError, SolverOptions, rk4};
 use crate::system::{PeriodicSystem, Side};
 use nalgebra::{DMatrix, DVector};
 
@@ -45,11 +45,15 @@ pub(super) struct Companion {
     pub rate: f64,
 }
 
-pub(super) fn companion_monodromy(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<Companion, SolverError> {
+/// `rate` is the largest |eigenvalue| of P(t) (the companion has the same P).
+pub(super) fn companion_monodromy(
+    sys: &dyn PeriodicSystem,
+    opts: &SolverOptions,
+    rate: f64,
+) -> Result<Companion, SolverError> {
     let th = sys.homogeneous_period_s();
     let k = (sys.period_s() / th).round().max(1.0) as usize;
     let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
-    let rate = max_rate(&hom);
     let (phi_h, est, steps) = romberg_monodromy(&hom, rate, opts.tolerance / k as f64, opts.max_steps)?;
     let mut phi = DMatrix::identity(sys.dim(), sys.dim());
     for _ in 0..k {
@@ -60,7 +64,9 @@ pub(super) fn companion_monodromy(sys: &dyn PeriodicSystem, opts: &SolverOptions
 
 /// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
 /// h^4, h^5, ...): R1 = (16 Phi_2m - Phi_m) / 15 is fifth order, R2 = (32 R1(2m) - R1(m)) / 31 sixth order,
-/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate, relative to |Phi|, meets `tol`.
+/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate meets `tol`. Differences are taken
+/// on the balanced monodromy D^-1 Phi D (unit-free) relative to max(|Phi|, 1), as for the step-based
+/// solvers: multipliers matter against the unit circle.
 fn romberg_monodromy(
     sys: &dyn PeriodicSystem,
     rate: f64,
@@ -71,6 +77,10 @@ fn romberg_monodromy(
     let breaks = sys.breakpoints();
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
+    // entry (i, j) of the balanced D^-1 Phi D is Phi_ij d_j / d_i
+    let d = super::steady::state_scales(sys);
+    let n = d.len();
+    let scales = DMatrix::from_fn(n, n, |i, j| d[j] / d[i]);
     let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {
         let r = rk4::monodromy(sys, &rk4::Grid::new(period, &breaks, steps));
         if r.monodromy.iter().any(|v| !v.is_finite()) {
@@ -87,12 +97,13 @@ fn romberg_monodromy(
         let r1a = (&b * 16.0 - &a) / 15.0;
         let r1b = (&c * 16.0 - &b) / 15.0;
         let r2 = (&r1b * 32.0 - &r1a) / 31.0;
-        let scale = r2.amax().max(f64::MIN_POSITIVE);
+        let balanced = |x: &DMatrix<f64>| x.component_mul(&scales);
+        let scale = balanced(&r2).amax().max(1.0);
         // sixth order: the error of R2(m) is about |R2(m) - R2(m/2)| / (2^6 - 1); before a second R2 exists,
         // the fifth-order |R2 - R1(2m)| bounds it
         let est = match &previous {
-            Some(p) => (&r2 - p).amax() / scale / 63.0,
-            None => (&r2 - &r1b).amax() / scale,
+            Some(p) => balanced(&(&r2 - p)).amax() / scale / 63.0,
+            None => balanced(&(&r2 - &r1b)).amax() / scale,
         };
         if est <= tol {
             return Ok((r2, est, total));

@@ -89,10 +89,17 @@ impl Default for SolverOptions {
 
 /// Largest |eigenvalue| of P(t) over 32 times per period and both sides of every breakpoint, in 1/s.
 pub fn max_rate(sys: &dyn PeriodicSystem) -> f64 {
+    rate_at(sys, 32)
+}
+
+/// Largest |eigenvalue| of P(t) over `samples` times per period and both sides of every breakpoint, 1/s
+/// (a quick plausibility check can take a few samples; the solvers take 32).
+pub fn rate_at(sys: &dyn PeriodicSystem, samples: usize) -> f64 {
     let n = sys.dim();
     let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
     let t_end = sys.period_s();
-    let mut times: Vec<(f64, Side)> = (0..32).map(|i| (t_end * i as f64 / 32.0, Side::Right)).collect();
+    let mut times: Vec<(f64, Side)> =
+        (0..samples.max(1)).map(|i| (t_end * i as f64 / samples.max(1) as f64, Side::Right)).collect();
     for b in sys.breakpoints() {
         times.push((b, Side::Left));
         times.push((b, Side::Right));
@@ -110,17 +117,19 @@ pub fn max_rate(sys: &dyn PeriodicSystem) -> f64 {
 /// estimated above it is refused with the estimate, or (for `auto`) handed to a cheaper method.
 pub const WORK_BUDGET_FLOPS: f64 = 1e10;
 
-/// Estimated work of harmonic balance (see [`hill::work_estimate`]); infinite without a Fourier form.
-pub fn hill_work(sys: &dyn PeriodicSystem) -> f64 {
-    sys.fourier_form().map_or(f64::INFINITY, |f| hill::work_estimate(&f, sys.max_harmonic()))
+/// Estimated work of harmonic balance (see [`hill::work_estimate`]) on `form` (the system's Fourier form);
+/// infinite without one.
+pub fn hill_work(sys: &dyn PeriodicSystem, form: Option<&crate::system::FourierForm>) -> f64 {
+    form.map_or(f64::INFINITY, |f| hill::work_estimate(f, sys.max_harmonic()))
 }
 
 /// Estimated work of the step-based tolerance loop: at least 4 K steps (and twice the explicit stability
 /// limit), two grids per attempt, about three attempts, three evaluations of `eval_terms` per step plus
 /// the block product n^2 (n + 1).
-pub fn step_work(sys: &dyn PeriodicSystem) -> f64 {
+/// `rate` is [`max_rate`] of `sys` (1/s).
+pub fn step_work(sys: &dyn PeriodicSystem, rate: f64) -> f64 {
     let n = sys.dim() as f64;
-    let limit = sys.period_s() * max_rate(sys) / RK4_STABILITY_LIMIT;
+    let limit = sys.period_s() * rate / RK4_STABILITY_LIMIT;
     let steps = (4.0 * sys.max_harmonic() as f64).max(2.0 * limit).max(64.0);
     let per_step = 3.0 * (4.0 * sys.eval_terms() as f64 + n * n * (n + 1.0) * 2.0);
     steps * 6.0 * 3.0 * per_step
@@ -140,8 +149,8 @@ fn too_much(what: &str, flops: f64) -> SolverError {
 ///
 /// # Errors
 /// [`SolverError::TooMuchWork`] or [`SolverError::NonFinite`].
-pub fn check_work(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<(), SolverError> {
-    let rate = max_rate(sys);
+/// `rate` is [`max_rate`] of `sys` (1/s).
+pub fn check_work(sys: &dyn PeriodicSystem, opts: &SolverOptions, rate: f64) -> Result<(), SolverError> {
     if !rate.is_finite() {
         return Err(SolverError::NonFinite { what: "coefficients of the system (P(t))".into() });
     }
@@ -162,8 +171,12 @@ pub const RK4_STABILITY_LIMIT: f64 = 2.78;
 /// [`SolverError`] when the monodromy is non-finite, its eigenvalues fail, I - Phi is exactly singular,
 /// or the tolerance cannot be reached within `max_steps`.
 pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadyState, SolverError> {
-    check_work(sys, opts)?;
-    let (hill_cost, step_cost) = (hill_work(sys), step_work(sys));
+    // the largest rate of P(t) (32 eigenvalue problems) is computed once and handed on
+    let rate = max_rate(sys);
+    check_work(sys, opts, rate)?;
+    // the Fourier form (series products: the costliest set-up of a long period) is built once too
+    let form = sys.fourier_form();
+    let (hill_cost, step_cost) = (hill_work(sys, form.as_ref()), step_work(sys, rate));
     let free = opts.steps.is_none() && opts.harmonics.is_none();
     match opts.method {
         Method::Hill if free && hill_cost.is_finite() && hill_cost > WORK_BUDGET_FLOPS => {
@@ -178,43 +191,50 @@ pub fn solve(sys: &dyn PeriodicSystem, opts: &SolverOptions) -> Result<SteadySta
         _ => {}
     }
     match opts.method {
-        Method::Rk4 => solve_rk4(sys, opts, "requested"),
-        Method::Hill => hill::solve_steady(sys, opts, "requested".into()),
-        Method::Magnus => solve_steps(sys, opts, "requested", rk4::Scheme::Magnus4),
-        Method::Auto => match sys.fourier_form() {
+        Method::Rk4 => solve_rk4(sys, opts, "requested", rate),
+        Method::Hill => hill::solve_steady(sys, form, opts, "requested".into(), rate),
+        Method::Magnus => solve_steps(sys, opts, "requested", rk4::Scheme::Magnus4, rate),
+        Method::Auto => match form {
             Some(_) if opts.steps.is_none() && hill_cost > WORK_BUDGET_FLOPS => solve_rk4(
                 sys,
                 opts,
                 "auto: harmonic balance would exceed the work budget with this many coefficient harmonics, so the rk4 product",
+                rate,
             ),
-            Some(_) if opts.steps.is_none() => hill::solve_steady(
+            Some(f) if opts.steps.is_none() => hill::solve_steady(
                 sys,
+                Some(f),
                 opts,
                 "auto: smooth Fourier coefficients, so harmonic balance is spectrally accurate and needs no time steps"
                     .into(),
+                rate,
             ),
-            Some(_) => solve_rk4(sys, opts, "auto: solver.steps fixes a step count, so the step-based rk4 product"),
+            Some(_) => {
+                solve_rk4(sys, opts, "auto: solver.steps fixes a step count, so the step-based rk4 product", rate)
+            }
             None if sys.piecewise_constant() && opts.steps.is_none() => solve_steps(
                 sys,
                 opts,
                 "auto: coefficients are piecewise constant, so magnus4 (exact exponentials) with one step per piece is exact",
                 rk4::Scheme::Magnus4,
+                rate,
             ),
             None => {
                 // stiff when the explicit stability limit alone asks for far more steps than the coefficients'
                 // resolution: then the A-stable Magnus scheme, else the cheaper rk4 product
-                let limit = sys.period_s() * max_rate(sys) / RK4_STABILITY_LIMIT;
+                let limit = sys.period_s() * rate / RK4_STABILITY_LIMIT;
                 let resolution = (16 * sys.max_harmonic()).max(16 * (sys.breakpoints().len() + 1)) as f64;
                 if limit > 8.0 * resolution {
                     let why = format!(
                         "auto: coefficients jump and the system is stiff (rk4 needs {limit:.0} steps for stability alone): A-stable magnus4 with steps on the jumps"
                     );
-                    solve_steps(sys, opts, &why, rk4::Scheme::Magnus4)
+                    solve_steps(sys, opts, &why, rk4::Scheme::Magnus4, rate)
                 } else {
                     solve_rk4(
                         sys,
                         opts,
                         "auto: coefficients jump, so the rk4 product with steps on the jumps (harmonic balance would converge only algebraically)",
+                        rate,
                     )
                 }
             }

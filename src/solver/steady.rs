@@ -3,7 +3,7 @@
 //! |x_m - x_2m| / 15).
 
 use super::floquet::{Floquet, condition_number, floquet_warnings};
-use super::{Method, RK4_STABILITY_LIMIT, SolverError, SolverOptions, hill, max_rate, rk4};
+use super::{Method, RK4_STABILITY_LIMIT, SolverError, SolverOptions, hill, rk4};
 use crate::system::PeriodicSystem;
 use nalgebra::{DMatrix, DVector};
 
@@ -156,8 +156,9 @@ pub(super) fn solve_rk4(
     sys: &dyn PeriodicSystem,
     opts: &SolverOptions,
     reason: &str,
+    rate: f64,
 ) -> Result<SteadyState, SolverError> {
-    solve_steps(sys, opts, reason, rk4::Scheme::Rk4)
+    solve_steps(sys, opts, reason, rk4::Scheme::Rk4, rate)
 }
 
 pub(super) fn solve_steps(
@@ -165,11 +166,11 @@ pub(super) fn solve_steps(
     opts: &SolverOptions,
     reason: &str,
     scheme: rk4::Scheme,
+    rate: f64,
 ) -> Result<SteadyState, SolverError> {
     let period = sys.period_s();
     let breaks = sys.breakpoints();
     let d = state_scales(sys);
-    let rate = max_rate(sys);
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut warnings = Vec::new();
     let (grid, fine, estimate) = if let Some(steps) = opts.steps {
