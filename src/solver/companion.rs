@@ -41,25 +41,25 @@ pub(super) struct Companion {
     pub error: f64,
     /// RK4 steps taken in all.
     pub steps: usize,
-    /// Largest |eigenvalue| of P(t), 1/s (computed once here, reused by the caller).
-    pub rate: f64,
 }
 
-/// `rate` is the largest |eigenvalue| of P(t) (the companion has the same P).
+/// `rate` is the largest |eigenvalue| of P(t) and `d` the state scales of `sys`
+/// ([`state_scales`](super::steady::state_scales)): the companion has the same P, so both carry over.
 pub(super) fn companion_monodromy(
     sys: &dyn PeriodicSystem,
     opts: &SolverOptions,
     rate: f64,
+    d: &[f64],
 ) -> Result<Companion, SolverError> {
     let th = sys.homogeneous_period_s();
     let k = (sys.period_s() / th).round().max(1.0) as usize;
     let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
-    let (phi_h, est, steps) = romberg_monodromy(&hom, rate, opts.tolerance / k as f64, opts.max_steps)?;
+    let (phi_h, est, steps) = romberg_monodromy(&hom, rate, d, opts.tolerance / k as f64, opts.max_steps)?;
     let mut phi = DMatrix::identity(sys.dim(), sys.dim());
     for _ in 0..k {
         phi = &phi_h * phi;
     }
-    Ok(Companion { monodromy: phi, error: est * k as f64, steps, rate })
+    Ok(Companion { monodromy: phi, error: est * k as f64, steps })
 }
 
 /// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
@@ -70,6 +70,7 @@ pub(super) fn companion_monodromy(
 fn romberg_monodromy(
     sys: &dyn PeriodicSystem,
     rate: f64,
+    d: &[f64],
     tol: f64,
     max_steps: usize,
 ) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
@@ -78,7 +79,6 @@ fn romberg_monodromy(
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
     // entry (i, j) of the balanced D^-1 Phi D is Phi_ij d_j / d_i
-    let d = super::steady::state_scales(sys);
     let n = d.len();
     let scales = DMatrix::from_fn(n, n, |i, j| d[j] / d[i]);
     let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {

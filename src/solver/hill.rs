@@ -381,13 +381,14 @@ pub(super) fn solve_steady(
         }
         None => solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?,
     };
-    let companion = companion_monodromy(sys, opts, rate)?;
+    let d = super::steady::state_scales(sys);
+    let companion = companion_monodromy(sys, opts, rate, &d)?;
     let (monodromy, phi_err, companion_steps) = (companion.monodromy, companion.error, companion.steps);
     let period = sys.period_s();
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &monodromy;
-    let cond = super::steady::scaled_condition(&a, &super::steady::state_scales(sys));
+    let cond = super::steady::scaled_condition(&a, &d);
     let mut x0 = DVector::zeros(n);
     sol.state(0.0, x0.as_mut_slice());
     let mut warnings = Vec::new();
@@ -406,7 +407,7 @@ pub(super) fn solve_steady(
     }
     let mut floquet = floquet;
     floquet_warnings(&mut floquet, opts.tolerance.max(phi_err), phi_err, &mut warnings);
-    let limit = (period * companion.rate / RK4_STABILITY_LIMIT).ceil() as usize;
+    let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     Ok(SteadyState {
         method: Method::Hill,
         reason: format!(
