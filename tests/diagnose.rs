@@ -260,5 +260,8 @@ fn sidecar_tacho_is_used_and_pulse_channels_are_never_vibration() {
     assert_eq!(v["unit"], "m/s");
     // a pulse channel asked for as vibration (once FAULTY from M6A = 135 on the pulses)
     let run = gearvib(&["diagnose", &rec, "--channel", "2"]);
-    assert_one_line_error(&run, &["channel 2", "pulse train"]);
+    assert_one_line_error(&run, &["channel 2", "tachometer"]);
+    // the wheel's pulse channel (not the sidecar's pinion tacho) is recognised by its two levels
+    let run = gearvib(&["diagnose", &rec, "--channel", "3"]);
+    assert_one_line_error(&run, &["channel 3", "pulse train"]);
 }

@@ -114,9 +114,14 @@ pub struct DiagnoseArgs {
     /// Tachometer pulses per revolution.
     #[arg(long, default_value_t = 1)]
     pub pulses_per_rev: usize,
-    /// Healthy recording of the same machine to judge against.
-    #[arg(long)]
-    pub baseline: Option<String>,
+    /// Healthy recordings of the same machine to judge against (files or directories of .wav/.csv; the
+    /// flag may be repeated or take several paths). Their blocks of whole revolutions make the statistical
+    /// baseline.
+    #[arg(long, num_args = 1..)]
+    pub baseline: Vec<String>,
+    /// Revolutions per TSA block of the statistical baseline (and fewest revolutions any TSA needs).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(2..=10_000))]
+    pub block_revs: u64,
     /// Scene to simulate at the recording's speed and compare with.
     #[arg(long)]
     pub scene: Option<String>,

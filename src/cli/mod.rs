@@ -254,12 +254,13 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         tacho_channel: a.tacho_channel,
         pulses_per_rev: a.pulses_per_rev,
         quantity: a.quantity,
+        min_revolutions: a.block_revs as usize,
         ..Default::default()
     };
     Ok(jobs::diagnose::DiagnoseJob {
         recordings: a.recordings.iter().map(PathBuf::from).collect(),
         options,
-        baseline: a.baseline.as_ref().map(PathBuf::from),
+        baselines: a.baseline.iter().map(PathBuf::from).collect(),
         scene: a.scene.as_ref().map(PathBuf::from),
         report: a.report.as_ref().map(PathBuf::from),
     })

@@ -33,8 +33,8 @@ pub struct Sidecar {
     pub noise_rms: f64,
     /// Noise seed.
     pub seed: u64,
-    /// Speed fluctuation depth and frequency, if any.
-    pub speed_modulation: Option<[f64; 2]>,
+    /// The speed change the recording follows (`null` at constant speed).
+    pub speed_change: Option<String>,
     /// Base frequency of the orders in Hz (pinion rotation for the gear pair).
     pub base_hz: f64,
     /// Period of the steady state in s.

@@ -2,8 +2,9 @@
 //! optional slow speed fluctuation, white measurement noise and once-per-revolution tachometer channels.
 //!
 //! ```text
-//! speed(t) = nominal (1 + depth sin(2 pi f_m t))
-//! phase(t) = t + depth (1 - cos(2 pi f_m t)) / (2 pi f_m)      (s of nominal-speed time; angle / w_nominal)
+//! speed(t) = nominal s(t)                                       (s: relative speed, 1 when constant)
+//! phase(t) = integral of the relative speed from 0 to t        (s of nominal-speed time; angle / w_nominal;
+//!            see `scene::SpeedChange`: sinusoidal, random drift or ramp)
 //! y(t_n)   = steady-state output at phase(t_n) mod T              (quasi-static in the speed fluctuation)
 //! ```
 //! For smooth systems with a linear output the periodic output is tabulated once (values and exact time
@@ -159,7 +160,7 @@ pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: 
     crate::io::check_output(out)?;
     crate::io::check_output(&crate::io::sidecar::path_of(out))?;
     let o = &scene.output;
-    let highest = o.max_order * o.base_hz * (1.0 + o.speed_modulation.map_or(0.0, |m| m.depth));
+    let highest = o.max_order * o.base_hz * o.speed_change.map_or(1.0, |m| m.max_relative_speed());
     if o.sample_rate_hz < 2.0 * highest {
         let msg = format!(
             "field `output.sample_rate_hz`: {} Hz is below twice the highest line requested ({:.1} Hz = order {} of {:.3} Hz): the signal would alias",
@@ -268,13 +269,16 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
     const CHUNK: usize = 8192;
     let mut buf = Vec::with_capacity(CHUNK * nch);
     let mut times = Vec::with_capacity(CHUNK);
+    let angle_time = o
+        .speed_change
+        .map_or_else(|| Box::new(|t: f64| t) as Box<dyn Fn(f64) -> f64 + Send + Sync>, |c| c.angle_time(o.duration_s));
     let mut start = 0u64;
     while start < frames {
         let len = CHUNK.min((frames - start) as usize);
         times.clear();
         for i in 0..len {
             let t = (start + i as u64) as f64 / fs;
-            times.push(phase(t, o.speed_modulation.map(|m| (m.depth, m.frequency_hz))));
+            times.push(angle_time(t));
         }
         let values = match &eval {
             Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(wrap(tau, period))).collect(),
@@ -329,7 +333,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         clipped_samples: clipped,
         noise_rms: o.noise_rms,
         seed: o.seed,
-        speed_modulation: o.speed_modulation.map(|m| [m.depth, m.frequency_hz]),
+        speed_change: o.speed_change.map(|c| c.describe()),
         base_hz: o.base_hz,
         period_s: period,
         evaluation: eval.describe(),
@@ -353,17 +357,6 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
 fn wrap(x: f64, period: f64) -> f64 {
     let r = x - (x / period) as i64 as f64 * period;
     if r < 0.0 { r + period } else { r }
-}
-
-/// Nominal-speed time equivalent of the shaft angle at time t (see the module docs).
-pub fn phase(t: f64, modulation: Option<(f64, f64)>) -> f64 {
-    match modulation {
-        None => t,
-        Some((depth, fm)) => {
-            let w = 2.0 * std::f64::consts::PI * fm;
-            t + depth * (1.0 - (w * t).cos()) / w
-        }
-    }
 }
 
 fn nice_ceiling(x: f64) -> f64 {

@@ -57,13 +57,124 @@ pub enum Model {
     Ltp(SecondOrderSystem),
 }
 
-/// Slow sinusoidal speed fluctuation: speed(t) = nominal (1 + depth sin(2 pi f t)).
+/// A slow speed change over a written recording. Quasi-static: the waveform is the steady state at the
+/// nominal speed, and its shaft angle follows the speed, theta(t) = f0 tau(t) with tau(t) = integral of the
+/// relative speed s(u) from 0 to t (the "nominal-speed time equivalent").
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpeedModulation {
-    /// Relative depth (0.01 = 1 %).
-    pub depth: f64,
-    /// Modulation frequency in Hz.
-    pub frequency_hz: f64,
+pub enum SpeedChange {
+    /// s(t) = 1 + depth sin(2 pi f t).
+    Sinusoidal {
+        /// Relative depth (0.01 = 1 %).
+        depth: f64,
+        /// Modulation frequency, Hz.
+        frequency_hz: f64,
+    },
+    /// Smooth random drift: s(t) = 1 + sum over k = 1..=8 of a_k sin(2 pi k t / (8 T) + phi_k), amplitudes
+    /// and phases from `seed`, scaled so the largest |s - 1| over the recording is `ppm` 1e-6.
+    Drift {
+        /// Largest relative deviation, parts per million.
+        ppm: f64,
+        /// Slowest time scale T, s (the fastest component has period T).
+        time_scale_s: f64,
+        /// Seed of the amplitudes and phases.
+        seed: u64,
+    },
+    /// Linear change from `from` to `to` times the nominal speed over `duration_s` (a run-up or coast-down).
+    Ramp {
+        /// Relative speed at t = 0.
+        from: f64,
+        /// Relative speed at t = duration.
+        to: f64,
+        /// Duration of the recording, s.
+        duration_s: f64,
+    },
+}
+
+/// Components of [`SpeedChange::Drift`].
+const DRIFT_TERMS: usize = 8;
+
+impl SpeedChange {
+    /// Amplitudes (relative) and phases of the drift's sinusoids, and the slowest frequency, Hz.
+    fn drift_terms(ppm: f64, time_scale_s: f64, seed: u64, duration_s: f64) -> ([(f64, f64); DRIFT_TERMS], f64) {
+        // splitmix64: a fixed, documented generator (the recording must be reproducible from the seed)
+        let mut state = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut next = || {
+            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut terms = [(0.0, 0.0); DRIFT_TERMS];
+        for (k, t) in terms.iter_mut().enumerate() {
+            *t = ((next() - 0.5) / (k + 1) as f64, std::f64::consts::TAU * next());
+        }
+        let f1 = 1.0 / (DRIFT_TERMS as f64 * time_scale_s);
+        // scale to the largest deviation over the recording (sampled at 4096 points, enough for 8 slow terms)
+        let peak = (0..=4096)
+            .map(|i| {
+                let t = duration_s * i as f64 / 4096.0;
+                terms
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (a, p))| a * (std::f64::consts::TAU * (k + 1) as f64 * f1 * t + p).sin())
+                    .sum::<f64>()
+                    .abs()
+            })
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let scale = ppm * 1e-6 / peak;
+        terms.iter_mut().for_each(|t| t.0 *= scale);
+        (terms, f1)
+    }
+
+    /// The nominal-speed time equivalent tau(t) of a recording `duration_s` long, as a function of the time t
+    /// in s (the drift's terms computed once).
+    pub fn angle_time(&self, duration_s: f64) -> Box<dyn Fn(f64) -> f64 + Send + Sync> {
+        use std::f64::consts::TAU;
+        match *self {
+            Self::Sinusoidal { depth, frequency_hz } => {
+                let w = TAU * frequency_hz;
+                Box::new(move |t| t + depth * (1.0 - (w * t).cos()) / w)
+            }
+            Self::Drift { ppm, time_scale_s, seed } => {
+                let (terms, f1) = Self::drift_terms(ppm, time_scale_s, seed, duration_s);
+                Box::new(move |t| {
+                    t + terms
+                        .iter()
+                        .enumerate()
+                        .map(|(k, (a, p))| {
+                            let w = TAU * (k + 1) as f64 * f1;
+                            a * (p.cos() - (w * t + p).cos()) / w
+                        })
+                        .sum::<f64>()
+                })
+            }
+            Self::Ramp { from, to, duration_s: d } => Box::new(move |t| from * t + (to - from) * t * t / (2.0 * d)),
+        }
+    }
+
+    /// Largest relative speed reached (1.01 for +1 %).
+    pub fn max_relative_speed(&self) -> f64 {
+        match *self {
+            Self::Sinusoidal { depth, .. } => 1.0 + depth,
+            Self::Drift { ppm, .. } => 1.0 + ppm * 1e-6,
+            Self::Ramp { from, to, .. } => from.max(to),
+        }
+    }
+
+    /// One line for the sidecar.
+    pub fn describe(&self) -> String {
+        match *self {
+            Self::Sinusoidal { depth, frequency_hz } => {
+                format!("sinusoidal: speed x (1 + {depth} sin(2 pi {frequency_hz} Hz t))")
+            }
+            Self::Drift { ppm, time_scale_s, seed } => {
+                format!("random drift: at most {ppm} ppm, slowest time scale {time_scale_s} s, seed {seed}")
+            }
+            Self::Ramp { from, to, .. } => format!("linear ramp from {from} to {to} times the nominal speed"),
+        }
+    }
 }
 
 /// Sample format of a written WAV file.
@@ -97,8 +208,8 @@ pub struct OutputOptions {
     pub noise_rms: f64,
     /// Seed of the noise generator.
     pub seed: u64,
-    /// Optional speed fluctuation.
-    pub speed_modulation: Option<SpeedModulation>,
+    /// Optional speed change over the written recording.
+    pub speed_change: Option<SpeedChange>,
     /// Add once-per-revolution tachometer channels.
     pub tacho: bool,
     /// WAV sample format.

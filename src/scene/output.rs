@@ -3,7 +3,7 @@
 
 use super::raw::RawOutput;
 use super::validate::Validator;
-use super::{OutputOptions, SceneError, SpeedModulation, WavFormat};
+use super::{OutputOptions, SceneError, SpeedChange, WavFormat};
 use crate::model::{GearPair, MeshStiffness, OutputQuantity, PressParams, SecondOrderSystem};
 use crate::system::PeriodicSystem;
 use std::f64::consts::PI;
@@ -36,20 +36,7 @@ impl Validator<'_> {
             Some(d) => self.positive("output.duration_s", d)?,
             None => 1.0,
         };
-        let speed_modulation = match &o.speed_modulation {
-            None => None,
-            Some(m) => {
-                if !(m.depth.is_finite() && m.depth >= 0.0 && m.depth < 0.5) {
-                    return Err(
-                        self.err("output.speed_modulation.depth", format!("must be in [0, 0.5), got {}", m.depth))
-                    );
-                }
-                Some(SpeedModulation {
-                    depth: m.depth,
-                    frequency_hz: self.positive("output.speed_modulation.frequency_hz", m.frequency_hz)?,
-                })
-            }
-        };
+        let speed_change = self.speed_change(o, duration_s)?;
         let wav_format = o.wav_format.unwrap_or(WavFormat::F32);
         let full_scale = match o.full_scale {
             Some(x) => Some(self.positive("output.full_scale", x)?),
@@ -64,12 +51,46 @@ impl Validator<'_> {
             duration_s,
             noise_rms: self.non_negative("output.noise_rms", o.noise_rms.unwrap_or(0.0))?,
             seed: o.seed.unwrap_or(1),
-            speed_modulation,
+            speed_change,
             tacho: o.tacho.unwrap_or(false),
             wav_format,
             full_scale,
             sample_rate_given: o.sample_rate_hz.is_some(),
         })
+    }
+
+    /// The one speed change of `output` (sinusoidal modulation, random drift or ramp), validated.
+    fn speed_change(&self, o: &RawOutput, duration_s: f64) -> Result<Option<SpeedChange>, SceneError> {
+        let given = [o.speed_modulation.is_some(), o.speed_drift.is_some(), o.speed_ramp.is_some()];
+        if given.iter().filter(|g| **g).count() > 1 {
+            return Err(self.err(
+                "output.speed_modulation",
+                "give at most one of speed_modulation, speed_drift and speed_ramp".to_string(),
+            ));
+        }
+        if let Some(m) = &o.speed_modulation {
+            if !(m.depth.is_finite() && m.depth >= 0.0 && m.depth < 0.5) {
+                return Err(self.err("output.speed_modulation.depth", format!("must be in [0, 0.5), got {}", m.depth)));
+            }
+            let frequency_hz = self.positive("output.speed_modulation.frequency_hz", m.frequency_hz)?;
+            return Ok(Some(SpeedChange::Sinusoidal { depth: m.depth, frequency_hz }));
+        }
+        if let Some(d) = &o.speed_drift {
+            if !(d.ppm.is_finite() && d.ppm > 0.0 && d.ppm <= 2e5) {
+                return Err(self.err("output.speed_drift.ppm", format!("must be in (0, 200000], got {}", d.ppm)));
+            }
+            let time_scale_s = self.positive("output.speed_drift.time_scale_s", d.time_scale_s)?;
+            return Ok(Some(SpeedChange::Drift { ppm: d.ppm, time_scale_s, seed: o.seed.unwrap_or(1) }));
+        }
+        if let Some(r) = &o.speed_ramp {
+            for (field, v) in [("output.speed_ramp.from", r.from), ("output.speed_ramp.to", r.to)] {
+                if !(v.is_finite() && (0.1..=10.0).contains(&v)) {
+                    return Err(self.err(field, format!("must be a relative speed in [0.1, 10], got {v}")));
+                }
+            }
+            return Ok(Some(SpeedChange::Ramp { from: r.from, to: r.to, duration_s }));
+        }
+        Ok(None)
     }
 
     pub(super) fn gear_output(&self, o: &RawOutput, g: &GearPair) -> Result<OutputOptions, SceneError> {

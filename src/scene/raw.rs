@@ -81,6 +81,10 @@ pub(super) struct RawOutput {
     #[serde(default)]
     pub(super) speed_modulation: Option<RawSpeedModulation>,
     #[serde(default)]
+    pub(super) speed_drift: Option<RawSpeedDrift>,
+    #[serde(default)]
+    pub(super) speed_ramp: Option<RawSpeedRamp>,
+    #[serde(default)]
     pub(super) tacho: Option<bool>,
     #[serde(default)]
     pub(super) wav_format: Option<WavFormat>,
@@ -93,6 +97,20 @@ pub(super) struct RawOutput {
 pub(super) struct RawSpeedModulation {
     pub(super) depth: f64,
     pub(super) frequency_hz: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSpeedDrift {
+    pub(super) ppm: f64,
+    pub(super) time_scale_s: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawSpeedRamp {
+    pub(super) from: f64,
+    pub(super) to: f64,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -1,6 +1,7 @@
 //! Signals and their analysis: spectra, windows, TSA, indicators, sidebands, comparison.
 //! Knows nothing of ODEs or gears' equations of motion: it sees sample arrays, rates and orders.
 
+pub mod angle;
 pub mod indicators;
 pub mod spectrum;
 pub mod speed;

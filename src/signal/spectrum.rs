@@ -91,6 +91,36 @@ fn bin_scale(k: usize, n: usize) -> f64 {
     if k == 0 || (n % 2 == 0 && k == n / 2) { 1.0 } else { 2.0 }
 }
 
+/// Peak amplitude of the strongest sinusoid within +-`search` cycles per sample of `f` (cycles per
+/// sample) in the first 65536 samples of `x`: Hann-windowed DFT evaluated at 9 frequencies across the
+/// search range (the main lobe is 4 / N wide, so a line anywhere in the range is caught within its lobe;
+/// the amplitude reads low by up to the Hann scalloping, 15 %). For deciding which of a few candidate
+/// lines is present, not for measuring them.
+pub fn line_amplitude<T: Sample>(x: &[T], f: f64, search: f64) -> f64 {
+    let n = x.len().min(1 << 16);
+    if n < 8 {
+        return 0.0;
+    }
+    let w = hann(n);
+    let mean = x[..n].iter().map(|v| v.f()).sum::<f64>() / n as f64;
+    let gain = w.iter().sum::<f64>();
+    (-4..=4)
+        .map(|j| {
+            let fj = f + search * j as f64 / 4.0;
+            let (c, s) = ((std::f64::consts::TAU * fj).cos(), (std::f64::consts::TAU * fj).sin());
+            let (mut re, mut im) = (1.0, 0.0);
+            let (mut sr, mut si) = (0.0, 0.0);
+            for (v, wi) in x[..n].iter().zip(&w) {
+                let y = (v.f() - mean) * wi;
+                sr += y * re;
+                si -= y * im;
+                (re, im) = (re * c - im * s, re * s + im * c);
+            }
+            2.0 * sr.hypot(si) / gain
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Periodic Hann window of length n: w_i = 0.5 (1 - cos(2 pi i / n)).
 pub fn hann(n: usize) -> Vec<f64> {
     (0..n).map(|i| 0.5 * (1.0 - (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())).collect()

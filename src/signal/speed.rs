@@ -36,6 +36,9 @@ pub struct PeriodEstimate {
     pub period_samples: f64,
     /// Normalised autocorrelation at that lag (0..1): how strongly the signal repeats.
     pub confidence: f64,
+    /// The shorter lag that repeats strongly within the period (the tooth-mesh period, fractional samples),
+    /// when the period was found as a multiple of it: period / mesh lag is then the mesh order.
+    pub mesh_lag: Option<f64>,
 }
 
 /// Repetition period of the summed normalised autocorrelation of `channels`, between `min_lag` and
@@ -102,7 +105,8 @@ pub fn estimate_period<T: Sample>(
         }
         _ => shortest,
     };
-    Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0] })
+    let mesh_lag = (p0 != shortest).then(|| refine(&sum, shortest as f64));
+    Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0], mesh_lag })
 }
 
 /// Refines a period from the autocorrelation peaks near its multiples 2, 4, 8, ... (parabolic vertex).

@@ -32,6 +32,11 @@ impl AngleMap {
         Self { starts: pulses.iter().step_by(per_rev.max(1)).copied().collect(), constant: None }
     }
 
+    /// Revolution starts, fractional sample indices.
+    pub fn starts(&self) -> &[f64] {
+        &self.starts
+    }
+
     /// Whole revolutions covered.
     pub fn revolutions(&self) -> usize {
         self.starts.len().saturating_sub(1)
@@ -147,7 +152,7 @@ pub struct Tsa {
 /// # Errors
 /// [`SignalError::TooShort`] naming the revolutions needed.
 pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_revs: usize) -> Result<Tsa, SignalError> {
-    let revs = (map.revolutions() as f64 * ratio + 1e-9).floor() as usize;
+    let revs = revolutions_of(map, ratio);
     if revs < min_revs {
         let per_rev = map.mean_period_samples() / ratio;
         return Err(SignalError::TooShort {
@@ -162,15 +167,35 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
     if let Some((offset, period)) = map.constant {
         return Ok(Tsa { samples: tsa_constant(x, interp, offset, period / ratio, revs, points), revolutions: revs });
     }
+    Ok(Tsa { samples: tsa_of_revolutions(x, map, ratio, points, 0..revs), revolutions: revs })
+}
+
+/// Revolutions of the shaft turning `ratio` times per reference revolution that `map` covers whole.
+pub fn revolutions_of(map: &AngleMap, ratio: f64) -> usize {
+    (map.revolutions() as f64 * ratio + 1e-9).floor() as usize
+}
+
+/// Average of the revolutions `revs` (of the shaft turning `ratio` times per reference revolution), each
+/// resampled at `points` angles through `map`; the caller keeps `revs` within [`revolutions_of`].
+pub fn tsa_of_revolutions<T: Sample>(
+    x: &[T],
+    map: &AngleMap,
+    ratio: f64,
+    points: usize,
+    revs: std::ops::Range<usize>,
+) -> Vec<f64> {
+    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
+    let interp = TABLE.get_or_init(Interpolator::new);
+    let count = revs.len().max(1);
     let mut acc = vec![0.0; points];
-    for j in 0..revs {
+    for j in revs {
         for (i, a) in acc.iter_mut().enumerate() {
             let rev = (j as f64 + i as f64 / points as f64) / ratio;
             *a += interp.at(x, map.sample_at(rev));
         }
     }
-    acc.iter_mut().for_each(|a| *a /= revs as f64);
-    Ok(Tsa { samples: acc, revolutions: revs })
+    acc.iter_mut().for_each(|a| *a /= count as f64);
+    acc
 }
 
 /// Number of fractional-offset classes of [`tsa_constant`].

@@ -8,6 +8,7 @@
 //! amplitude spectrum around the first mesh harmonic. Raw-signal RMS and kurtosis are reported but never
 //! decide the verdict.
 
+mod baseline;
 mod compare;
 mod verdict;
 
@@ -19,13 +20,13 @@ use crate::Error;
 use crate::io::{self, Recording};
 use crate::model::Quantity;
 use crate::report::summary::{
-    Diagnosis, GearIndicators, MeshHarmonic, Shaft, ShaftHz, Sideband, SpeedSource, TeethSource, Verdict, VerdictGear,
-    VerdictState,
+    Diagnosis, GearIndicators, MeshHarmonic, Shaft, ShaftHz, Sideband, SpeedProfile, SpeedSource, TeethSource,
+    Tracking, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use crate::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
-use crate::signal::speed;
 use crate::signal::tsa::{self, AngleMap, Decomposition};
+use crate::signal::{angle, speed};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -38,8 +39,9 @@ pub struct DiagnoseJob {
     pub recordings: Vec<PathBuf>,
     /// Analysis options shared by all recordings and the baseline.
     pub options: Options,
-    /// Healthy recording of the same machine to judge against.
-    pub baseline: Option<PathBuf>,
+    /// Healthy recordings of the same machine (files, or directories whose .wav and .csv files are taken in
+    /// name order): the statistical baseline.
+    pub baselines: Vec<PathBuf>,
     /// Scene simulated at each recording's speed and compared with it.
     pub scene: Option<PathBuf>,
     /// Directory for the PNG images and the JSON of each recording.
@@ -64,19 +66,42 @@ pub struct DiagnoseOutcome {
 pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     crate::io::begin_run();
     let opts = &job.options;
-    let baseline = job.baseline.as_deref().map(|b| diagnose(b, opts, None)).transpose()?;
-    let geometry = baseline.as_ref().map(|b| Geometry {
+    let baseline_files = expand_dirs(&job.baselines)?;
+    // the first baseline fixes what was estimated (speed, mesh order); the others follow it
+    let first = baseline_files.first().map(|b| diagnose(b, opts, None)).transpose()?;
+    let geometry = first.as_ref().map(|b| Geometry {
         period_samples: (b.speed_source == SpeedSource::Estimated).then_some(b.shaft_period_samples),
         mesh_order: (b.teeth_source == TeethSource::Estimated).then_some(b.mesh_order),
     });
+    let mut baselines: Vec<Diagnosis> = first.into_iter().collect();
+    let rest: Vec<Result<Diagnosis, Error>> = baseline_files
+        .iter()
+        .skip(1)
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|b| diagnose(b, opts, geometry.as_ref()))
+        .collect();
+    for b in rest {
+        baselines.push(b?);
+    }
+    for b in baselines.iter().skip(1) {
+        compatibility(b, &baselines[0])?;
+    }
+    let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.min_revolutions)).transpose()?;
     let results: Vec<Result<Diagnosis, Error>> =
         job.recordings.par_iter().map(|r| diagnose(r, opts, geometry.as_ref())).collect();
     let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    if let Some(b) = baselines.first() {
+        for d in &mut done {
+            let warnings = compatibility(d, b)?;
+            d.warnings.extend(warnings);
+        }
+    }
     ensemble_na4(&mut done);
     let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
     let thresholds = Thresholds::default();
     for d in &mut done {
-        judge(d, baseline.as_ref(), &thresholds);
+        judge(d, reference.as_ref(), &thresholds);
         if let Some(s) = &scene {
             compare(d, s, opts.quantity)?;
         }
@@ -88,6 +113,100 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         }
     }
     Ok(DiagnoseOutcome { diagnoses: done, report_files })
+}
+
+/// Files of `paths`, directories replaced by their .wav and .csv files in name order.
+///
+/// # Errors
+/// A directory that cannot be read or holds no recording.
+fn expand_dirs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
+    let mut out = Vec::new();
+    for p in paths {
+        if !p.is_dir() {
+            out.push(p.clone());
+            continue;
+        }
+        let mut files: Vec<PathBuf> = std::fs::read_dir(p)
+            .map_err(|e| bad(p, format!("cannot read the directory: {e}")))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|f| {
+                f.extension()
+                    .and_then(|x| x.to_str())
+                    .is_some_and(|x| x.eq_ignore_ascii_case("wav") || x.eq_ignore_ascii_case("csv"))
+            })
+            .collect();
+        files.sort();
+        if files.is_empty() {
+            return Err(bad(p, "the directory holds no .wav or .csv recording"));
+        }
+        out.extend(files);
+    }
+    Ok(out)
+}
+
+/// Relative speed difference from the baseline beyond which a recording is refused: indicators change with
+/// speed (resonances move against the mesh orders), so a baseline at another speed is another machine state.
+pub const MAX_SPEED_DIFFERENCE: f64 = 0.10;
+/// Relative speed difference from the baseline that is warned about.
+pub const WARN_SPEED_DIFFERENCE: f64 = 0.03;
+
+/// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
+/// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
+/// [`WARN_SPEED_DIFFERENCE`]), sample rate and overall level (warned). Returns the warnings.
+///
+/// # Errors
+/// An incompatible baseline, naming both files and what differs.
+pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Vec<String>, Error> {
+    let refuse = |what: String| -> Error {
+        JobError::Value {
+            what: "baseline".into(),
+            message: format!("{} is not comparable with {}: {what}", b.file, d.file),
+        }
+        .into()
+    };
+    let mut warnings = Vec::new();
+    if !d.unit.is_empty() && !b.unit.is_empty() && d.unit != b.unit {
+        return Err(refuse(format!("it is in {} and the recording in {}", b.unit, d.unit)));
+    }
+    if let Some(c) = d.channels.iter().find(|c| !b.channels.contains(c)) {
+        return Err(refuse(format!(
+            "the recording's channel {c} is not among the baseline's analysed channels {:?}",
+            b.channels
+        )));
+    }
+    let speed = |x: &Diagnosis| x.speed_profile.mean_hz.unwrap_or(1.0 / x.shaft_period_samples);
+    let ratio = speed(d) / speed(b) - 1.0;
+    if ratio.abs() > MAX_SPEED_DIFFERENCE {
+        return Err(refuse(format!(
+            "its shaft speed differs by {:+.1} % (at most {} % is accepted: another operating point)",
+            -100.0 * ratio / (1.0 + ratio),
+            100.0 * MAX_SPEED_DIFFERENCE
+        )));
+    }
+    if ratio.abs() > WARN_SPEED_DIFFERENCE {
+        warnings.push(format!(
+            "the baseline's shaft speed differs by {:+.1} %: indicators that depend on speed may move",
+            100.0 * ratio
+        ));
+    }
+    if let (Some(fd), Some(fb)) = (d.sample_rate_hz, b.sample_rate_hz) {
+        if (fd / fb - 1.0).abs() > 1e-3 {
+            warnings.push(format!("the baseline was sampled at {fb} Hz and this recording at {fd} Hz: the orders are compared, the raw spectra differ"));
+        }
+    }
+    for (i, c) in d.channels.iter().enumerate() {
+        let j = b.channels.iter().position(|x| x == c);
+        let level = |x: &Diagnosis, k: usize| x.raw.get(k).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
+        if let Some(j) = j {
+            let r = level(d, i) / level(b, j);
+            if !(0.5..=2.0).contains(&r) {
+                warnings.push(format!(
+                    "channel {c}: the overall level is {r:.2} times the baseline's: the operating condition (load) may differ, and the indicators that scale with it move too"
+                ));
+            }
+        }
+    }
+    Ok(warnings)
 }
 
 /// Writes `DIR/<stem>-diagnosis.json` and the diagnosis images of `d`.
@@ -286,6 +405,14 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     let channels: Vec<usize> = match o.channel {
         Some(c) => {
             let c = check_index(ChannelRole::Vibration, c)?;
+            if Some(c) == tacho {
+                return Err(bad(
+                    path,
+                    format!(
+                        "channel {c} is the tachometer channel: it gives the speed and cannot also be analysed as vibration"
+                    ),
+                ));
+            }
             if looks_like_pulses(&rec.channels[c - 1]) {
                 return Err(bad(
                     path,
@@ -328,35 +455,36 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         warnings.extend(c?);
     }
     let mut fft = Fft::new();
-    // ---- speed
-    let (map, source, confidence) = if let Some(t) = tacho {
-        let pulses =
-            speed::tacho_pulses(&rec.channels[t - 1]).map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
-        (AngleMap::from_pulses(&pulses, o.pulses_per_rev.max(1)), SpeedSource::Tachometer, 1.0)
-    } else if let Some(hz) = o.shaft_hz {
-        let fs = fs
-            .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
-        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
-        (AngleMap::constant(fs / hz, 0.0, n), SpeedSource::Given, 1.0)
-    } else {
-        let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
-        let est = match geometry.and_then(|g| g.period_samples) {
-            Some(p) => speed::refine_near(&mut fft, &views, p, 0.03),
-            None => speed::estimate_period(&mut fft, &views, 16, n / o.min_revolutions.max(2)),
+    let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
+    let (source, confidence) = (nominal.source, nominal.confidence);
+    let nominal_mesh_from_lag = nominal.mesh_order.is_some();
+    let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
+    let (map, tracking, line_snr_db, tracked_z) = track(path, &rec, &channels, o, known_z, nominal.map, &mut warnings)?;
+    let profile = angle::SpeedProfile::of(&map);
+    if let (Some(hz), Some(fs), Tracking::MeshPhase) = (o.shaft_hz, fs, tracking) {
+        let off = profile.mean * fs / hz - 1.0;
+        if off.abs() > 0.01 {
+            warnings.push(format!(
+                "the given speed {hz:.4} Hz differs by {:+.2} % from the speed tracked on the mesh line ({:.4} Hz): the tracked speed is used; check the given speed",
+                100.0 * off,
+                profile.mean * fs
+            ));
         }
-        .map_err(|e| bad(path, e))?;
-        warnings.push(format!(
-            "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
-            est.period_samples, est.confidence
-        ));
-        (AngleMap::constant(est.period_samples, 0.0, n), SpeedSource::Estimated, est.confidence)
+    }
+    let speed_profile = SpeedProfile {
+        tracking,
+        mean_hz: fs.map(|f| f * profile.mean),
+        min_hz: fs.map(|f| f * profile.min),
+        max_hz: fs.map(|f| f * profile.max),
+        change_percent: 100.0 * profile.change,
+        line_snr_db,
     };
     let period = map.mean_period_samples();
-    let points = (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16);
+    let points = tsa_points(period);
     // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown)
     let gears: Vec<(Shaft, f64, Option<usize>)> = match o.teeth {
         Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
-        None => vec![(Shaft::Estimated, 1.0, geometry.and_then(|g| g.mesh_order))],
+        None => vec![(Shaft::Estimated, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
     // one TSA per channel and gear, in parallel
     let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
@@ -368,8 +496,23 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
                 .map_err(|e| bad(path, e))
         })
         .collect::<Result<Vec<_>, Error>>()?;
-    let mut teeth_source = if o.teeth.is_some() { TeethSource::Given } else { TeethSource::Baseline };
-    let mut gear_results = Vec::new();
+    let mut teeth_source = match (o.teeth, geometry.and_then(|g| g.mesh_order)) {
+        (Some(_), _) => TeethSource::Given,
+        (None, Some(_)) => TeethSource::Baseline,
+        (None, None) => TeethSource::Estimated,
+    };
+    if teeth_source == TeethSource::Estimated && tracked_z.is_some() {
+        warnings.push(format!(
+            "mesh order {} estimated ({}); give the teeth when known",
+            tracked_z.unwrap_or(0),
+            if nominal_mesh_from_lag {
+                "repetition period over the mesh period"
+            } else {
+                "strongest harmonic family of the TSA spectrum"
+            }
+        ));
+    }
+    let mut pending = Vec::new();
     let mut mesh_orders = Vec::new();
     for (gi, (name, _, known)) in gears.iter().enumerate() {
         let z = match known {
@@ -384,13 +527,37 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             }
         };
         if z * 2 + 8 > points / 2 {
-            return Err(bad(path, format!("mesh order {z} needs more than {points} samples per revolution")));
+            return Err(bad(
+                path,
+                format!(
+                    "mesh order {z} needs more than {points} samples per revolution of the {name}: the shaft speed ({}) is too high for the sample rate, or the teeth are wrong",
+                    match source {
+                        SpeedSource::Estimated => "estimated; give --rpm",
+                        SpeedSource::Given => "given",
+                        SpeedSource::Tachometer => "from the tachometer",
+                    }
+                ),
+            ));
+        }
+        if o.teeth.is_some() {
+            if let Some(w) = teeth_misfit(tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()), z, *name) {
+                warnings.push(w);
+            }
         }
         mesh_orders.push(z);
         for (c, _, t) in tsas.iter().filter(|t| t.1 == gi) {
-            gear_results.push(gear_indicators(&mut fft, *name, *c, z, t, o.shaft_orders));
+            pending.push((*name, *c, z, t, gears[gi].1));
         }
     }
+    let gear_results: Vec<GearIndicators> = pending
+        .par_iter()
+        .map(|&(name, c, z, t, ratio)| {
+            let mut fft = Fft::new();
+            let mut g = gear_indicators(&mut fft, name, c, z, t, o.shaft_orders);
+            g.blocks = blocks(&mut fft, &rec.channels[c - 1], &map, ratio, points, z, o);
+            g
+        })
+        .collect();
     // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now)
     let shaft_hz = fs.map(|fs| fs / period);
     let spectra = match fs {
@@ -427,6 +594,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         shaft_period_samples: period,
         speed_source: source,
         speed_confidence: confidence,
+        speed_profile,
         mesh_hz: shaft_hz.map(|f| f * mesh_orders[0] as f64),
         mesh_order: mesh_orders[0],
         teeth_source,
@@ -436,6 +604,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         raw,
         verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
         comparison: None,
+        scores: Vec::new(),
         unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
         warnings,
         spectra,
@@ -445,6 +614,217 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         d.indicators = g.indicators.clone();
     }
     Ok(d)
+}
+
+/// Points per revolution of a TSA: the revolution's samples rounded up to a power of two (64 ..= 65536).
+fn tsa_points(period: f64) -> usize {
+    (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16)
+}
+
+/// The speed before tracking: revolution starts from the tachometer, or a constant nominal speed (given,
+/// or estimated from the repetition period).
+struct Nominal {
+    map: AngleMap,
+    source: SpeedSource,
+    confidence: f64,
+    /// Mesh order from the ratio of the repetition period to the mesh lag (estimated speed only).
+    mesh_order: Option<usize>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn nominal_speed(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    fs: Option<f64>,
+    geometry: Option<&Geometry>,
+    fft: &mut Fft,
+    warnings: &mut Vec<String>,
+) -> Result<Nominal, Error> {
+    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    if let Some(t) = o.tacho_channel {
+        let pulses = speed::tacho_pulses(&rec.channels[t - 1])
+            .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
+            .map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
+        return Ok(Nominal { map: pulses, source: SpeedSource::Tachometer, confidence: 1.0, mesh_order: None });
+    }
+    if let Some(hz) = o.shaft_hz {
+        let fs = fs
+            .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
+        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
+        return Ok(Nominal {
+            map: AngleMap::constant(fs / hz, 0.0, n),
+            source: SpeedSource::Given,
+            confidence: 1.0,
+            mesh_order: None,
+        });
+    }
+    let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
+    let est = match geometry.and_then(|g| g.period_samples) {
+        Some(p) => speed::refine_near(fft, &views, p, 0.03),
+        None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
+    }
+    .map_err(|e| bad(path, e))?;
+    warnings.push(format!(
+        "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
+        est.period_samples, est.confidence
+    ));
+    if let Some((zp, _)) = o.teeth {
+        // the signal may repeat over several pinion revolutions (a hunting period): the pinion revolution
+        // is the fraction of the period where the given mesh order has its strongest line
+        let line = |k: usize| -> f64 {
+            let f = (zp * k) as f64 / est.period_samples;
+            if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.3 / est.period_samples)).sum() }
+        };
+        let k = (1..=8).max_by(|&a, &b| line(a).total_cmp(&line(b))).unwrap_or(1);
+        if k > 1 {
+            warnings.push(format!(
+                "the signal repeats every {k} pinion revolutions (the given mesh order {zp} fits a period of {:.3} samples): the pinion period is taken as that",
+                est.period_samples / k as f64
+            ));
+            return Ok(Nominal {
+                map: AngleMap::constant(est.period_samples / k as f64, 0.0, n),
+                source: SpeedSource::Estimated,
+                confidence: est.confidence,
+                mesh_order: None,
+            });
+        }
+    }
+    Ok(Nominal {
+        map: AngleMap::constant(est.period_samples, 0.0, n),
+        source: SpeedSource::Estimated,
+        confidence: est.confidence,
+        mesh_order: est
+            .mesh_lag
+            .map(|m| (est.period_samples / m).round() as usize)
+            .map(|z| fundamental_mesh(&views, est.period_samples, z))
+            .filter(|&z| z >= 8),
+    })
+}
+
+/// Largest relative difference between the tracked mean speed and the nominal one that is accepted: the
+/// nominal speed is the mean (estimated) or what the user gave; further away the ridge followed another line.
+const MAX_TRACKING_SHIFT: f64 = 0.05;
+
+/// The mesh order whose fundamental is really there: a repetition lag or a harmonic family can hold two or
+/// three mesh periods (order z / 2 or z / 3 scores through its even harmonics), so among z, 2z and 3z the
+/// smallest whose line at that order reaches a quarter of its strongest harmonic (orders 1..=4 times it)
+/// is taken, summed over channels.
+fn fundamental_mesh(channels: &[&[f32]], period: f64, z: usize) -> usize {
+    let amp = |order: usize| -> f64 {
+        let f = order as f64 / period;
+        if f >= 0.5 {
+            return 0.0;
+        }
+        channels.iter().map(|c| ind_line(c, f, 0.5 / period)).sum()
+    };
+    for c in [z, 2 * z, 3 * z] {
+        let own = amp(c);
+        let strongest = (1..=4).map(|k| amp(k * c)).fold(0.0, f64::max);
+        if own >= 0.25 * strongest && own > 0.0 {
+            return c;
+        }
+    }
+    z
+}
+
+fn ind_line(x: &[f32], f: f64, search: f64) -> f64 {
+    crate::signal::spectrum::line_amplitude(x, f, search)
+}
+
+/// Line-to-band ratio below which a tracked mesh line is too weak to trust, dB.
+const MIN_TRACKING_SNR_DB: f64 = 6.0;
+
+/// Follows the shaft angle through the recording. With a tachometer its pulses are the angle. Otherwise the
+/// phase of the first mesh harmonic is tracked on each analysed channel (the mesh order from the teeth, the
+/// baseline, or the harmonic family of a constant-speed TSA) and the channel where the line stands out
+/// most is used; when no channel allows it, the constant nominal speed stays, with a warning.
+fn track(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    known_z: Option<usize>,
+    nominal: AngleMap,
+    warnings: &mut Vec<String>,
+) -> Result<(AngleMap, Tracking, Option<f64>, Option<usize>), Error> {
+    if o.tacho_channel.is_some() {
+        return Ok((nominal, Tracking::Tachometer, None, None));
+    }
+    let period = nominal.mean_period_samples();
+    let z = match known_z {
+        Some(z) => z,
+        None => {
+            let tsas = channels
+                .par_iter()
+                .map(|&c| tsa::tsa(&rec.channels[c - 1], &nominal, 1.0, tsa_points(period), o.min_revolutions))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| bad(path, e))?;
+            let z = mesh_family(&mut Fft::new(), tsas.iter().map(|t| t.samples.as_slice()));
+            let views: Vec<&[f32]> = channels.iter().map(|&c| rec.channels[c - 1].as_slice()).collect();
+            fundamental_mesh(&views, period, z)
+        }
+    };
+    let tracked: Vec<Result<angle::Tracked, _>> = channels
+        .par_iter()
+        .map(|&c| angle::track_mesh(&mut Fft::new(), &rec.channels[c - 1], period, z as f64))
+        .collect();
+    let best = tracked.into_iter().reduce(|a, b| match (&a, &b) {
+        (Ok(x), Ok(y)) => {
+            if y.line_snr_db > x.line_snr_db {
+                b
+            } else {
+                a
+            }
+        }
+        (Err(_), _) => b,
+        _ => a,
+    });
+    match best {
+        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > MAX_TRACKING_SHIFT => {
+            warnings.push(format!(
+                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
+                100.0 * (period / t.map.mean_period_samples() - 1.0)
+            ));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        Some(Ok(t)) if t.line_snr_db >= MIN_TRACKING_SNR_DB => {
+            Ok((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)))
+        }
+        Some(Ok(t)) => {
+            warnings.push(format!(
+                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed; the TSA assumes a constant speed",
+                t.line_snr_db
+            ));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        Some(Err(e)) => {
+            warnings.push(format!("mesh-phase tracking not possible ({e}); the TSA assumes a constant speed"));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        None => Ok((nominal, Tracking::Constant, None, Some(z))),
+    }
+}
+
+/// A warning when the given teeth do not fit: the TSA line at the mesh order z must stand above every line
+/// of its +-1..3 sideband family (summed over channels), as a mesh line does; a line of the family that is
+/// stronger says the mesh is elsewhere (13 or 15 given for 14 teeth, or the pinion and wheel swapped).
+fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, gear: Shaft) -> Option<String> {
+    let mut power: Vec<f64> = Vec::new();
+    for t in tsas {
+        let a = crate::signal::spectrum::periodic_amplitudes(t);
+        power.resize(a.len(), 0.0);
+        power.iter_mut().zip(&a).for_each(|(p, v)| *p += v * v);
+    }
+    let at = |k: usize| power.get(k).copied().unwrap_or(0.0).sqrt();
+    let (best, a_best) = (z.saturating_sub(3).max(1)..=z + 3).map(|k| (k, at(k))).max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (best != z).then(|| {
+        format!(
+            "the given teeth do not fit the {gear}: its TSA line at order {best} is {:.1} times the line at the given mesh order {z}; check --teeth (a mesh line stands above its sidebands)",
+            a_best / at(z).max(f64::MIN_POSITIVE)
+        )
+    })
 }
 
 /// Mesh order: the family z (z >= 8) whose first harmonics hold the most TSA energy per harmonic, summed
@@ -479,8 +859,24 @@ fn gear_indicators(
     t: &tsa::Tsa,
     shaft_orders: usize,
 ) -> GearIndicators {
-    let x = &t.samples;
-    let Decomposition { amplitudes, regular, residual, difference } = tsa::decompose(fft, x, z, shaft_orders);
+    let (indicators, d) = tsa_indicators(fft, &t.samples, z, shaft_orders);
+    GearIndicators {
+        gear,
+        channel,
+        mesh_order: z,
+        revolutions: t.revolutions,
+        indicators,
+        residual: d.residual,
+        tsa_amplitudes: d.amplitudes,
+        tsa: t.samples.clone(),
+        blocks: Vec::new(),
+    }
+}
+
+/// The condition indicators of one TSA of a gear with mesh order `z`, and its decomposition.
+fn tsa_indicators(fft: &mut Fft, x: &[f64], z: usize, shaft_orders: usize) -> (BTreeMap<String, f64>, Decomposition) {
+    let d = tsa::decompose(fft, x, z, shaft_orders);
+    let Decomposition { amplitudes, regular, residual, difference } = &d;
     let mesh_amps: Vec<f64> =
         (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
     let mean = x.iter().sum::<f64>() / x.len() as f64;
@@ -491,24 +887,43 @@ fn gear_indicators(
     m.insert("kurtosis".into(), ind::kurtosis(x));
     m.insert("crest_factor".into(), ind::crest_factor(&centred));
     m.insert("fm0".into(), ind::fm0(x, &mesh_amps));
-    m.insert("fm4".into(), ind::normalized_moment(&difference, 4));
-    m.insert("m6a".into(), ind::normalized_moment(&difference, 6));
-    m.insert("m8a".into(), ind::normalized_moment(&difference, 8));
-    m.insert("na4".into(), ind::kurtosis(&residual));
-    m.insert("er".into(), ind::energy_ratio(&difference, &regular));
+    m.insert("fm4".into(), ind::normalized_moment(difference, 4));
+    m.insert("m6a".into(), ind::normalized_moment(difference, 6));
+    m.insert("m8a".into(), ind::normalized_moment(difference, 8));
+    m.insert("na4".into(), ind::kurtosis(residual));
+    m.insert("er".into(), ind::energy_ratio(difference, regular));
     m.insert("si".into(), side / 2.0);
     m.insert("slf".into(), side / ind::rms(&centred));
-    m.insert("ser".into(), ind::sideband_energy_ratio(&amplitudes, z, 1));
-    GearIndicators {
-        gear,
-        channel,
-        mesh_order: z,
-        revolutions: t.revolutions,
-        indicators: m,
-        residual,
-        tsa_amplitudes: amplitudes,
-        tsa: x.clone(),
-    }
+    m.insert("ser".into(), ind::sideband_energy_ratio(amplitudes, z, 1));
+    (m, d)
+}
+
+/// Indicators of consecutive blocks of `o.min_revolutions` whole revolutions of the gear turning `ratio`
+/// times per reference revolution (the statistical baseline's samples; a recording under test is scored by
+/// the median of its own blocks, so both sides average the same number of revolutions).
+fn blocks(
+    fft: &mut Fft,
+    x: &[f32],
+    map: &AngleMap,
+    ratio: f64,
+    points: usize,
+    z: usize,
+    o: &Options,
+) -> Vec<crate::report::summary::Block> {
+    let per = o.min_revolutions.max(1);
+    let count = tsa::revolutions_of(map, ratio) / per;
+    let top = ((7 * z) / 2 + 4).min(points / 2);
+    (0..count)
+        .map(|b| {
+            let t = tsa::tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per);
+            let (mut indicators, d) = tsa_indicators(fft, &t, z, o.shaft_orders);
+            let n = d.residual.len() as f64;
+            let mean = d.residual.iter().sum::<f64>() / n;
+            indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
+            indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
+            crate::report::summary::Block { indicators, amplitudes: d.amplitudes[..=top].to_vec() }
+        })
+        .collect()
 }
 
 /// Mesh harmonics and sidebands (3 per shaft on each side) from the raw amplitude spectrum when the

@@ -90,6 +90,48 @@ pub enum SpeedSource {
     Estimated,
 }
 
+/// How the shaft angle was followed through the recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Tracking {
+    /// Revolution starts from tachometer pulses, interpolated in between.
+    #[serde(rename = "tachometer")]
+    Tachometer,
+    /// Angle from the unwrapped phase of a mesh harmonic.
+    #[serde(rename = "mesh phase")]
+    MeshPhase,
+    /// Constant speed assumed (tracking was not possible; see the warnings).
+    #[serde(rename = "constant speed")]
+    Constant,
+}
+
+impl Tracking {
+    /// Name shown to people and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tachometer => "tachometer",
+            Self::MeshPhase => "mesh phase",
+            Self::Constant => "constant speed",
+        }
+    }
+}
+
+/// The reference shaft's speed over the recording (per revolution), in Hz (`null` without a sample rate).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SpeedProfile {
+    /// How the angle was tracked.
+    pub tracking: Tracking,
+    /// Mean speed, Hz.
+    pub mean_hz: Option<f64>,
+    /// Slowest revolution, Hz.
+    pub min_hz: Option<f64>,
+    /// Fastest revolution, Hz.
+    pub max_hz: Option<f64>,
+    /// Change from the first tenth of the recording to the last tenth, percent of the mean.
+    pub change_percent: f64,
+    /// With mesh-phase tracking: how far the tracked line stands above its band, dB.
+    pub line_snr_db: Option<f64>,
+}
+
 /// Where the teeth (mesh order) came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -219,6 +261,46 @@ pub struct GearIndicators {
     /// TSA over one revolution, resampled to a power of two.
     #[serde(skip)]
     pub tsa: Vec<f64>,
+    /// The same indicators on consecutive blocks of whole revolutions (for the statistical baseline).
+    #[serde(skip)]
+    pub blocks: Vec<Block>,
+}
+
+/// Indicators of one block of whole revolutions of one gear on one channel.
+#[derive(Clone, Debug, Default)]
+pub struct Block {
+    /// Indicators keyed by lower-case name, plus `residual_m2` and `residual_m4` (second and fourth
+    /// central moments of the residual signal, for NA4*).
+    pub indicators: BTreeMap<String, f64>,
+    /// TSA amplitude by order 0..=K (K about 3.5 mesh harmonics), for the spectral-change indicator.
+    pub amplitudes: Vec<f64>,
+}
+
+/// One indicator of one gear and channel scored against the statistical baseline.
+#[derive(Clone, Debug, Serialize)]
+pub struct Score {
+    /// Gear (shaft).
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// Indicator name (lower case).
+    pub indicator: String,
+    /// Median over this recording's blocks.
+    pub value: f64,
+    /// Blocks of this recording.
+    pub blocks: usize,
+    /// Median over the baseline's blocks.
+    pub baseline_centre: f64,
+    /// Spread of the baseline's blocks (1.4826 x median absolute deviation, at least 5 % of the centre).
+    pub baseline_spread: f64,
+    /// Smallest and largest baseline block value.
+    pub baseline_range: [f64; 2],
+    /// Baseline blocks.
+    pub baseline_blocks: usize,
+    /// (value - centre) / spread: how many spreads above the baseline's centre.
+    pub spreads: f64,
+    /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
+    pub decides: bool,
 }
 
 /// The verdict.
@@ -285,6 +367,8 @@ pub struct Diagnosis {
     pub speed_source: SpeedSource,
     /// Confidence of an estimated speed (autocorrelation at the period, 0..1); 1 when given.
     pub speed_confidence: f64,
+    /// The reference shaft's speed over the recording.
+    pub speed_profile: SpeedProfile,
     /// Mesh frequency in Hz (`null` when unknown).
     pub mesh_hz: Option<f64>,
     /// Mesh order of the pinion (or of the estimated shaft).
@@ -301,6 +385,9 @@ pub struct Diagnosis {
     pub raw: Vec<BTreeMap<String, f64>>,
     /// Verdict.
     pub verdict: Verdict,
+    /// Indicators scored against the statistical baseline (empty without a baseline).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub scores: Vec<Score>,
     /// Model comparison, with `--scene`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Comparison>,
@@ -333,7 +420,7 @@ macro_rules! display_by_name {
         }
     )*};
 }
-display_by_name!(VerdictState, VerdictGear, SpeedSource, TeethSource);
+display_by_name!(VerdictState, VerdictGear, SpeedSource, TeethSource, Tracking);
 
 impl SpeedSource {
     /// Lower-case name.

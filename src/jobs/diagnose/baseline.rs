@@ -1,0 +1,298 @@
+//! The statistical baseline: healthy recordings of the same machine, cut into blocks of whole revolutions;
+//! each indicator's distribution over the blocks (median and robust spread) is the reference, and a
+//! recording is scored by how many spreads the median of its own blocks lies above that centre.
+//!
+//! Scores: s = (value - centre) / spread with centre = median of the baseline blocks and spread =
+//! max(1.4826 MAD, 5 % of |centre|). For Gaussian block values 1.4826 MAD estimates the standard deviation;
+//! the 5 % floor keeps a baseline of near-identical blocks (a noise-free simulation) from turning every
+//! rounding-level change into a detection. Limits ([`SUSPECT_SPREADS`], [`FAULTY_SPREADS`]) are one-sided
+//! Gaussian quantiles for a stated false-alarm rate per indicator; a median over several blocks scatters
+//! less than one block, so the real rate is lower still.
+
+use super::JobError;
+use crate::Error;
+use crate::report::summary::{Block, Diagnosis, GearIndicators, Score, Shaft};
+use std::collections::BTreeMap;
+
+/// Suspect at 3.09 spreads: one-sided false-alarm probability 1e-3 per indicator for one healthy block.
+pub const SUSPECT_SPREADS: f64 = 3.09;
+/// Faulty at 4.75 spreads: one-sided false-alarm probability 1e-6 per indicator for one healthy block.
+pub const FAULTY_SPREADS: f64 = 4.75;
+/// Fewest baseline blocks per gear and channel for a distribution.
+pub const MIN_BASELINE_BLOCKS: usize = 4;
+/// Relative floor of the spread (5 % of the centre).
+const SPREAD_FLOOR: f64 = 0.05;
+/// An amplitude indicator (SI) below this fraction of the gear's TSA RMS, in the baseline and now, is
+/// noise: it never decides.
+const NEAR_ZERO_OF_RMS: f64 = 1e-3;
+/// Dynamic range of the log spectra of the spectral-change indicator, dB (weaker orders are clipped there).
+const SPECTRUM_RANGE_DB: f64 = 60.0;
+
+/// Indicators that take part in the verdict, with what a rise means.
+pub const DECIDING: [(&str, &str, &str); 8] = [
+    ("fm4", "FM4", "the difference signal is more impulsive"),
+    ("m6a", "M6A", "the difference signal has sharper peaks"),
+    ("na4_star", "NA4*", "the residual signal has grown and become impulsive"),
+    ("er", "ER", "more energy outside the regular mesh lines"),
+    ("fm0", "FM0", "the peak-to-peak of the average grew against the mesh lines"),
+    ("ser", "SER", "the sidebands around the mesh line have grown"),
+    ("si", "SI", "the first sidebands of the mesh line have grown"),
+    ("spectral_change", "spectral change", "the order spectrum of the average has changed"),
+];
+
+/// A distribution over blocks.
+#[derive(Clone, Copy, Debug)]
+struct Stat {
+    centre: f64,
+    spread: f64,
+    min: f64,
+    max: f64,
+    count: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+impl Stat {
+    fn of(values: &[f64]) -> Self {
+        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+        let centre = median(&mut v);
+        let mut dev: Vec<f64> = v.iter().map(|x| (x - centre).abs()).collect();
+        let mad = median(&mut dev);
+        Self {
+            centre,
+            spread: (1.4826 * mad).max(SPREAD_FLOOR * centre.abs()).max(f64::MIN_POSITIVE),
+            min: v.first().copied().unwrap_or(f64::NAN),
+            max: v.last().copied().unwrap_or(f64::NAN),
+            count: v.len(),
+        }
+    }
+}
+
+/// The reference of one gear on one channel.
+#[derive(Clone, Debug)]
+struct GearReference {
+    stats: BTreeMap<String, Stat>,
+    /// Median residual variance of the blocks (NA4*'s denominator).
+    residual_var: f64,
+    /// Mean log amplitude spectrum of the blocks, dB, and its floor.
+    log_spectrum: Vec<f64>,
+    floor: f64,
+    /// Median TSA RMS of the blocks (scale for near-zero amplitudes).
+    rms: f64,
+    /// Mean over the baseline files of the RMS of the whole-record TSA's residual signal.
+    residual_rms: f64,
+}
+
+/// The statistical baseline of every gear and channel.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    gears: BTreeMap<(Shaft, usize), GearReference>,
+    /// Files pooled.
+    pub files: usize,
+}
+
+fn log_spectrum(a: &[f64], floor: f64) -> Vec<f64> {
+    a.iter().skip(1).map(|v| 20.0 * v.max(floor).log10()).collect()
+}
+
+fn rms_db(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()).max(1);
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n as f64).sqrt()
+}
+
+/// Per-block values of the deciding indicators that need the reference (NA4*, spectral change).
+fn derived(block: &Block, residual_var: f64, log_ref: &[f64], floor: f64) -> (f64, f64) {
+    let m4 = block.indicators.get("residual_m4").copied().unwrap_or(f64::NAN);
+    (m4 / (residual_var * residual_var), rms_db(&log_spectrum(&block.amplitudes, floor), log_ref))
+}
+
+fn value(block: &Block, key: &str) -> f64 {
+    block.indicators.get(key).copied().unwrap_or(f64::NAN)
+}
+
+/// Builds the reference from healthy recordings (their blocks pooled per gear and channel).
+///
+/// # Errors
+/// A gear and channel with fewer than [`MIN_BASELINE_BLOCKS`] blocks over all baseline files.
+pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Error> {
+    let mut pooled: BTreeMap<(Shaft, usize), Vec<&Block>> = BTreeMap::new();
+    let mut revs: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
+    let mut residual: BTreeMap<(Shaft, usize), Vec<f64>> = BTreeMap::new();
+    for d in baselines {
+        for g in &d.gears {
+            pooled.entry((g.gear, g.channel)).or_default().extend(&g.blocks);
+            *revs.entry((g.gear, g.channel)).or_default() += g.revolutions;
+            residual.entry((g.gear, g.channel)).or_default().push(crate::signal::indicators::rms(&g.residual));
+        }
+    }
+    let mut gears = BTreeMap::new();
+    for (key, blocks) in pooled {
+        if blocks.len() < MIN_BASELINE_BLOCKS {
+            return Err(JobError::Value {
+                what: "baseline".into(),
+                message: format!(
+                    "{} revolutions of the {} (channel {}) give {} block(s) of {block_revs}; the statistical baseline needs at least {MIN_BASELINE_BLOCKS}: give a longer healthy recording, several, or a smaller --block-revs",
+                    revs[&key],
+                    key.0,
+                    key.1,
+                    blocks.len()
+                ),
+            }
+            .into());
+        }
+        let len = blocks.iter().map(|b| b.amplitudes.len()).min().unwrap_or(0);
+        let mean_amp: Vec<f64> =
+            (0..len).map(|k| blocks.iter().map(|b| b.amplitudes[k]).sum::<f64>() / blocks.len() as f64).collect();
+        let floor = mean_amp.iter().skip(1).copied().fold(0.0, f64::max) * 10f64.powf(-SPECTRUM_RANGE_DB / 20.0);
+        let floor = floor.max(f64::MIN_POSITIVE);
+        let logs: Vec<Vec<f64>> = blocks.iter().map(|b| log_spectrum(&b.amplitudes[..len], floor)).collect();
+        let log_ref: Vec<f64> =
+            (0..len.saturating_sub(1)).map(|k| logs.iter().map(|l| l[k]).sum::<f64>() / logs.len() as f64).collect();
+        let residual_var = median(&mut blocks.iter().map(|b| value(b, "residual_m2")).collect::<Vec<_>>());
+        let mut stats = BTreeMap::new();
+        for (k, _, _) in DECIDING {
+            let values: Vec<f64> = match k {
+                "na4_star" => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).0).collect(),
+                "spectral_change" => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).1).collect(),
+                _ => blocks.iter().map(|b| value(b, k)).collect(),
+            };
+            stats.insert(k.to_string(), Stat::of(&values));
+        }
+        let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
+        let residual_rms = residual[&key].iter().sum::<f64>() / residual[&key].len() as f64;
+        gears.insert(key, GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms, residual_rms });
+    }
+    Ok(Reference { gears, files: baselines.len() })
+}
+
+impl Reference {
+    /// How much the residual signal of the whole-record TSA of `g` has grown against the baseline's (RMS
+    /// ratio): which gear carries a fault. A local fault is synchronous with its own gear, so its full
+    /// average keeps it while the other gear's average spreads it over many revolutions and attenuates it;
+    /// block indicators of 8 revolutions cannot tell the two apart as well.
+    pub fn residual_growth(&self, g: &GearIndicators) -> f64 {
+        self.gears
+            .get(&(g.gear, g.channel))
+            .map_or(f64::NAN, |r| crate::signal::indicators::rms(&g.residual) / r.residual_rms.max(f64::MIN_POSITIVE))
+    }
+
+    /// Whether the reference holds the gear and channel of `g`.
+    pub fn covers(&self, g: &GearIndicators) -> bool {
+        self.gears.contains_key(&(g.gear, g.channel))
+    }
+}
+
+/// Scores every deciding indicator of one gear and channel (empty when the reference lacks it).
+pub fn score_one(g: &GearIndicators, r: &Reference) -> Vec<Score> {
+    r.gears.get(&(g.gear, g.channel)).map(|gr| score_gear(g, gr)).unwrap_or_default()
+}
+
+fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
+    let len = r.log_spectrum.len() + 1;
+    let blocks: Vec<&Block> = g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect();
+    DECIDING
+        .iter()
+        .filter_map(|(k, _, _)| {
+            let stat = r.stats.get(*k)?;
+            let mut values: Vec<f64> = blocks
+                .iter()
+                .map(|b| match *k {
+                    "na4_star" => derived(b, r.residual_var, &r.log_spectrum, r.floor).0,
+                    "spectral_change" => rms_db(&log_spectrum(&b.amplitudes[..len], r.floor), &r.log_spectrum),
+                    _ => value(b, k),
+                })
+                .filter(|v| v.is_finite())
+                .collect();
+            if values.is_empty() {
+                return None;
+            }
+            let v = median(&mut values);
+            let near_zero = *k == "si" && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
+            Some(Score {
+                gear: g.gear,
+                channel: g.channel,
+                indicator: k.to_string(),
+                value: v,
+                blocks: values.len(),
+                baseline_centre: stat.centre,
+                baseline_spread: stat.spread,
+                baseline_range: [stat.min, stat.max],
+                baseline_blocks: stat.count,
+                spreads: (v - stat.centre) / stat.spread,
+                decides: !near_zero,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robust_spread_of_gaussian_like_values() {
+        // the 1.4826 MAD of a symmetric sample equals its standard deviation for a Gaussian; for the
+        // evenly spaced quantiles of N(10, 1) at p = (i + 0.5) / 201 it is 1 within 2 %
+        let q: Vec<f64> = (0..201).map(|i| 10.0 + acklam((i as f64 + 0.5) / 201.0)).collect();
+        let s = Stat::of(&q);
+        assert!((s.centre - 10.0).abs() < 1e-9);
+        assert!((s.spread - 1.0).abs() < 0.02, "{}", s.spread);
+    }
+
+    /// Acklam's inverse normal CDF (relative error below 1.2e-9).
+    fn acklam(p: f64) -> f64 {
+        let a = [
+            -3.969683028665376e1,
+            2.209460984245205e2,
+            -2.759285104469687e2,
+            1.38357751867269e2,
+            -3.066479806614716e1,
+            2.506628277459239,
+        ];
+        let b = [
+            -5.447609879822406e1,
+            1.615858368580409e2,
+            -1.556989798598866e2,
+            6.680131188771972e1,
+            -1.328068155288572e1,
+        ];
+        let c = [
+            -7.784894002430293e-3,
+            -3.223964580411365e-1,
+            -2.400758277161838,
+            -2.549732539343734,
+            4.374664141464968,
+            2.938163982698783,
+        ];
+        let d = [7.784695709041462e-3, 3.224671290700398e-1, 2.445134137142996, 3.754408661907416];
+        let pl = 0.02425;
+        if p < pl {
+            let q = (-2.0 * p.ln()).sqrt();
+            (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5])
+                / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0)
+        } else if p <= 1.0 - pl {
+            let q = p - 0.5;
+            let r = q * q;
+            (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q
+                / (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+        } else {
+            -acklam(1.0 - p)
+        }
+    }
+
+    #[test]
+    fn spread_has_a_floor() {
+        let s = Stat::of(&[2.0; 9]);
+        assert!((s.spread - 0.1).abs() < 1e-12);
+    }
+}
