@@ -119,9 +119,9 @@ pub struct DiagnoseArgs {
     /// baseline.
     #[arg(long, num_args = 1..)]
     pub baseline: Vec<String>,
-    /// Revolutions per TSA block of the statistical baseline (and fewest revolutions any TSA needs).
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(2..=10_000))]
-    pub block_revs: u64,
+    /// Revolutions per block of the statistical baseline (default 8, fewer when the baseline is short).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000))]
+    pub block_revs: Option<u64>,
     /// Scene to simulate at the recording's speed and compare with.
     #[arg(long)]
     pub scene: Option<String>,

@@ -254,7 +254,7 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         tacho_channel: a.tacho_channel,
         pulses_per_rev: a.pulses_per_rev,
         quantity: a.quantity,
-        min_revolutions: a.block_revs as usize,
+        block_revs: a.block_revs.map(|r| r as usize),
         ..Default::default()
     };
     Ok(jobs::diagnose::DiagnoseJob {

@@ -102,7 +102,18 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
         .filter(|(i, _)| Some(*i) != time_col)
         .map(|(_, (name, col))| (name, col.into_iter().map(|v| v as f32).collect()))
         .unzip();
-    Ok(Recording { units: vec![String::new(); channels.len()], channels, sample_rate_hz, names })
+    // "accel [m/s^2]" names the unit in brackets (gearvib writes its CSV headers that way)
+    let (names, units): (Vec<String>, Vec<String>) = names.iter().map(|n| split_unit(n)).unzip();
+    Ok(Recording { units, channels, sample_rate_hz, names })
+}
+
+/// Splits a column name "name [unit]" into name and unit (empty when there are no brackets).
+fn split_unit(name: &str) -> (String, String) {
+    let t = name.trim();
+    match (t.rfind(" ["), t.ends_with(']')) {
+        (Some(i), true) => (t[..i].trim().to_string(), t[i + 2..t.len() - 1].trim().to_string()),
+        _ => (t.to_string(), String::new()),
+    }
 }
 
 fn parse(f: &str, delim: char, buf: &mut String) -> Option<f64> {

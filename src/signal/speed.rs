@@ -103,10 +103,40 @@ pub fn estimate_period<T: Sample>(
                 .next()
                 .unwrap_or(p)
         }
+        // a short lag cannot be a shaft period (fewer than 64 samples per revolution): look for the shaft
+        // among its multiples
+        _ if shortest < 64 => comb_outlier(&sum, shortest, lag_max).unwrap_or(shortest),
         _ => shortest,
     };
     let mesh_lag = (p0 != shortest).then(|| refine(&sum, shortest as f64));
     Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0], mesh_lag })
+}
+
+/// The shaft period among the multiples j m of the mesh lag m (j >= 8) when it stands out of the comb of
+/// mesh-lag peaks as an outlier rather than by a fixed ratio: with c(j) the autocorrelation peak near j m,
+/// the excess e(j) = c(j) - (c(j - 1) + c(j + 1)) / 2 of the best j must exceed 6 times the median
+/// absolute excess (a robust noise level of the comb) and 0.005. A local fault adds a small shaft-periodic
+/// part to a mesh-dominated signal: its peak at the shaft lag is then only a few percent above its
+/// neighbours, but far above the comb's ripple.
+fn comb_outlier(sum: &[f64], m: usize, lag_max: usize) -> Option<usize> {
+    let peak_near = |centre: usize| -> Option<usize> {
+        let w = (m / 4).max(1);
+        let (lo, hi) = (centre.saturating_sub(w).max(1), (centre + w).min(lag_max));
+        (lo <= hi).then(|| (lo..=hi).max_by(|a, b| sum[*a].total_cmp(&sum[*b])).unwrap_or(centre))
+    };
+    let jmax = lag_max / m;
+    if jmax < 10 {
+        return None;
+    }
+    let c: Vec<(usize, f64)> = (0..=jmax).map(|j| peak_near(j * m).map_or((j * m, 0.0), |i| (i, sum[i]))).collect();
+    let excess: Vec<(usize, f64)> = (8..jmax).map(|j| (c[j].0, c[j].1 - 0.5 * (c[j - 1].1 + c[j + 1].1))).collect();
+    let mut abs: Vec<f64> = excess.iter().map(|e| e.1.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let mad = abs[abs.len() / 2];
+    let (lag, e) = excess.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    // the shortest lag whose excess is at least 40 % of the best (the best may be a multiple of the shaft)
+    let first = excess.iter().find(|x| x.1 >= 0.4 * e).map_or(lag, |x| x.0);
+    (e > 6.0 * mad && e > 0.005).then_some(first)
 }
 
 /// Refines a period from the autocorrelation peaks near its multiples 2, 4, 8, ... (parabolic vertex).

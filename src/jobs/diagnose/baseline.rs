@@ -3,21 +3,41 @@
 //! recording is scored by how many spreads the median of its own blocks lies above that centre.
 //!
 //! Scores: s = (value - centre) / spread with centre = median of the baseline blocks and spread =
-//! max(1.4826 MAD, 5 % of |centre|). For Gaussian block values 1.4826 MAD estimates the standard deviation;
+//! max(1.4826 MAD, 5 % of |centre|), on the logarithm of the moment and energy ratios (see [`Scale`]). For Gaussian block values 1.4826 MAD estimates the standard deviation;
 //! the 5 % floor keeps a baseline of near-identical blocks (a noise-free simulation) from turning every
-//! rounding-level change into a detection. Limits ([`SUSPECT_SPREADS`], [`FAULTY_SPREADS`]) are one-sided
-//! Gaussian quantiles for a stated false-alarm rate per indicator; a median over several blocks scatters
-//! less than one block, so the real rate is lower still.
+//! rounding-level change into a detection. Limits are one-sided prediction limits for a new block from m
+//! baseline blocks at a stated false-alarm rate per indicator (1e-3 suspect, 1e-6 faulty):
+//! t_{m-1}(1 - alpha) sqrt(1 + 1/m) spreads, Student's t because the spread itself is estimated from m
+//! blocks (m = 5 gives 8.0 spreads for 1e-3, m = 30 gives 3.5, many blocks 3.09). A median over several
+//! blocks scatters less than one block, so the real rate is lower still.
 
 use super::JobError;
 use crate::Error;
-use crate::report::summary::{Block, Diagnosis, GearIndicators, Score, Shaft};
+use crate::report::summary::{Block, Diagnosis, GearIndicators, Scale, Score, Shaft};
 use std::collections::BTreeMap;
 
-/// Suspect at 3.09 spreads: one-sided false-alarm probability 1e-3 per indicator for one healthy block.
-pub const SUSPECT_SPREADS: f64 = 3.09;
-/// Faulty at 4.75 spreads: one-sided false-alarm probability 1e-6 per indicator for one healthy block.
-pub const FAULTY_SPREADS: f64 = 4.75;
+/// Standard normal quantile of the suspect limit: one-sided false-alarm probability 1e-3 per indicator.
+pub const SUSPECT_Z: f64 = 3.090_232;
+/// Standard normal quantile of the faulty limit: one-sided false-alarm probability 1e-6 per indicator.
+pub const FAULTY_Z: f64 = 4.753_424;
+
+/// Student-t quantile with `nu` degrees of freedom at the normal quantile `z` (Cornish-Fisher expansion to
+/// 1 / nu^4; Abramowitz and Stegun 26.7.5), within 1 % of the exact value for nu >= 3 at these tails.
+pub fn student_t(z: f64, nu: f64) -> f64 {
+    let z2 = z * z;
+    let g1 = (z2 + 1.0) * z / 4.0;
+    let g2 = ((5.0 * z2 + 16.0) * z2 + 3.0) * z / 96.0;
+    let g3 = (((3.0 * z2 + 19.0) * z2 + 17.0) * z2 - 15.0) * z / 384.0;
+    let g4 = ((((79.0 * z2 + 776.0) * z2 + 1482.0) * z2 - 1920.0) * z2 - 945.0) * z / 92160.0;
+    z + g1 / nu + g2 / nu.powi(2) + g3 / nu.powi(3) + g4 / nu.powi(4)
+}
+
+/// Suspect and faulty limits in spreads for a baseline of `m` blocks (prediction limits for one new block).
+pub fn limits(m: usize) -> (f64, f64) {
+    let m = m.max(MIN_BASELINE_BLOCKS) as f64;
+    let inflate = (1.0 + 1.0 / m).sqrt();
+    (student_t(SUSPECT_Z, m - 1.0) * inflate, student_t(FAULTY_Z, m - 1.0) * inflate)
+}
 /// Fewest baseline blocks per gear and channel for a distribution.
 pub const MIN_BASELINE_BLOCKS: usize = 4;
 /// Relative floor of the spread (5 % of the centre).
@@ -48,6 +68,7 @@ struct Stat {
     min: f64,
     max: f64,
     count: usize,
+    scale: Scale,
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -63,17 +84,53 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 impl Stat {
-    fn of(values: &[f64]) -> Self {
-        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-        let centre = median(&mut v);
-        let mut dev: Vec<f64> = v.iter().map(|x| (x - centre).abs()).collect();
-        let mad = median(&mut dev);
+    /// The distribution of `values` on `scale` (non-finite values, and non-positive ones on the log scale,
+    /// are left out).
+    fn of(values: &[f64], scale: Scale) -> Self {
+        let mut v: Vec<f64> =
+            values.iter().copied().filter(|x| x.is_finite() && (scale == Scale::Linear || *x > 0.0)).collect();
+        v.sort_by(f64::total_cmp);
+        let (min, max) = (v.first().copied().unwrap_or(f64::NAN), v.last().copied().unwrap_or(f64::NAN));
+        let mut t: Vec<f64> = v.iter().map(|&x| scale.to(x)).collect();
+        let centre = median(&mut t);
+        let mut dev: Vec<f64> = t.iter().map(|x| (x - centre).abs()).collect();
+        let floor = match scale {
+            Scale::Linear => SPREAD_FLOOR * centre.abs(),
+            Scale::Log => (1.0 + SPREAD_FLOOR).ln(),
+        };
         Self {
             centre,
-            spread: (1.4826 * mad).max(SPREAD_FLOOR * centre.abs()).max(f64::MIN_POSITIVE),
-            min: v.first().copied().unwrap_or(f64::NAN),
-            max: v.last().copied().unwrap_or(f64::NAN),
+            spread: (1.4826 * median(&mut dev)).max(floor).max(f64::MIN_POSITIVE),
+            min,
+            max,
             count: v.len(),
+            scale,
+        }
+    }
+
+    /// How many spreads `value` lies above the centre.
+    fn spreads(&self, value: f64) -> f64 {
+        (self.scale.to(value) - self.centre) / self.spread
+    }
+}
+
+/// A [`Scale`] as a map to the scored value and back.
+trait Transform {
+    fn to(self, x: f64) -> f64;
+    fn from(self, x: f64) -> f64;
+}
+
+impl Transform for Scale {
+    fn to(self, x: f64) -> f64 {
+        match self {
+            Self::Linear => x,
+            Self::Log => x.ln(),
+        }
+    }
+    fn from(self, x: f64) -> f64 {
+        match self {
+            Self::Linear => x,
+            Self::Log => x.exp(),
         }
     }
 }
@@ -113,7 +170,9 @@ fn rms_db(a: &[f64], b: &[f64]) -> f64 {
 /// Per-block values of the deciding indicators that need the reference (NA4*, spectral change).
 fn derived(block: &Block, residual_var: f64, log_ref: &[f64], floor: f64) -> (f64, f64) {
     let m4 = block.indicators.get("residual_m4").copied().unwrap_or(f64::NAN);
-    (m4 / (residual_var * residual_var), rms_db(&log_spectrum(&block.amplitudes, floor), log_ref))
+    let len = log_ref.len() + 1;
+    let a = &block.amplitudes[..len.min(block.amplitudes.len())];
+    (m4 / (residual_var * residual_var), rms_db(&log_spectrum(a, floor), log_ref))
 }
 
 fn value(block: &Block, key: &str) -> f64 {
@@ -159,14 +218,25 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
         let log_ref: Vec<f64> =
             (0..len.saturating_sub(1)).map(|k| logs.iter().map(|l| l[k]).sum::<f64>() / logs.len() as f64).collect();
         let residual_var = median(&mut blocks.iter().map(|b| value(b, "residual_m2")).collect::<Vec<_>>());
+        // each baseline block against the mean of the others (leave one out): against a mean that holds the
+        // block itself its distance would read low by about sqrt((m - 1) / (m + 1)) against a new block's
+        let m = logs.len() as f64;
+        let leave_one_out: Vec<f64> = logs
+            .iter()
+            .map(|l| {
+                let others: Vec<f64> = log_ref.iter().zip(l).map(|(r, x)| (m * r - x) / (m - 1.0)).collect();
+                rms_db(l, &others)
+            })
+            .collect();
         let mut stats = BTreeMap::new();
         for (k, _, _) in DECIDING {
             let values: Vec<f64> = match k {
                 "na4_star" => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).0).collect(),
-                "spectral_change" => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).1).collect(),
+                "spectral_change" => leave_one_out.clone(),
                 _ => blocks.iter().map(|b| value(b, k)).collect(),
             };
-            stats.insert(k.to_string(), Stat::of(&values));
+            let scale = if k == "spectral_change" { Scale::Linear } else { Scale::Log };
+            stats.insert(k.to_string(), Stat::of(&values, scale));
         }
         let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
         let residual_rms = residual[&key].iter().sum::<f64>() / residual[&key].len() as f64;
@@ -218,17 +288,21 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
             }
             let v = median(&mut values);
             let near_zero = *k == "si" && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
+            let (suspect_at, faulty_at) = limits(stat.count);
             Some(Score {
+                suspect_at,
+                faulty_at,
                 gear: g.gear,
                 channel: g.channel,
                 indicator: k.to_string(),
                 value: v,
                 blocks: values.len(),
-                baseline_centre: stat.centre,
+                baseline_centre: stat.scale.from(stat.centre),
                 baseline_spread: stat.spread,
+                scale: stat.scale,
                 baseline_range: [stat.min, stat.max],
                 baseline_blocks: stat.count,
-                spreads: (v - stat.centre) / stat.spread,
+                spreads: stat.spreads(v),
                 decides: !near_zero,
             })
         })
@@ -244,7 +318,7 @@ mod tests {
         // the 1.4826 MAD of a symmetric sample equals its standard deviation for a Gaussian; for the
         // evenly spaced quantiles of N(10, 1) at p = (i + 0.5) / 201 it is 1 within 2 %
         let q: Vec<f64> = (0..201).map(|i| 10.0 + acklam((i as f64 + 0.5) / 201.0)).collect();
-        let s = Stat::of(&q);
+        let s = Stat::of(&q, Scale::Linear);
         assert!((s.centre - 10.0).abs() < 1e-9);
         assert!((s.spread - 1.0).abs() < 0.02, "{}", s.spread);
     }
@@ -291,8 +365,22 @@ mod tests {
     }
 
     #[test]
+    fn student_t_matches_the_published_table() {
+        // t quantiles from standard tables (e.g. NIST/SEMATECH e-Handbook 1.3.6.7.2): one-sided 0.999
+        for (nu, t) in [(4.0, 7.173), (10.0, 4.144), (30.0, 3.385)] {
+            let got = student_t(SUSPECT_Z, nu);
+            // the expansion is asymptotic in 1 / nu: within 1 % at nu = 4, closer beyond
+            assert!((got / t - 1.0).abs() < 0.01, "nu {nu}: {got} vs {t}");
+        }
+        assert!((student_t(SUSPECT_Z, 1e9) - SUSPECT_Z).abs() < 1e-6);
+    }
+
+    #[test]
     fn spread_has_a_floor() {
-        let s = Stat::of(&[2.0; 9]);
+        let s = Stat::of(&[2.0; 9], Scale::Linear);
         assert!((s.spread - 0.1).abs() < 1e-12);
+        // on the log scale the floor is ln 1.05, and 2.1 against 2.0 is one spread
+        let s = Stat::of(&[2.0; 9], Scale::Log);
+        assert!((s.spreads(2.1) - 1.0).abs() < 1e-12);
     }
 }

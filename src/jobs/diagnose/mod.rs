@@ -65,10 +65,19 @@ pub struct DiagnoseOutcome {
 /// Any recording, the baseline or the scene cannot be read or analysed; the report cannot be written.
 pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     crate::io::begin_run();
-    let opts = &job.options;
+    let mut opts = job.options.clone();
     let baseline_files = expand_dirs(&job.baselines)?;
-    // the first baseline fixes what was estimated (speed, mesh order); the others follow it
-    let first = baseline_files.first().map(|b| diagnose(b, opts, None)).transpose()?;
+    // the first baseline fixes what was estimated (speed, mesh order) and the block length; the others
+    // follow it
+    let mut first = baseline_files.first().map(|b| diagnose(b, &opts, None)).transpose()?;
+    if let (Some(b), None) = (&first, opts.block_revs) {
+        let revs = b.gears.iter().map(|g| g.revolutions).min().unwrap_or(0) * baseline_files.len();
+        let fit = auto_block_revs(revs);
+        opts.block_revs = Some(fit);
+        if fit != DEFAULT_BLOCK_REVS {
+            first = Some(diagnose(&baseline_files[0], &opts, None)?);
+        }
+    }
     let geometry = first.as_ref().map(|b| Geometry {
         period_samples: (b.speed_source == SpeedSource::Estimated).then_some(b.shaft_period_samples),
         mesh_order: (b.teeth_source == TeethSource::Estimated).then_some(b.mesh_order),
@@ -79,7 +88,7 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         .skip(1)
         .collect::<Vec<_>>()
         .par_iter()
-        .map(|b| diagnose(b, opts, geometry.as_ref()))
+        .map(|b| diagnose(b, &opts, geometry.as_ref()))
         .collect();
     for b in rest {
         baselines.push(b?);
@@ -87,21 +96,26 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     for b in baselines.iter().skip(1) {
         compatibility(b, &baselines[0])?;
     }
-    let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.min_revolutions)).transpose()?;
+    let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.block_revs())).transpose()?;
     let results: Vec<Result<Diagnosis, Error>> =
-        job.recordings.par_iter().map(|r| diagnose(r, opts, geometry.as_ref())).collect();
+        job.recordings.par_iter().map(|r| diagnose(r, &opts, geometry.as_ref())).collect();
     let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let mut caps = vec![None; done.len()];
     if let Some(b) = baselines.first() {
-        for d in &mut done {
-            let warnings = compatibility(d, b)?;
-            d.warnings.extend(warnings);
+        for (d, cap) in done.iter_mut().zip(&mut caps) {
+            let c = compatibility(d, b)?;
+            d.warnings.extend(c.warnings);
+            *cap = c.operating_point;
         }
     }
     ensemble_na4(&mut done);
     let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
     let thresholds = Thresholds::default();
-    for d in &mut done {
+    for (d, cap) in done.iter_mut().zip(caps) {
         judge(d, reference.as_ref(), &thresholds);
+        if let Some(why) = cap {
+            verdict::cap_at_suspect(d, why);
+        }
         if let Some(s) = &scene {
             compare(d, s, opts.quantity)?;
         }
@@ -113,6 +127,19 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         }
     }
     Ok(DiagnoseOutcome { diagnoses: done, report_files })
+}
+
+/// Revolutions per baseline block unless given: 8, or fewer (down to 2) when the baseline would otherwise
+/// give fewer than [`baseline::MIN_BASELINE_BLOCKS`] blocks. Fewer revolutions per block make noisier
+/// indicators on both sides alike (the recording is scored on blocks of the same length).
+pub const DEFAULT_BLOCK_REVS: usize = 8;
+
+fn auto_block_revs(baseline_revs: usize) -> usize {
+    (2..=DEFAULT_BLOCK_REVS)
+        .rev()
+        .find(|r| baseline_revs / r >= 2 * baseline::MIN_BASELINE_BLOCKS)
+        .or_else(|| (2..=DEFAULT_BLOCK_REVS).rev().find(|r| baseline_revs / r >= baseline::MIN_BASELINE_BLOCKS))
+        .unwrap_or(2)
 }
 
 /// Files of `paths`, directories replaced by their .wav and .csv files in name order.
@@ -150,13 +177,29 @@ pub const MAX_SPEED_DIFFERENCE: f64 = 0.10;
 /// Relative speed difference from the baseline that is warned about.
 pub const WARN_SPEED_DIFFERENCE: f64 = 0.03;
 
+/// Relative speed difference from the baseline above which the operating point is taken to differ: 20
+/// times the drift of a speed-controlled rig (100 ppm); an induction motor slows by about 0.4 % from no
+/// load to 90 % load on the SpectraQuest rig of `data/realdata`, while a broken tooth changes its speed by
+/// less than 0.05 %.
+pub const OPERATING_POINT_SPEED_DIFFERENCE: f64 = 0.002;
+
+/// What [`compatibility`] found.
+#[derive(Clone, Debug, Default)]
+pub struct Compatibility {
+    /// Warnings for the recording.
+    pub warnings: Vec<String>,
+    /// Why the operating point differs from the baseline's (the verdict then stays at most suspect).
+    pub operating_point: Option<String>,
+}
+
 /// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
 /// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
-/// [`WARN_SPEED_DIFFERENCE`]), sample rate and overall level (warned). Returns the warnings.
+/// [`WARN_SPEED_DIFFERENCE`], operating point taken as different beyond
+/// [`OPERATING_POINT_SPEED_DIFFERENCE`]), sample rate and overall level (warned).
 ///
 /// # Errors
 /// An incompatible baseline, naming both files and what differs.
-pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Vec<String>, Error> {
+pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Error> {
     let refuse = |what: String| -> Error {
         JobError::Value {
             what: "baseline".into(),
@@ -185,10 +228,18 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Vec<String>, Error>
     }
     if ratio.abs() > WARN_SPEED_DIFFERENCE {
         warnings.push(format!(
-            "the baseline's shaft speed differs by {:+.1} %: indicators that depend on speed may move",
+            "the shaft speed differs from the baseline's by {:+.1} %: indicators that depend on speed may move",
             100.0 * ratio
         ));
     }
+    let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE).then(|| {
+        format!(
+            "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
+            100.0 * ratio.abs(),
+            if ratio > 0.0 { "faster" } else { "slower" },
+            (OPERATING_POINT_SPEED_DIFFERENCE * 1e6 / 20.0) as u32
+        )
+    });
     if let (Some(fd), Some(fb)) = (d.sample_rate_hz, b.sample_rate_hz) {
         if (fd / fb - 1.0).abs() > 1e-3 {
             warnings.push(format!("the baseline was sampled at {fb} Hz and this recording at {fd} Hz: the orders are compared, the raw spectra differ"));
@@ -206,7 +257,7 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Vec<String>, Error>
             }
         }
     }
-    Ok(warnings)
+    Ok(Compatibility { warnings, operating_point })
 }
 
 /// Writes `DIR/<stem>-diagnosis.json` and the diagnosis images of `d`.
@@ -242,8 +293,18 @@ pub struct Options {
     pub quantity: Quantity,
     /// Fewest whole revolutions a TSA needs.
     pub min_revolutions: usize,
+    /// Revolutions per block of the statistical baseline (`None`: [`DEFAULT_BLOCK_REVS`], or fewer when
+    /// the baseline is short).
+    pub block_revs: Option<usize>,
     /// Shaft orders 1..=n counted as regular.
     pub shaft_orders: usize,
+}
+
+impl Options {
+    /// Revolutions per baseline block in use.
+    pub fn block_revs(&self) -> usize {
+        self.block_revs.unwrap_or(DEFAULT_BLOCK_REVS)
+    }
 }
 
 impl Default for Options {
@@ -258,6 +319,7 @@ impl Default for Options {
             pulses_per_rev: 1,
             quantity: Quantity::Velocity,
             min_revolutions: 8,
+            block_revs: None,
             shaft_orders: 2,
         }
     }
@@ -666,6 +728,15 @@ fn nominal_speed(
         None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
     }
     .map_err(|e| bad(path, e))?;
+    if est.mesh_lag.is_none() && est.period_samples < MIN_SAMPLES_PER_REV {
+        return Err(bad(
+            path,
+            format!(
+                "no plausible shaft speed: the signal repeats every {:.2} samples, too short for a shaft (likely the tooth mesh), and no longer period stands out (the speed may vary too much to estimate); give --rpm or a tachometer channel",
+                est.period_samples
+            ),
+        ));
+    }
     warnings.push(format!(
         "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
         est.period_samples, est.confidence
@@ -677,7 +748,11 @@ fn nominal_speed(
             let f = (zp * k) as f64 / est.period_samples;
             if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.3 / est.period_samples)).sum() }
         };
-        let k = (1..=8).max_by(|&a, &b| line(a).total_cmp(&line(b))).unwrap_or(1);
+        // the smallest k whose line reaches a quarter of the strongest (k = 2 would otherwise take the
+        // second mesh harmonic, often stronger than the first, for the mesh of half the shaft period)
+        let lines: Vec<f64> = (1..=8).map(line).collect();
+        let top = lines.iter().copied().fold(0.0, f64::max);
+        let k = lines.iter().position(|&a| a >= 0.25 * top && a > 0.0).map_or(1, |i| i + 1);
         if k > 1 {
             warnings.push(format!(
                 "the signal repeats every {k} pinion revolutions (the given mesh order {zp} fits a period of {:.3} samples): the pinion period is taken as that",
@@ -707,22 +782,41 @@ fn nominal_speed(
 /// nominal speed is the mean (estimated) or what the user gave; further away the ridge followed another line.
 const MAX_TRACKING_SHIFT: f64 = 0.05;
 
-/// The mesh order whose fundamental is really there: a repetition lag or a harmonic family can hold two or
-/// three mesh periods (order z / 2 or z / 3 scores through its even harmonics), so among z, 2z and 3z the
-/// smallest whose line at that order reaches a quarter of its strongest harmonic (orders 1..=4 times it)
-/// is taken, summed over channels.
+/// The mesh order whose fundamental is really there: a repetition lag can hold two or three mesh periods,
+/// or only half or a third of one (a strong second harmonic), and a harmonic family can score through its
+/// even harmonics; so among z / 3, z / 2, z, 2z and 3z (whole divisors and multiples, at least 8) the
+/// smallest whose line reaches [`MESH_FUNDAMENTAL_SHARE`] of its strongest harmonic (orders 1..=4 times
+/// it) is taken, summed over channels; a divisor must moreover stand 4 times above the orders around it
+/// (a line at half the mesh order from elsewhere in the machine is not a mesh).
+/// Smallest amplitude of a mesh fundamental relative to its strongest harmonic: the bundled cracked-tooth
+/// scene's first mesh line is 10 % of its second (a resonance near twice the mesh), while on the real
+/// SpectraQuest recordings the lines at half and a quarter of the mesh order are 1.6 % and 4.5 % of the
+/// mesh: an engineering choice between the two.
+const MESH_FUNDAMENTAL_SHARE: f64 = 0.07;
+
 fn fundamental_mesh(channels: &[&[f32]], period: f64, z: usize) -> usize {
-    let amp = |order: usize| -> f64 {
-        let f = order as f64 / period;
+    // summed over channels, the strongest line within +-`search` orders of `order`
+    let amp = |order: f64, search: f64| -> f64 {
+        let f = order / period;
         if f >= 0.5 {
             return 0.0;
         }
-        channels.iter().map(|c| ind_line(c, f, 0.5 / period)).sum()
+        channels.iter().map(|c| ind_line(c, f, search / period)).sum()
     };
-    for c in [z, 2 * z, 3 * z] {
-        let own = amp(c);
-        let strongest = (1..=4).map(|k| amp(k * c)).fold(0.0, f64::max);
-        if own >= 0.25 * strongest && own > 0.0 {
+    // a divisor of z must also be a line of its own: 4 times the median of orders c +- 1..3
+    let clear_line = |c: usize| -> bool {
+        let mut near: Vec<f64> = [-3.0, -2.0, -1.0, 1.0, 2.0, 3.0].iter().map(|d| amp(c as f64 + d, 0.2)).collect();
+        near.sort_by(f64::total_cmp);
+        amp(c as f64, 0.2) >= 4.0 * 0.5 * (near[2] + near[3])
+    };
+    let mut candidates: Vec<usize> =
+        [z / 3, z / 2, z, 2 * z, 3 * z].into_iter().filter(|&c| c >= 8 && (c % z == 0 || z % c == 0)).collect();
+    candidates.dedup();
+    for c in candidates {
+        // +-0.2 orders: a wheel of 2.5 times as many teeth puts lines every 0.4 pinion orders
+        let own = amp(c as f64, 0.2);
+        let strongest = (1..=4).map(|k| amp((k * c) as f64, 0.2)).fold(0.0, f64::max);
+        if own >= MESH_FUNDAMENTAL_SHARE * strongest && own > 0.0 && (c >= z || clear_line(c)) {
             return c;
         }
     }
@@ -732,6 +826,10 @@ fn fundamental_mesh(channels: &[&[f32]], period: f64, z: usize) -> usize {
 fn ind_line(x: &[f32], f: f64, search: f64) -> f64 {
     crate::signal::spectrum::line_amplitude(x, f, search)
 }
+
+/// [`MAX_TRACKING_SHIFT`] when the nominal speed was estimated from the repetition period (the mean speed
+/// itself, good to about 1e-4): 0.5 % leaves room for a drift that is not symmetric in time.
+const MAX_TRACKING_SHIFT_ESTIMATED: f64 = 0.005;
 
 /// Line-to-band ratio below which a tracked mesh line is too weak to trust, dB.
 const MIN_TRACKING_SNR_DB: f64 = 6.0;
@@ -753,6 +851,8 @@ fn track(
         return Ok((nominal, Tracking::Tachometer, None, None));
     }
     let period = nominal.mean_period_samples();
+    // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
+    let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
     let z = match known_z {
         Some(z) => z,
         None => {
@@ -766,9 +866,19 @@ fn track(
             fundamental_mesh(&views, period, z)
         }
     };
+    // on each channel the strongest of the first four mesh harmonics below 0.4 cycles per sample is tracked
+    // (a resonance can make the second ten times the first)
     let tracked: Vec<Result<angle::Tracked, _>> = channels
         .par_iter()
-        .map(|&c| angle::track_mesh(&mut Fft::new(), &rec.channels[c - 1], period, z as f64))
+        .map(|&c| {
+            let x = &rec.channels[c - 1];
+            let order = (1..=4)
+                .map(|k| (k * z) as f64)
+                .filter(|o| o / period < 0.4)
+                .max_by(|a, b| ind_line(x, a / period, 0.2 / period).total_cmp(&ind_line(x, b / period, 0.2 / period)))
+                .unwrap_or(z as f64);
+            angle::track_mesh(&mut Fft::new(), x, period, order)
+        })
         .collect();
     let best = tracked.into_iter().reduce(|a, b| match (&a, &b) {
         (Ok(x), Ok(y)) => {
@@ -782,7 +892,7 @@ fn track(
         _ => a,
     });
     match best {
-        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > MAX_TRACKING_SHIFT => {
+        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
             warnings.push(format!(
                 "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
                 100.0 * (period / t.map.mean_period_samples() - 1.0)
@@ -898,7 +1008,7 @@ fn tsa_indicators(fft: &mut Fft, x: &[f64], z: usize, shaft_orders: usize) -> (B
     (m, d)
 }
 
-/// Indicators of consecutive blocks of `o.min_revolutions` whole revolutions of the gear turning `ratio`
+/// Indicators of consecutive blocks of `o.block_revs()` whole revolutions of the gear turning `ratio`
 /// times per reference revolution (the statistical baseline's samples; a recording under test is scored by
 /// the median of its own blocks, so both sides average the same number of revolutions).
 fn blocks(
@@ -910,9 +1020,9 @@ fn blocks(
     z: usize,
     o: &Options,
 ) -> Vec<crate::report::summary::Block> {
-    let per = o.min_revolutions.max(1);
+    let per = o.block_revs().max(1);
     let count = tsa::revolutions_of(map, ratio) / per;
-    let top = ((7 * z) / 2 + 4).min(points / 2);
+    let top = points / 2;
     (0..count)
         .map(|b| {
             let t = tsa::tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per);

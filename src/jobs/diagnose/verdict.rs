@@ -95,9 +95,9 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference) -> Vec
     let mut out = Vec::new();
     for sc in &scores {
         let Some((_, name, why)) = baseline::DECIDING.iter().find(|x| x.0 == sc.indicator) else { continue };
-        let state = if !sc.decides || sc.spreads < baseline::SUSPECT_SPREADS {
+        let state = if !sc.decides || sc.spreads < sc.suspect_at {
             continue;
-        } else if sc.spreads >= baseline::FAULTY_SPREADS {
+        } else if sc.spreads >= sc.faulty_at {
             VerdictState::Faulty
         } else {
             VerdictState::Suspect
@@ -202,11 +202,15 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
         }
         _ => {
             reasons.push(match reference {
-                Some(r) => format!(
-                    "every condition indicator lies within {} spreads of the baseline's blocks ({} healthy recording(s); false-alarm rate 1e-3 per indicator)",
-                    baseline::SUSPECT_SPREADS,
-                    r.files
-                ),
+                Some(r) => {
+                    let lo = d.scores.iter().map(|s| s.suspect_at).fold(f64::INFINITY, f64::min);
+                    let hi = d.scores.iter().map(|s| s.suspect_at).fold(0.0, f64::max);
+                    let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
+                    format!(
+                        "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s))",
+                        r.files
+                    )
+                }
                 None => {
                     "FM4, M6A and NA4 are within their healthy ranges (no baseline given: absolute thresholds)".into()
                 }
@@ -218,4 +222,18 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
         reasons.push("without a baseline only absolute thresholds apply; a healthy recording of the same machine makes the verdict much stronger".into());
     }
     d.verdict = Verdict { state, gear, reasons };
+}
+
+/// Lowers a faulty verdict to suspect when the recording's operating point differs from the baseline's,
+/// with `why` as the first reason (a change of load is not a fault, and the baseline cannot tell them
+/// apart).
+pub fn cap_at_suspect(d: &mut Diagnosis, why: String) {
+    if d.verdict.state == VerdictState::Faulty {
+        d.verdict.state = VerdictState::Suspect;
+    }
+    if d.verdict.state > VerdictState::Healthy {
+        d.verdict.reasons.insert(0, why);
+    } else {
+        d.warnings.push(why);
+    }
 }

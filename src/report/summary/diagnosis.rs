@@ -276,6 +276,18 @@ pub struct Block {
     pub amplitudes: Vec<f64>,
 }
 
+/// Where an indicator is scored: ratios of moments and energies vary by factors between blocks (their
+/// block-to-block spread is skewed, M6A from 11 to 25 around 13 on a real healthy gearbox), so they are
+/// scored on their logarithm; the spectral change is already a distance in dB.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// The value itself.
+    Linear,
+    /// Its natural logarithm.
+    Log,
+}
+
 /// One indicator of one gear and channel scored against the statistical baseline.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
@@ -291,14 +303,22 @@ pub struct Score {
     pub blocks: usize,
     /// Median over the baseline's blocks.
     pub baseline_centre: f64,
-    /// Spread of the baseline's blocks (1.4826 x median absolute deviation, at least 5 % of the centre).
+    /// Spread of the baseline's blocks (1.4826 x median absolute deviation, at least 5 % of the centre), on
+    /// `scale`.
     pub baseline_spread: f64,
+    /// `log` when the indicator is scored on its natural logarithm (the spread is then of ln value).
+    pub scale: Scale,
     /// Smallest and largest baseline block value.
     pub baseline_range: [f64; 2],
     /// Baseline blocks.
     pub baseline_blocks: usize,
     /// (value - centre) / spread: how many spreads above the baseline's centre.
     pub spreads: f64,
+    /// Suspect limit in spreads (false-alarm probability 1e-3 per indicator and block, Student-t prediction
+    /// limit for the number of baseline blocks).
+    pub suspect_at: f64,
+    /// Faulty limit in spreads (false-alarm probability 1e-6).
+    pub faulty_at: f64,
     /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
     pub decides: bool,
 }
