@@ -211,7 +211,7 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
                 *b = v.f() * w;
             }
             fft.forward(&mut buf, &mut spec);
-            spec.iter().map(|c| c.0.hypot(c.1)).collect()
+            spec.iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
         })
         .collect();
     let bins_per_order = nw as f64 / period;

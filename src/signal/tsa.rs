@@ -170,6 +170,50 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
     Ok(Tsa { samples: tsa_of_revolutions(x, map, ratio, points, 0..revs), revolutions: revs })
 }
 
+/// [`tsa`] and, in the same pass, the averages of consecutive blocks of `block_revs` revolutions (the
+/// revolutions after the last whole block count in the full average only).
+///
+/// # Errors
+/// As [`tsa`].
+pub fn tsa_with_blocks<T: Sample>(
+    x: &[T],
+    map: &AngleMap,
+    ratio: f64,
+    points: usize,
+    min_revs: usize,
+    block_revs: usize,
+) -> Result<(Tsa, Vec<Vec<f64>>), SignalError> {
+    let per = block_revs.max(1);
+    if map.constant.is_some() {
+        let full = tsa(x, map, ratio, points, min_revs)?;
+        let blocks =
+            (0..full.revolutions / per).map(|b| tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per)).collect();
+        return Ok((full, blocks));
+    }
+    let revs = revolutions_of(map, ratio);
+    if revs < min_revs {
+        return tsa(x, map, ratio, points, min_revs).map(|t| (t, Vec::new()));
+    }
+    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
+    let interp = TABLE.get_or_init(Interpolator::new);
+    let mut full = vec![0.0; points];
+    let mut block = vec![0.0; points];
+    let mut blocks = Vec::with_capacity(revs / per);
+    for j in 0..revs {
+        for (i, (f, b)) in full.iter_mut().zip(block.iter_mut()).enumerate() {
+            let v = interp.at(x, map.sample_at((j as f64 + i as f64 / points as f64) / ratio));
+            *f += v;
+            *b += v;
+        }
+        if (j + 1) % per == 0 {
+            blocks.push(block.iter().map(|v| v / per as f64).collect());
+            block.iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+    full.iter_mut().for_each(|v| *v /= revs as f64);
+    Ok((Tsa { samples: full, revolutions: revs }, blocks))
+}
+
 /// Revolutions of the shaft turning `ratio` times per reference revolution that `map` covers whole.
 pub fn revolutions_of(map: &AngleMap, ratio: f64) -> usize {
     (map.revolutions() as f64 * ratio + 1e-9).floor() as usize

@@ -553,8 +553,8 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     let tsas = jobs
         .par_iter()
         .map(|&(c, gi)| {
-            tsa::tsa(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions)
-                .map(|t| (c, gi, t))
+            tsa::tsa_with_blocks(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions, o.block_revs())
+                .map(|(t, blocks)| (c, gi, t, blocks))
                 .map_err(|e| bad(path, e))
         })
         .collect::<Result<Vec<_>, Error>>()?;
@@ -607,16 +607,16 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             }
         }
         mesh_orders.push(z);
-        for (c, _, t) in tsas.iter().filter(|t| t.1 == gi) {
-            pending.push((*name, *c, z, t, gears[gi].1));
+        for (c, _, t, blocks) in tsas.iter().filter(|t| t.1 == gi) {
+            pending.push((*name, *c, z, t, blocks));
         }
     }
     let gear_results: Vec<GearIndicators> = pending
         .par_iter()
-        .map(|&(name, c, z, t, ratio)| {
+        .map(|&(name, c, z, t, blocks)| {
             let mut fft = Fft::new();
             let mut g = gear_indicators(&mut fft, name, c, z, t, o.shaft_orders);
-            g.blocks = blocks(&mut fft, &rec.channels[c - 1], &map, ratio, points, z, o);
+            g.blocks = block_indicators(&mut fft, blocks, z, o.shaft_orders);
             g
         })
         .collect();
@@ -1008,30 +1008,24 @@ fn tsa_indicators(fft: &mut Fft, x: &[f64], z: usize, shaft_orders: usize) -> (B
     (m, d)
 }
 
-/// Indicators of consecutive blocks of `o.block_revs()` whole revolutions of the gear turning `ratio`
-/// times per reference revolution (the statistical baseline's samples; a recording under test is scored by
-/// the median of its own blocks, so both sides average the same number of revolutions).
-fn blocks(
+/// Indicators of the block averages of a gear (consecutive blocks of whole revolutions; the statistical
+/// baseline's samples; a recording under test is scored by the median of its own blocks, so both sides
+/// average the same number of revolutions).
+fn block_indicators(
     fft: &mut Fft,
-    x: &[f32],
-    map: &AngleMap,
-    ratio: f64,
-    points: usize,
+    blocks: &[Vec<f64>],
     z: usize,
-    o: &Options,
+    shaft_orders: usize,
 ) -> Vec<crate::report::summary::Block> {
-    let per = o.block_revs().max(1);
-    let count = tsa::revolutions_of(map, ratio) / per;
-    let top = points / 2;
-    (0..count)
-        .map(|b| {
-            let t = tsa::tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per);
-            let (mut indicators, d) = tsa_indicators(fft, &t, z, o.shaft_orders);
+    blocks
+        .iter()
+        .map(|t| {
+            let (mut indicators, d) = tsa_indicators(fft, t, z, shaft_orders);
             let n = d.residual.len() as f64;
             let mean = d.residual.iter().sum::<f64>() / n;
             indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
             indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
-            crate::report::summary::Block { indicators, amplitudes: d.amplitudes[..=top].to_vec() }
+            crate::report::summary::Block { indicators, amplitudes: d.amplitudes }
         })
         .collect()
 }
