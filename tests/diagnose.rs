@@ -305,3 +305,26 @@ fn sidecar_tacho_is_used_and_pulse_channels_are_never_vibration() {
     let run = gearvib(&["diagnose", &rec, "--channel", "3"]);
     assert_one_line_error(&run, &["channel 3", "pulse train"]);
 }
+
+/// Units end to end: a CSV without units takes --unit, and --sensitivity divides the samples (a 1.0 V
+/// reading at 0.1 V per g is 10 g).
+#[test]
+fn unit_and_sensitivity_are_applied() {
+    let dir = temp_dir("diag-units");
+    let mut text = String::from("a\n");
+    for i in 0..40_000 {
+        let th = std::f64::consts::TAU * 30.0 * i as f64 / 1e4;
+        text.push_str(&format!("{}\n", (14.0 * th).sin() + 0.3 * (13.0 * th).sin() + 0.1 * (th).sin()));
+    }
+    let f = write(&dir, "volts.csv", &text);
+    let plain = diag_json(&[&f, "--fs", "10000", "--rpm", "1800"]);
+    assert_eq!(plain["unit"], "");
+    let scaled = diag_json(&[&f, "--fs", "10000", "--rpm", "1800", "--unit", "g", "--sensitivity", "0.1"]);
+    assert_eq!(scaled["unit"], "g");
+    let rms = |d: &serde_json::Value| d["raw"][0]["rms"].as_f64().unwrap();
+    // f32 storage: relative rounding 6e-8
+    assert!((rms(&scaled) / rms(&plain) - 10.0).abs() < 1e-5, "{} {}", rms(&scaled), rms(&plain));
+    let run = gearvib(&["diagnose", &f, "--fs", "10000", "--sensitivity", "0"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.stderr.contains("--sensitivity"), "{}", run.stderr);
+}

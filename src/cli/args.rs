@@ -125,9 +125,17 @@ pub struct DiagnoseArgs {
     /// Scene to simulate at the recording's speed and compare with.
     #[arg(long)]
     pub scene: Option<String>,
-    /// What the recording measures (for --scene): acceleration, velocity or displacement.
-    #[arg(long, default_value = "velocity")]
-    pub quantity: Quantity,
+    /// What the recording measures (for --scene): acceleration, velocity or displacement; by default what
+    /// the unit says (sidecar, CSV header or --unit), else velocity.
+    #[arg(long)]
+    pub quantity: Option<Quantity>,
+    /// Physical unit of the analysed channels when the file does not name one (m/s, m/s^2, g, ...).
+    #[arg(long)]
+    pub unit: Option<String>,
+    /// Sensitivity: recorded value per physical unit (e.g. 0.1 for 100 mV per g); the samples are divided
+    /// by it.
+    #[arg(long, value_parser = positive_f64)]
+    pub sensitivity: Option<f64>,
     /// Exit with code 1 when any recording is at least this bad.
     #[arg(long, value_enum)]
     pub fail_on: Option<FailOn>,
@@ -150,5 +158,35 @@ pub enum FailOn {
 
 /// Parses the process arguments (clap prints usage errors itself and exits with code 2).
 pub fn parse_args() -> Cli {
-    Cli::parse()
+    match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            // one line, as every other error: clap's first line without its "error: " prefix
+            let text = e.render().to_string();
+            let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+            let first = lines.next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            // "the following required arguments were not provided:" names them on the next line
+            let rest = if first.ends_with(':') { lines.next().unwrap_or("") } else { "" };
+            eprintln!("gearvib: error: {}", format!("{first} {rest}").trim_end());
+            std::process::exit(2);
+        }
+    }
+}
+
+/// A finite number above zero (for factors such as `--sensitivity`).
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a finite number above 0, got {v}")),
+        Err(_) => Err(format!("{s:?} is not a number")),
+    }
 }

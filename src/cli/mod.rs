@@ -254,6 +254,8 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         tacho_channel: a.tacho_channel,
         pulses_per_rev: a.pulses_per_rev,
         quantity: a.quantity,
+        unit: a.unit.clone(),
+        sensitivity: a.sensitivity,
         block_revs: a.block_revs.map(|r| r as usize),
         ..Default::default()
     };

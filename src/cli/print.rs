@@ -50,6 +50,13 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
         })
         .collect();
     writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?;
+    let p = &d.speed_profile;
+    let range = match (p.min_hz, p.max_hz) {
+        (Some(lo), Some(hi)) => format!("revolutions from {lo:.4} to {hi:.4} Hz, "),
+        _ => String::new(),
+    };
+    let snr = p.line_snr_db.map_or(String::new(), |s| format!(", tracked line {s:.0} dB above its band"));
+    writeln!(w, "tracking         {}: {range}change {:+.3} % over the recording{snr}", p.tracking, p.change_percent)?;
     match d.mesh_hz {
         Some(f) => writeln!(w, "mesh             {f:.3} Hz = order {} ({})", d.mesh_order, d.teeth_source)?,
         None => writeln!(w, "mesh             order {} ({})", d.mesh_order, d.teeth_source)?,
@@ -59,12 +66,19 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
         writeln!(w, "  - {r}")?;
     }
     writeln!(w, "indicators (TSA of each gear's shaft; FM4/M6A/M8A on the difference signal, NA4 on the residual):")?;
-    let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest_factor"];
-    writeln!(w, "  {:<10} {:>3} {}", "gear", "ch", keys.iter().map(|k| format!("{k:>10}")).collect::<String>())?;
+    let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest"];
+    let name_width = d.gears.iter().map(|g| g.gear.name().len()).max().unwrap_or(4).max(4);
+    let head: String = keys.iter().map(|k| format!(" {k:>10}")).collect();
+    writeln!(w, "  {:<name_width$} {:>3}{head}", "gear", "ch")?;
     for g in &d.gears {
-        let vals: String =
-            keys.iter().map(|k| format!("{:>10.4}", g.indicators.get(*k).copied().unwrap_or(f64::NAN))).collect();
-        writeln!(w, "  {:<10} {:>3} {vals}", g.gear.name().chars().take(10).collect::<String>(), g.channel)?;
+        let vals: String = keys
+            .iter()
+            .map(|k| {
+                let key = if *k == "crest" { "crest_factor" } else { k };
+                format!(" {:>10}", table_number(g.indicators.get(key).copied().unwrap_or(f64::NAN)))
+            })
+            .collect();
+        writeln!(w, "  {:<name_width$} {:>3}{vals}", g.gear.name(), g.channel)?;
     }
     let unit = if d.unit.is_empty() { "unit of the file" } else { d.unit.as_str() };
     writeln!(w, "mesh harmonics (channel {}, amplitudes in {unit}):", d.channels[0])?;
@@ -147,4 +161,11 @@ pub fn sweep(w: &mut dyn Write, s: &SweepSummary) -> io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A number in at most 10 characters: four decimals while it fits, else three significant digits in
+/// scientific notation (an NA4* of 9.9e9 must not run into the next column).
+fn table_number(v: f64) -> String {
+    let plain = format!("{v:.4}");
+    if plain.len() <= 10 && (v == 0.0 || v.abs() >= 1e-3) { plain } else { format!("{v:.3e}") }
 }

@@ -72,6 +72,16 @@ impl Quantity {
             Self::Displacement => "displacement",
         }
     }
+    /// The quantity a physical unit measures ("m/s" velocity; "m/s^2", "m/s2", "g" acceleration; "m", "mm",
+    /// "um" displacement), `None` for anything else.
+    pub fn from_unit(unit: &str) -> Option<Self> {
+        match unit.trim().replace(['²', ' '], "^2").as_str() {
+            "m/s" | "mm/s" | "in/s" => Some(Self::Velocity),
+            "m/s^2" | "m/s2" | "mm/s^2" | "g" => Some(Self::Acceleration),
+            "m" | "mm" | "um" | "µm" => Some(Self::Displacement),
+            _ => None,
+        }
+    }
     /// A line amplitude `a` of this quantity at angular frequency `w_rad_s` (1/s) as a velocity amplitude.
     pub fn to_velocity(self, a: f64, w_rad_s: f64) -> f64 {
         match self {

@@ -186,8 +186,9 @@ pub fn tsa_with_blocks<T: Sample>(
     let per = block_revs.max(1);
     if map.constant.is_some() {
         let full = tsa(x, map, ratio, points, min_revs)?;
-        let blocks =
-            (0..full.revolutions / per).map(|b| tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per)).collect();
+        let blocks = (0..full.revolutions / per)
+            .map(|b| tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per))
+            .collect();
         return Ok((full, blocks));
     }
     let revs = revolutions_of(map, ratio);

@@ -117,7 +117,17 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             verdict::cap_at_suspect(d, why);
         }
         if let Some(s) = &scene {
-            compare(d, s, opts.quantity)?;
+            let quantity = match opts.quantity.or_else(|| Quantity::from_unit(&d.unit)) {
+                Some(q) => q,
+                None => {
+                    d.warnings.push(format!(
+                        "the recording's unit ({}) does not say what it measures: taken as velocity for the model comparison; give --quantity",
+                        if d.unit.is_empty() { "none" } else { &d.unit }
+                    ));
+                    Quantity::Velocity
+                }
+            };
+            compare(d, s, quantity)?;
         }
     }
     let mut report_files = Vec::new();
@@ -289,8 +299,12 @@ pub struct Options {
     pub tacho_channel: Option<usize>,
     /// Tachometer pulses per revolution.
     pub pulses_per_rev: usize,
-    /// What the recording measures.
-    pub quantity: Quantity,
+    /// What the recording measures (`None`: from the unit, else velocity).
+    pub quantity: Option<Quantity>,
+    /// Physical unit for channels whose file names none.
+    pub unit: Option<String>,
+    /// Recorded value per physical unit: samples are divided by it.
+    pub sensitivity: Option<f64>,
     /// Fewest whole revolutions a TSA needs.
     pub min_revolutions: usize,
     /// Revolutions per block of the statistical baseline (`None`: [`DEFAULT_BLOCK_REVS`], or fewer when
@@ -317,7 +331,9 @@ impl Default for Options {
             teeth: None,
             tacho_channel: None,
             pulses_per_rev: 1,
-            quantity: Quantity::Velocity,
+            quantity: None,
+            unit: None,
+            sensitivity: None,
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
@@ -353,8 +369,29 @@ pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result
     let tacho = o.tacho_channel.or(sidecar_tacho);
     let keep: Option<Vec<usize>> =
         o.channel.map(|c| std::iter::once(c).chain(tacho).map(|c| c.saturating_sub(1)).collect());
-    let rec = io::read_recording_channels(path, keep.as_deref())?;
+    let mut rec = io::read_recording_channels(path, keep.as_deref())?;
+    apply_units(&mut rec, o, tacho);
     analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+}
+
+/// `--sensitivity` (samples divided by it) and `--unit` (for channels whose file names no unit, or for all
+/// with a sensitivity) applied to every channel but the tachometer.
+fn apply_units(rec: &mut Recording, o: &Options, tacho: Option<usize>) {
+    for (i, (x, unit)) in rec.channels.iter_mut().zip(rec.units.iter_mut()).enumerate() {
+        if Some(i + 1) == tacho || unit == "pulse" {
+            continue;
+        }
+        if let Some(s) = o.sensitivity {
+            let k = (1.0 / s) as f32;
+            x.iter_mut().for_each(|v| *v *= k);
+        }
+        // a sensitivity turns the recorded unit (volts) into the physical one: --unit then names it
+        if unit.is_empty() || o.sensitivity.is_some() {
+            if let Some(u) = &o.unit {
+                unit.clone_from(u);
+            }
+        }
+    }
 }
 
 /// Name of the pinion's tachometer channel in gearvib's sidecar: used for the speed when no speed and no
