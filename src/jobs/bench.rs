@@ -57,6 +57,8 @@ pub fn run(job: &BenchJob, progress: &dyn Fn(&str)) -> Result<BenchOutcome, Erro
             crate::report::figures::bench(&png, &scene.name, &all.results)?;
             images.push(png);
         }
+        let section = crate::report::html::bench_section(&all, &images);
+        images.push(crate::report::html::write(dir, "gearvib bench", &[section])?);
     }
     Ok(BenchOutcome { report: all, images })
 }

@@ -108,6 +108,8 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
         crate::io::check_output(&dir.join("simulate.json"))?;
         report_files = crate::report::figures::simulation(&scene, &sim, dir)?;
         crate::io::write_atomic(&dir.join("simulate.json"), to_json_line(&summary).as_bytes())?;
+        let section = crate::report::html::simulation_section(&summary, &report_files);
+        report_files.push(crate::report::html::write(dir, &format!("gearvib simulation: {}", scene.name), &[section])?);
     }
     Ok(SimulateOutcome { summary, signal, report_files })
 }
@@ -140,6 +142,8 @@ pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
         crate::io::check_output(&dir.join("stability.json"))?;
         report_files.push(crate::report::figures::multipliers(&scene, &steady, dir)?);
         crate::io::write_atomic(&dir.join("stability.json"), to_json_line(&summary).as_bytes())?;
+        let section = crate::report::html::stability_section(&summary, &report_files);
+        report_files.push(crate::report::html::write(dir, &format!("gearvib stability: {}", scene.name), &[section])?);
     }
     Ok(StabilityOutcome { summary, report_files })
 }

@@ -76,6 +76,11 @@ pub fn run(job: &SweepJob, progress: &Progress<'_>) -> Result<SweepOutcome, Erro
     for img in &images {
         crate::report::figures::stability_map(img, &scene.name, &field, scene.output.quantity.unit(), &summary.points)?;
     }
+    if let Some(dir) = &job.report {
+        let own: Vec<PathBuf> = images.iter().filter(|i| i.starts_with(dir)).cloned().collect();
+        let section = crate::report::html::sweep_section(&summary, &own);
+        images.push(crate::report::html::write(dir, &format!("gearvib sweep: {}", scene.name), &[section])?);
+    }
     Ok(SweepOutcome { summary, images })
 }
 

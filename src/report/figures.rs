@@ -340,7 +340,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             x_label: "frequency [Hz]".into(),
             y_label: format!("amplitude [{}]", unit_or(&d.unit)),
             y_log: true,
-            x_range: Some((0.0, max_f * 1.25)),
+            x_range: Some((0.0, max_f)),
             y_range: Some((peak * 1e-5, peak * 10.0)),
             series,
             markers,

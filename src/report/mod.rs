@@ -1,6 +1,7 @@
-//! Reports: JSON summaries (serde) and PNG images (plotters).
+//! Reports: JSON summaries (serde), PNG images (plotters) and one HTML page per report directory.
 
 pub mod figures;
+pub mod html;
 pub mod plot;
 pub mod summary;
 

@@ -8,7 +8,7 @@
 //! amplitude spectrum around the first mesh harmonic. Raw-signal RMS and kurtosis are reported but never
 //! decide the verdict.
 
-mod baseline;
+pub mod baseline;
 mod compare;
 mod verdict;
 
@@ -132,9 +132,15 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     }
     let mut report_files = Vec::new();
     if let Some(dir) = &job.report {
+        let mut sections = Vec::new();
         for d in &done {
-            report_files.extend(write_report(d, dir)?);
+            let files = write_report(d, dir)?;
+            let images: Vec<PathBuf> =
+                files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
+            sections.push(crate::report::html::diagnosis_section(d, &images));
+            report_files.extend(files);
         }
+        report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);
     }
     Ok(DiagnoseOutcome { diagnoses: done, report_files })
 }

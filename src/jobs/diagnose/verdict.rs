@@ -22,7 +22,7 @@ pub struct Limits {
 /// NA4) and whose normalised sixth moment is 15 (M6A); the limits sit at 1.5x and 2x those values
 /// (FM4/NA4: 4.5 and 6) and at about 2.7x and 5.3x for the more scattered M6A (40 and 80). These are
 /// engineering choices checked on the bundled simulated recordings, not values from a standard; with a
-/// baseline the limits come from its own spread instead ([`super::baseline`]).
+/// baseline the limits come from its own spread instead (the `baseline` module of `jobs::diagnose`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Thresholds {
     /// FM4 without a baseline (3 for a healthy mesh).
