@@ -328,3 +328,22 @@ fn unit_and_sensitivity_are_applied() {
     assert_eq!(run.code, 2, "{}", run.stderr);
     assert!(run.stderr.contains("--sensitivity"), "{}", run.stderr);
 }
+
+/// The envelope in the kurtogram's band shows a local pinion fault at the pinion's first order (the
+/// impacts repeat once per pinion revolution): 15 dB above the envelope spectrum around it for the cracked
+/// and the pitted tooth, while the healthy mesh stays below 12 dB there.
+#[test]
+fn envelope_shows_local_faults_at_the_pinion_order() {
+    let over = |name: &str| {
+        let d = diag_json(&[&rec(name), "--teeth", "14,39"]);
+        let e = &d["envelope"];
+        assert!(e["band_hz"][0].as_f64().unwrap() >= 1.5 * 420.0 * 0.99, "{e}");
+        e["lines"].as_array().unwrap().iter().find(|l| l["shaft"] == "pinion" && l["order"] == 1).unwrap()["over_floor_db"]
+            .as_f64()
+            .unwrap()
+    };
+    for fault in ["cracked-pinion-tooth3", "pitted-pinion-tooth3"] {
+        assert!(over(fault) > 15.0, "{fault}: {}", over(fault));
+    }
+    assert!(over("healthy") < 12.0, "{}", over("healthy"));
+}

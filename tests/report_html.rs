@@ -98,8 +98,8 @@ fn every_report_page_renders_with_its_images() {
         &d_s,
     ]);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    // two recordings, a TSA and a spectrum image each
-    check_page(&d, &["FAULTY", "HEALTHY", "NA4*", "spreads"], 4);
+    // two recordings with a TSA, a spectrum, an envelope and a cepstrum image each
+    check_page(&d, &["FAULTY", "HEALTHY", "NA4*", "spreads"], 8);
 
     let s = root.join("simulate");
     let scene = repo("data/scenes/paper-gear-fig8a.json");

@@ -90,6 +90,22 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             sb.iter().take(4).map(|s| format!("{:+} {} {:.3e}", s.offset, s.shaft, s.amplitude)).collect();
         writeln!(w, "  {}x mesh  {f:>12}  {:.4e}   strongest sidebands: {}", h.k, h.amplitude, top.join("; "))?;
     }
+    if let Some(e) = &d.envelope {
+        let lines: Vec<String> = e
+            .lines
+            .iter()
+            .filter(|l| l.order == 1)
+            .map(|l| format!("{} order 1 {:+.1} dB over the envelope spectrum around", l.shaft, l.over_floor_db))
+            .collect();
+        writeln!(
+            w,
+            "envelope         band {:.0}..{:.0} Hz (spectral kurtosis {:.2}): {}",
+            e.band_hz[0],
+            e.band_hz[1],
+            e.spectral_kurtosis,
+            lines.join("; ")
+        )?;
+    }
     if let Some(c) = &d.comparison {
         writeln!(
             w,

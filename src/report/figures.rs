@@ -350,6 +350,16 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         render_png(&p, 1400, 700, &[chart])?;
         out.push(p);
     }
+    if let Some(e) = &d.envelope {
+        let p = dir.join(format!("{stem}-envelope.png"));
+        render_png(&p, 1400, 600, &[envelope_chart(&stem, d, e)])?;
+        out.push(p);
+    }
+    if let Some(c) = &d.cepstrum {
+        let p = dir.join(format!("{stem}-cepstrum.png"));
+        render_png(&p, 1400, 550, &[cepstrum_chart(&stem, d, c)])?;
+        out.push(p);
+    }
     if let Some(c) = &d.comparison {
         let meas: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 - 0.12, l.measured_db)).collect();
         let model: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 + 0.12, l.model_db)).collect();
@@ -368,6 +378,84 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     Ok(out)
+}
+
+/// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, with the first orders of
+/// each shaft marked; a shaft order is drawn as detected only 10 dB above the envelope spectrum around it.
+fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelope) -> Chart {
+    let top = 3.5;
+    let pts: Vec<(f64, f64)> =
+        e.orders.iter().zip(&e.amplitudes).filter(|(o, _)| **o > 0.05 && **o <= top).map(|(o, a)| (*o, *a)).collect();
+    let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+    let mut series =
+        vec![Series { name: "squared-envelope order spectrum".into(), points: pts, style: Style::Line, color: 4 }];
+    let reference = match d.shaft_hz {
+        ShaftHz::Pair { .. } => "pinion",
+        ShaftHz::Estimated { .. } => "estimated shaft",
+    };
+    let mut markers = Vec::new();
+    for (i, shaft) in [Shaft::Pinion, Shaft::Wheel, Shaft::Estimated].into_iter().enumerate() {
+        let lines: Vec<_> = e.lines.iter().filter(|l| l.shaft == shaft).collect();
+        let detected: Vec<(f64, f64)> =
+            lines.iter().filter(|l| l.over_floor_db >= 10.0).map(|l| (l.reference_order, l.amplitude)).collect();
+        markers.extend(lines.iter().map(|l| Marker {
+            x: l.reference_order,
+            label: format!("{}x {}", l.order, shaft.name().split(' ').next().unwrap_or("shaft")),
+            color: 1 + i,
+        }));
+        if !detected.is_empty() {
+            series.push(Series {
+                name: format!("{shaft} orders, 10 dB above the envelope spectrum around"),
+                points: detected,
+                style: Style::Points,
+                color: 1 + i,
+            });
+        }
+    }
+    Chart {
+        title: format!(
+            "{stem}: envelope spectrum, band {:.0}..{:.0} Hz (kurtogram, spectral kurtosis {:.1})",
+            e.band_hz[0], e.band_hz[1], e.spectral_kurtosis
+        ),
+        x_label: format!("order of the {reference} (tracked angle)"),
+        y_label: format!("squared envelope [({})^2]", unit_or(&d.unit)),
+        y_log: true,
+        x_range: Some((0.0, top)),
+        y_range: Some((peak * 1e-4, peak * 10.0)),
+        series,
+        markers,
+        ..Default::default()
+    }
+}
+
+/// The real cepstrum up to 1.2 periods of the slowest shaft, with the rahmonics of each shaft marked.
+fn cepstrum_chart(stem: &str, d: &Diagnosis, c: &crate::report::summary::Cepstrum) -> Chart {
+    let q_max = c.rahmonics.iter().map(|r| r.quefrency_s).fold(0.0, f64::max) * 1.1;
+    let pts: Vec<(f64, f64)> = c
+        .values
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (1e3 * i as f64 * c.dq_s, *v))
+        .filter(|(q, _)| *q >= 1e3 * 5.0 * c.dq_s && *q <= 1e3 * q_max)
+        .collect();
+    let markers = c
+        .rahmonics
+        .iter()
+        .map(|r| Marker {
+            x: 1e3 * r.quefrency_s,
+            label: format!("{} {}", r.shaft.name().split(' ').next().unwrap_or("shaft"), r.k),
+            color: if r.shaft == Shaft::Wheel { 2 } else { 1 },
+        })
+        .collect();
+    let _ = d;
+    Chart {
+        title: format!("{stem}: real power cepstrum with the rahmonics of each shaft"),
+        x_label: "quefrency [ms]".into(),
+        y_label: "cepstrum [-]".into(),
+        series: vec![Series { name: "cepstrum".into(), points: pts, style: Style::Line, color: 4 }],
+        markers,
+        ..Default::default()
+    }
 }
 
 /// A sideband is drawn as detected only above this multiple of the local noise floor (about 10 dB).

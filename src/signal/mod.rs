@@ -2,6 +2,7 @@
 //! Knows nothing of ODEs or gears' equations of motion: it sees sample arrays, rates and orders.
 
 pub mod angle;
+pub mod envelope;
 pub mod indicators;
 pub mod spectrum;
 pub mod speed;

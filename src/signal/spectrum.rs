@@ -14,6 +14,7 @@ use std::sync::Arc;
 /// Reusable FFT context: plans are cached per length, scratch buffers kept between calls.
 pub struct Fft {
     planner: RealFftPlanner<f64>,
+    complex: rustfft::FftPlanner<f64>,
     scratch: Vec<Complex<f64>>,
 }
 
@@ -26,7 +27,7 @@ impl Default for Fft {
 impl Fft {
     /// A fresh context.
     pub fn new() -> Self {
-        Self { planner: RealFftPlanner::new(), scratch: Vec::new() }
+        Self { planner: RealFftPlanner::new(), complex: rustfft::FftPlanner::new(), scratch: Vec::new() }
     }
 
     fn forward_plan(&mut self, n: usize) -> Arc<dyn realfft::RealToComplex<f64>> {
@@ -45,6 +46,16 @@ impl Fft {
             .expect("sizes from the plan");
         out.clear();
         out.extend(spec.iter().map(|c| (c.re, c.im)));
+    }
+
+    /// Unnormalised complex inverse transform in place: x_n = sum_k X_k exp(+2 pi i k n / N).
+    pub fn inverse_complex(&mut self, data: &mut [(f64, f64)]) {
+        let plan = self.complex.plan_fft_inverse(data.len());
+        let mut buf: Vec<Complex<f64>> = data.iter().map(|&(r, i)| Complex::new(r, i)).collect();
+        plan.process(&mut buf);
+        for (d, c) in data.iter_mut().zip(buf) {
+            *d = (c.re, c.im);
+        }
     }
 
     /// Inverse of [`forward`](Self::forward) including the 1/N factor: `spec` (len N/2 + 1) -> N samples.

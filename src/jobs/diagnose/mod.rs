@@ -709,6 +709,8 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         raw,
         verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
         comparison: None,
+        envelope: None,
+        cepstrum: None,
         scores: Vec::new(),
         unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
         warnings,
@@ -718,7 +720,95 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     if let Some(g) = d.gears.first() {
         d.indicators = g.indicators.clone();
     }
+    if let Some(fs) = fs {
+        let x = &rec.channels[channels[0] - 1];
+        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order) {
+            Ok(e) => d.envelope = Some(e),
+            Err(e) => d.warnings.push(format!("no envelope analysis: {e}")),
+        }
+        d.cepstrum = cepstrum(&mut fft, x, fs, period, &ratios);
+    }
     Ok(d)
+}
+
+/// Kurtogram levels searched (band widths down to fs / 64).
+const KURTOGRAM_LEVELS: usize = 5;
+
+/// Envelope analysis of one channel: the band of largest spectral kurtosis (from 1.5 mesh frequencies up,
+/// at most from fs / 4), the squared envelope there,
+/// its order spectrum on the tracked angle, and its lines at orders 1..=3 of each shaft.
+fn envelope(
+    fft: &mut Fft,
+    x: &[f32],
+    fs: f64,
+    map: &AngleMap,
+    shafts: &[(Shaft, f64)],
+    mesh_order: usize,
+) -> Result<crate::report::summary::Envelope, crate::signal::SignalError> {
+    use crate::signal::envelope as env;
+    let n = x.len().min(1 << 20);
+    let deepest = ((n.next_power_of_two() / 4 / 64) as f64).log2().floor().max(1.0) as usize;
+    // bands from 1.5 mesh frequencies up: below, the shafts' and mesh's own lines beat into a peaky envelope
+    let period = map.mean_period_samples();
+    let mesh_hz = shafts.first().map_or(0.0, |_| mesh_order as f64 * fs / period);
+    let k = env::kurtogram(fft, x, fs, KURTOGRAM_LEVELS.min(deepest), (1.5 * mesh_hz).min(fs / 4.0))?;
+    let (level, _, lo, hi) = k.best;
+    let e = env::squared_envelope(fft, x, fs, lo, hi)?;
+    // points per revolution: twice the envelope's band width in orders, a power of two
+    let points = ((2.0 * (hi - lo) * period / fs + 16.0) as usize).next_power_of_two().clamp(32, 4096);
+    let (orders, amplitudes) = env::order_spectrum(fft, &e, map, points);
+    let revs = map.revolutions().max(1) as f64;
+    let at = |o: f64| -> (f64, f64) {
+        let i = (o * revs).round() as usize;
+        let a = (i.saturating_sub(2)..=i + 2).filter_map(|j| amplitudes.get(j)).copied().fold(0.0, f64::max);
+        let w = (2.0 * revs) as usize;
+        let mut near: Vec<f64> = (i.saturating_sub(w)..=i + w).filter_map(|j| amplitudes.get(j)).copied().collect();
+        near.sort_by(f64::total_cmp);
+        let floor = near.get(near.len() / 2).copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
+        (a, 20.0 * (a / floor).max(f64::MIN_POSITIVE).log10())
+    };
+    let lines = shafts
+        .iter()
+        .flat_map(|&(shaft, ratio)| (1..=3).map(move |k| (shaft, k, k as f64 * ratio)))
+        .map(|(shaft, order, o)| {
+            let (amplitude, over_floor_db) = at(o);
+            crate::report::summary::EnvelopeLine { shaft, order, reference_order: o, amplitude, over_floor_db }
+        })
+        .collect();
+    Ok(crate::report::summary::Envelope {
+        band_hz: [lo, hi],
+        level,
+        spectral_kurtosis: k.best_kurtosis,
+        lines,
+        orders,
+        amplitudes,
+        kurtogram: k.levels,
+    })
+}
+
+/// Real power cepstrum over segments of about 4 revolutions, with the first 3 rahmonics of each shaft.
+fn cepstrum(
+    fft: &mut Fft,
+    x: &[f32],
+    fs: f64,
+    period: f64,
+    shafts: &[(Shaft, f64)],
+) -> Option<crate::report::summary::Cepstrum> {
+    let slowest = shafts.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+    let segment = ((8.0 * period / slowest) as usize).next_power_of_two().clamp(256, 1 << 18);
+    let values = crate::signal::envelope::cepstrum(fft, x, segment).ok()?;
+    let rahmonics = shafts
+        .iter()
+        .flat_map(|&(shaft, ratio)| (1..=3).map(move |k| (shaft, k, k as f64 * period / ratio)))
+        .filter(|(_, _, q)| (*q as usize) + 2 < values.len())
+        .map(|(shaft, k, q)| {
+            let w = (q * 0.01).ceil() as usize;
+            let i = q.round() as usize;
+            let value = (i.saturating_sub(w)..=i + w).filter_map(|j| values.get(j)).copied().fold(f64::MIN, f64::max);
+            crate::report::summary::Rahmonic { shaft, k, quefrency_s: q / fs, value }
+        })
+        .collect();
+    Some(crate::report::summary::Cepstrum { rahmonics, dq_s: 1.0 / fs, values })
 }
 
 /// Points per revolution of a TSA: the revolution's samples rounded up to a power of two (64 ..= 65536).

@@ -288,6 +288,69 @@ pub enum Scale {
     Log,
 }
 
+/// A line of the envelope's order spectrum at a shaft order.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnvelopeLine {
+    /// The shaft.
+    pub shaft: Shaft,
+    /// Order of that shaft (1, 2, 3).
+    pub order: usize,
+    /// Order of the reference shaft where it lies.
+    pub reference_order: f64,
+    /// Amplitude of the squared envelope (unit^2).
+    pub amplitude: f64,
+    /// Height over the median of the envelope spectrum within +-2 orders, dB.
+    pub over_floor_db: f64,
+}
+
+/// The envelope analysis of the deciding channel: band from the fast kurtogram, the squared envelope's
+/// order spectrum on the tracked angle, the lines at the shafts' first orders.
+#[derive(Clone, Debug, Serialize)]
+pub struct Envelope {
+    /// Band, Hz.
+    pub band_hz: [f64; 2],
+    /// Kurtogram level of the band (band width fs / 2^(level + 1)).
+    pub level: usize,
+    /// Spectral kurtosis of the band (0 for Gaussian noise).
+    pub spectral_kurtosis: f64,
+    /// Lines at orders 1..=3 of each shaft.
+    pub lines: Vec<EnvelopeLine>,
+    /// Order axis of the envelope spectrum (reference shaft orders).
+    #[serde(skip)]
+    pub orders: Vec<f64>,
+    /// Envelope spectrum amplitudes.
+    #[serde(skip)]
+    pub amplitudes: Vec<f64>,
+    /// Kurtogram: spectral kurtosis per level and band.
+    #[serde(skip)]
+    pub kurtogram: Vec<Vec<f64>>,
+}
+
+/// A rahmonic of a shaft in the real cepstrum.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rahmonic {
+    /// The shaft.
+    pub shaft: Shaft,
+    /// Rahmonic number (1 at the shaft period).
+    pub k: usize,
+    /// Quefrency, s.
+    pub quefrency_s: f64,
+    /// Cepstrum value there (largest within +-1 % of the quefrency).
+    pub value: f64,
+}
+
+/// The real power cepstrum of the deciding channel.
+#[derive(Clone, Debug, Serialize)]
+pub struct Cepstrum {
+    /// Rahmonics of each shaft.
+    pub rahmonics: Vec<Rahmonic>,
+    /// Quefrency step, s.
+    pub dq_s: f64,
+    /// Cepstrum values from quefrency 0.
+    #[serde(skip)]
+    pub values: Vec<f64>,
+}
+
 /// One indicator of one gear and channel scored against the statistical baseline.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
@@ -405,6 +468,12 @@ pub struct Diagnosis {
     pub raw: Vec<BTreeMap<String, f64>>,
     /// Verdict.
     pub verdict: Verdict,
+    /// Envelope analysis of the deciding channel (with a sample rate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub envelope: Option<Envelope>,
+    /// Real power cepstrum of the deciding channel (with a sample rate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cepstrum: Option<Cepstrum>,
     /// Indicators scored against the statistical baseline (empty without a baseline).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub scores: Vec<Score>,

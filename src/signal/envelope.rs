@@ -1,0 +1,308 @@
+//! Beyond the TSA: the envelope of a band (where a local fault's impacts excite a resonance), the band
+//! chosen by the fast kurtogram, the envelope's order spectrum on the tracked shaft angle, and the real
+//! power cepstrum.
+//!
+//! ```text
+//! band envelope   c(t) = analytic signal of x band-passed to [f1, f2], shifted to 0 Hz (FFT bins of the band)
+//! squared env.    e(t) = |c(t)|^2
+//! spectral kurt.  SK = <|c|^4> / <|c|^2>^2 - 2          (0 for Gaussian noise, Antoni 2006; > 0 impulsive)
+//! kurtogram       SK of the 2^l bands of width fs / 2^(l+1), levels l = 1..L (Antoni 2007, dyadic tree)
+//! cepstrum        C(q) = IFFT(ln |X(f)|^2)             (real power cepstrum, segment-averaged power)
+//! ```
+
+use super::spectrum::{Fft, hann};
+use super::tsa::{AngleMap, Interpolator};
+use super::{Sample, SignalError};
+
+/// Complex envelope of the band [`lo`, `hi`) bins of a one-sided spectrum of an N-point real signal: the
+/// band's bins moved to 0 Hz and inverse transformed at the smallest power-of-two length holding them (a
+/// decimated envelope, one sample every N / len input samples). |c|^2 is the squared envelope up to a
+/// constant factor.
+fn band_envelope(fft: &mut Fft, spec: &[(f64, f64)], lo: usize, hi: usize) -> Vec<(f64, f64)> {
+    let width = hi.saturating_sub(lo).max(1);
+    let len = width.next_power_of_two().max(8);
+    let mut buf = vec![(0.0, 0.0); len];
+    for (k, b) in buf.iter_mut().enumerate().take(width) {
+        *b = spec.get(lo + k).copied().unwrap_or((0.0, 0.0));
+    }
+    fft.inverse_complex(&mut buf);
+    buf
+}
+
+/// Spectral kurtosis of a complex envelope: <|c|^4> / <|c|^2>^2 - 2.
+fn spectral_kurtosis(c: &[(f64, f64)]) -> f64 {
+    let (mut m2, mut m4) = (0.0, 0.0);
+    for &(r, i) in c {
+        let p = r * r + i * i;
+        m2 += p;
+        m4 += p * p;
+    }
+    let n = c.len() as f64;
+    if m2 <= 0.0 { 0.0 } else { (m4 / n) / (m2 / n).powi(2) - 2.0 }
+}
+
+/// The fast kurtogram of a signal.
+#[derive(Clone, Debug)]
+pub struct Kurtogram {
+    /// Spectral kurtosis per level (level l has 2^l bands of width fs / 2^(l+1)), levels 1..=L.
+    pub levels: Vec<Vec<f64>>,
+    /// The band with the largest spectral kurtosis: (level, band index, lower and upper edge in Hz).
+    pub best: (usize, usize, f64, f64),
+    /// Its spectral kurtosis.
+    pub best_kurtosis: f64,
+}
+
+/// Fewest envelope samples a band needs for its kurtosis to mean anything.
+const MIN_BAND_SAMPLES: usize = 64;
+
+/// Fast kurtogram over levels 1..=`levels` of the first 2^20 samples of `x` (sample rate `fs_hz`); the best
+/// band is sought among bands starting at `min_hz` or above (below it, a machine's own deterministic lines
+/// beat into a peaky but fault-free envelope). Bands holding fewer than 64 envelope samples cannot be
+/// estimated: asking for such a level is an error.
+///
+/// # Errors
+/// Fewer than 256 samples, no level, or a level deeper than the recording allows.
+pub fn kurtogram<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    fs_hz: f64,
+    levels: usize,
+    min_hz: f64,
+) -> Result<Kurtogram, SignalError> {
+    let n = x.len().min(1 << 20);
+    if n < 256 {
+        return Err(SignalError::TooShort { what: "kurtogram".into(), needed: 256, got: x.len() });
+    }
+    let n = 1usize << (usize::BITS - 1 - n.leading_zeros()); // largest power of two that fits
+    let deepest = ((n / 2 / MIN_BAND_SAMPLES) as f64).log2().floor() as usize;
+    if levels == 0 || levels > deepest {
+        return Err(SignalError::Invalid(format!(
+            "kurtogram level {levels} is not possible: {n} samples allow levels 1 to {deepest} (each band needs {MIN_BAND_SAMPLES} envelope samples)"
+        )));
+    }
+    let mean = x[..n].iter().map(|v| v.f()).sum::<f64>() / n as f64;
+    let mut buf: Vec<f64> = x[..n].iter().map(|v| v.f() - mean).collect();
+    let mut spec = Vec::new();
+    fft.forward(&mut buf, &mut spec);
+    let half = n / 2;
+    let mut out = Vec::with_capacity(levels);
+    let mut best = (1, 1, fs_hz / 4.0, fs_hz / 2.0);
+    let mut best_k = f64::NEG_INFINITY;
+    for l in 1..=levels {
+        let bands = 1usize << l;
+        let width = half / bands;
+        let row: Vec<f64> = (0..bands)
+            .map(|b| {
+                // the DC bin is left out of the lowest band
+                let lo = (b * width).max(1);
+                spectral_kurtosis(&band_envelope(fft, &spec, lo, (b + 1) * width))
+            })
+            .collect();
+        let bw = fs_hz / 2.0 / bands as f64;
+        for (b, &k) in row.iter().enumerate() {
+            if k > best_k && b as f64 * bw >= min_hz {
+                best_k = k;
+                best = (l, b, b as f64 * bw, (b + 1) as f64 * bw);
+            }
+        }
+        out.push(row);
+    }
+    Ok(Kurtogram { levels: out, best, best_kurtosis: best_k })
+}
+
+/// Squared envelope of `x` in the band [`lo_hz`, `hi_hz`] at the full sample rate: the band's bins of the
+/// whole record kept, the analytic signal by inverse transform, |.|^2.
+///
+/// # Errors
+/// An empty band, or one outside 0 .. fs / 2.
+pub fn squared_envelope<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    fs_hz: f64,
+    lo_hz: f64,
+    hi_hz: f64,
+) -> Result<Vec<f64>, SignalError> {
+    let n = x.len();
+    if !(lo_hz >= 0.0 && hi_hz > lo_hz && hi_hz <= fs_hz / 2.0) {
+        return Err(SignalError::Invalid(format!(
+            "envelope band {lo_hz} .. {hi_hz} Hz is empty or outside 0 .. {} Hz",
+            fs_hz / 2.0
+        )));
+    }
+    let mut buf: Vec<f64> = x.iter().map(|v| v.f()).collect();
+    let mut spec = Vec::new();
+    fft.forward(&mut buf, &mut spec);
+    let (lo, hi) = ((lo_hz * n as f64 / fs_hz).ceil() as usize, (hi_hz * n as f64 / fs_hz).floor() as usize);
+    if hi <= lo {
+        return Err(SignalError::Invalid(format!("envelope band {lo_hz} .. {hi_hz} Hz holds no frequency bin")));
+    }
+    // analytic signal: positive frequencies doubled, the rest zero
+    let mut full = vec![(0.0, 0.0); n];
+    for k in lo.max(1)..=hi.min(n / 2) {
+        full[k] = (2.0 * spec[k].0 / n as f64, 2.0 * spec[k].1 / n as f64);
+    }
+    fft.inverse_complex(&mut full);
+    Ok(full.iter().map(|(r, i)| r * r + i * i).collect())
+}
+
+/// Amplitude spectrum in orders of the reference shaft: `x` resampled at `points` equal angles per
+/// revolution over the whole revolutions of `map`, mean removed, Hann window, amplitude-corrected. Entry k
+/// is order k / revolutions.
+pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points: usize) -> (Vec<f64>, Vec<f64>) {
+    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
+    let interp = TABLE.get_or_init(Interpolator::new);
+    let revs = map.revolutions();
+    let n = revs * points;
+    let mut y: Vec<f64> = (0..n).map(|i| interp.at(x, map.sample_at(i as f64 / points as f64))).collect();
+    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
+    let w = hann(n);
+    let gain = w.iter().sum::<f64>();
+    y.iter_mut().zip(&w).for_each(|(v, w)| *v = (*v - mean) * w);
+    let mut spec = Vec::new();
+    fft.forward(&mut y, &mut spec);
+    let orders = (0..spec.len()).map(|k| k as f64 / revs.max(1) as f64).collect();
+    let amps = spec.iter().map(|c| 2.0 * c.0.hypot(c.1) / gain).collect();
+    (orders, amps)
+}
+
+/// Real power cepstrum of `x`: the power spectrum averaged over Hann segments of `segment` samples (50 %
+/// overlap), then C(q) = IFFT(ln P) for quefrencies 0 .. segment / 2 samples.
+///
+/// # Errors
+/// Fewer samples than one segment.
+pub fn cepstrum<T: Sample>(fft: &mut Fft, x: &[T], segment: usize) -> Result<Vec<f64>, SignalError> {
+    if x.len() < segment || segment < 16 {
+        return Err(SignalError::TooShort { what: "cepstrum".into(), needed: segment.max(16), got: x.len() });
+    }
+    let w = hann(segment);
+    let mut power = vec![0.0; segment / 2 + 1];
+    let mut count = 0usize;
+    let mut buf = vec![0.0; segment];
+    let mut spec = Vec::new();
+    let mut start = 0;
+    while start + segment <= x.len() {
+        let seg = &x[start..start + segment];
+        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / segment as f64;
+        for ((b, v), w) in buf.iter_mut().zip(seg).zip(&w) {
+            *b = (v.f() - mean) * w;
+        }
+        fft.forward(&mut buf, &mut spec);
+        for (p, c) in power.iter_mut().zip(&spec) {
+            *p += c.0 * c.0 + c.1 * c.1;
+        }
+        count += 1;
+        start += segment / 2;
+    }
+    let floor = power.iter().copied().fold(0.0, f64::max) * 1e-12 + f64::MIN_POSITIVE;
+    let log: Vec<(f64, f64)> = power.iter().map(|p| ((p / count as f64).max(floor).ln(), 0.0)).collect();
+    let c = fft.inverse(&log, segment);
+    Ok(c[..segment / 2].to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::TAU;
+
+    #[test]
+    fn squared_envelope_of_am_signal_is_closed_form() {
+        // x = (1 + m cos(2 pi fm t)) cos(2 pi fc t): e = (1 + m cos)^2 = 1 + m^2/2 + 2 m cos + m^2/2 cos(2 .)
+        let (fs, fc, fm, m) = (8192.0, 1000.0, 16.0, 0.3);
+        let x: Vec<f64> = (0..8192)
+            .map(|i| {
+                let t = i as f64 / fs;
+                (1.0 + m * (TAU * fm * t).cos()) * (TAU * fc * t).cos()
+            })
+            .collect();
+        let e = squared_envelope(&mut Fft::new(), &x, fs, 900.0, 1100.0).unwrap();
+        // every line is on a bin and inside the band: the envelope is exact to rounding
+        for (i, v) in e.iter().enumerate().skip(100).take(7000) {
+            let t = i as f64 / fs;
+            let want = (1.0 + m * (TAU * fm * t).cos()).powi(2);
+            assert!((v - want).abs() < 1e-9, "{i}: {v} vs {want}");
+        }
+        assert!(squared_envelope(&mut Fft::new(), &x, fs, 1100.0, 900.0).is_err());
+    }
+
+    #[test]
+    fn kurtogram_finds_the_band_of_the_impacts() {
+        // Gaussian-like noise (sum of 12 uniforms) plus a decaying 3 kHz ring every 100 ms
+        let fs = 16384.0;
+        let mut state = 7u64;
+        let mut uni = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let x: Vec<f64> = (0..65536)
+            .map(|i| {
+                let t = i as f64 / fs;
+                let noise: f64 = (0..12).map(|_| uni()).sum::<f64>() - 6.0;
+                let since = t % 0.1;
+                noise + 4.0 * (-since * 400.0).exp() * (TAU * 3000.0 * since).sin()
+            })
+            .collect();
+        let k = kurtogram(&mut Fft::new(), &x, fs, 5, 0.0).unwrap();
+        let (_, _, lo, hi) = k.best;
+        assert!(lo <= 3000.0 && 3000.0 <= hi, "band {lo} .. {hi}");
+        assert!(k.best_kurtosis > 1.0, "{}", k.best_kurtosis);
+        // white noise alone has SK near 0 in every band (Antoni: 0 for a Gaussian process)
+        let noise: Vec<f64> = (0..65536).map(|_| (0..12).map(|_| uni()).sum::<f64>() - 6.0).collect();
+        let kn = kurtogram(&mut Fft::new(), &noise, fs, 3, 0.0).unwrap();
+        assert!(kn.best_kurtosis < 0.3, "{}", kn.best_kurtosis);
+        assert!(kurtogram(&mut Fft::new(), &x[..1024], fs, 6, 0.0).is_err());
+        // above 4 kHz the impacts' band is excluded
+        let above = kurtogram(&mut Fft::new(), &x, fs, 5, 4000.0).unwrap();
+        assert!(above.best.2 >= 4000.0);
+    }
+
+    #[test]
+    fn cepstrum_of_an_echo_peaks_at_its_delay() {
+        // x(t) = s(t) + a s(t - tau): ln|1 + a e^{-i w tau}|^2 = 2 sum (-1)^(k+1) a^k cos(k w tau) / k, so
+        // the cepstrum has a rahmonic of height a at quefrency tau (and -a^2/2 at 2 tau)
+        let (a, tau) = (0.5, 37usize);
+        let mut state = 3u64;
+        let s: Vec<f64> = (0..70_000)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let x: Vec<f64> = (tau..s.len()).map(|i| s[i] + a * s[i - tau]).collect();
+        let c = cepstrum(&mut Fft::new(), &x, 1024).unwrap();
+        let peak = (10..400).max_by(|&i, &j| c[i].total_cmp(&c[j])).unwrap();
+        assert_eq!(peak, tau);
+        // averaged over 135 segments the noise's own cepstrum is small; the window smooths the log spectrum
+        // slightly: within 10 %
+        assert!((c[tau] - a).abs() < 0.05, "{}", c[tau]);
+        assert!((c[2 * tau] + a * a / 2.0).abs() < 0.05, "{}", c[2 * tau]);
+    }
+
+    #[test]
+    fn order_spectrum_reads_orders_at_varying_speed() {
+        // orders 3 (amplitude 1) and 14 (0.5) under a 10 % linear speed change
+        let n = 100_000;
+        let rate = |i: f64| 0.01 * (1.0 + 0.1 * i / n as f64);
+        let mut th = 0.0;
+        let mut starts = Vec::new();
+        let x: Vec<f64> = (0..n)
+            .map(|i| {
+                let v = (TAU * 3.0 * th).cos() + 0.5 * (TAU * 14.0 * th).sin();
+                let next = th + rate(i as f64);
+                if next.floor() > th.floor() {
+                    starts.push(i as f64 + (next.floor() - th) / (next - th));
+                }
+                th = next;
+                v
+            })
+            .collect();
+        let map = AngleMap::from_pulses(&starts, 1);
+        let (orders, amps) = order_spectrum(&mut Fft::new(), &x, &map, 64);
+        let at = |o: f64| {
+            orders.iter().zip(&amps).filter(|(k, _)| (*k - o).abs() < 0.01).map(|(_, a)| *a).fold(0.0, f64::max)
+        };
+        // whole revolutions: both orders on a bin, Hann-corrected amplitude exact up to the interpolation
+        // (1e-3) and the starts' linear crossing times (about 1e-4 revolution)
+        assert!((at(3.0) - 1.0).abs() < 0.01, "{}", at(3.0));
+        assert!((at(14.0) - 0.5).abs() < 0.01, "{}", at(14.0));
+    }
+}
