@@ -361,20 +361,43 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     if let Some(c) = &d.comparison {
-        let meas: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 - 0.12, l.measured_db)).collect();
-        let model: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 + 0.12, l.model_db)).collect();
+        // one overlay: measured and model bars side by side at each order, the lines the model misses
+        // (measured more than 6 dB above it) ringed
+        let meas: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 - 0.15, l.measured_db)).collect();
+        let model: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 + 0.15, l.model_db)).collect();
+        let missed: Vec<(f64, f64)> = c
+            .lines
+            .iter()
+            .filter(|l| l.difference_db > 6.0)
+            .map(|l| (l.order as f64 - 0.15, l.measured_db))
+            .collect();
         let lo = c.lines.iter().map(|l| l.measured_db.min(l.model_db)).fold(0.0, f64::min) - 5.0;
-        let hi = c.lines.iter().map(|l| l.measured_db.max(l.model_db)).fold(0.0, f64::max) + 5.0;
-        let chart = |name: &str, pts: Vec<(f64, f64)>, color: usize| Chart {
-            title: format!("{stem}: {name}, levels relative to the first mesh line (distance {:.1} dB)", c.distance_db),
+        let hi = c.lines.iter().map(|l| l.measured_db.max(l.model_db)).fold(0.0, f64::max) + 8.0;
+        let mut series = vec![
+            Series { name: "measured".into(), points: meas, style: Style::Stems, color: 0 },
+            Series { name: format!("model ({})", c.scene), points: model, style: Style::Stems, color: 2 },
+        ];
+        if !missed.is_empty() {
+            series.push(Series {
+                name: "missed by the model (measured > model + 6 dB)".into(),
+                points: missed,
+                style: Style::Points,
+                color: 1,
+            });
+        }
+        let chart = Chart {
+            title: format!(
+                "{stem}: measured against model, levels relative to each one's first mesh line (distance {:.1} dB)",
+                c.distance_db
+            ),
             x_label: "order of the pinion rotation".into(),
             y_label: "level [dB re 1x mesh]".into(),
             y_range: Some((lo, hi)),
-            series: vec![Series { name: name.into(), points: pts, style: Style::Points, color }],
+            series,
             ..Default::default()
         };
         let p = dir.join(format!("{stem}-vs-model.png"));
-        render_png(&p, 1400, 900, &[chart("measured", meas, 0), chart(&format!("model {}", c.scene), model, 1)])?;
+        render_png(&p, 1400, 600, &[chart])?;
         out.push(p);
     }
     Ok(out)
