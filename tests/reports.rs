@@ -55,8 +55,11 @@ fn diagnose_report_writes_images() {
     let stem = "gear-z14z39-fs10kHz-pitted-pinion-tooth3";
     assert_eq!(png_size(&dir.join(format!("{stem}-spectrum.png"))), (1400, 700));
     assert_eq!(png_size(&dir.join(format!("{stem}-tsa.png"))), (1400, 900));
-    assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (1400, 900));
+    assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (1400, 600));
+    assert_eq!(png_size(&dir.join(format!("{stem}-envelope.png"))), (1400, 600));
+    assert_eq!(png_size(&dir.join(format!("{stem}-cepstrum.png"))), (1400, 550));
     assert!(dir.join(format!("{stem}-diagnosis.json")).exists());
+    assert!(dir.join("index.html").exists());
 }
 
 #[test]
