@@ -347,3 +347,52 @@ fn envelope_shows_local_faults_at_the_pinion_order() {
     }
     assert!(over("healthy") < 12.0, "{}", over("healthy"));
 }
+
+/// A directory of recordings in name order gives the trend table and chart: the healthy recording stays in
+/// the baseline's band, the pitted one after it leaves it (the first outside is #2).
+#[test]
+fn trend_over_a_directory_marks_the_first_recording_outside_the_band() {
+    let dir = temp_dir("diag-trend");
+    let series = dir.join("series");
+    std::fs::create_dir_all(&series).unwrap();
+    for (i, name) in ["healthy", "pitted-pinion-tooth3", "cracked-pinion-tooth3"].iter().enumerate() {
+        let src = rec(name);
+        let dst = series.join(format!("{:02}-{name}.wav", i + 1));
+        std::fs::copy(&src, &dst).unwrap();
+        std::fs::copy(format!("{src}.json"), format!("{}.json", dst.display())).unwrap();
+    }
+    let out = dir.join("report");
+    let run = gearvib(&[
+        "diagnose",
+        &series.to_string_lossy(),
+        "--baseline",
+        &rec("healthy"),
+        "--teeth",
+        "14,39",
+        "--report",
+        &out.to_string_lossy(),
+        "--json",
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let states: Vec<String> = run
+        .stdout
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["verdict"]["state"].as_str().unwrap().to_string()
+        })
+        .collect();
+    assert_eq!(states, ["healthy", "faulty", "faulty"]);
+    let csv = std::fs::read_to_string(out.join("trend.csv")).unwrap();
+    let jsonl = std::fs::read_to_string(out.join("trend.jsonl")).unwrap();
+    assert_eq!(csv.lines().count() - 1, jsonl.lines().count(), "one JSON line per CSV row");
+    // 3 recordings x 2 gears x 8 indicators
+    assert_eq!(jsonl.lines().count(), 48);
+    let first_outside = jsonl
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|r| r["decides"] == true && r["spreads"].as_f64().unwrap() >= r["suspect_at"].as_f64().unwrap())
+        .map(|r| r["index"].as_u64().unwrap())
+        .min();
+    assert_eq!(first_outside, Some(2));
+    assert!(out.join("trend.png").exists());
+}

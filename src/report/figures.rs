@@ -365,12 +365,8 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         // (measured more than 6 dB above it) ringed
         let meas: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 - 0.15, l.measured_db)).collect();
         let model: Vec<(f64, f64)> = c.lines.iter().map(|l| (l.order as f64 + 0.15, l.model_db)).collect();
-        let missed: Vec<(f64, f64)> = c
-            .lines
-            .iter()
-            .filter(|l| l.difference_db > 6.0)
-            .map(|l| (l.order as f64 - 0.15, l.measured_db))
-            .collect();
+        let missed: Vec<(f64, f64)> =
+            c.lines.iter().filter(|l| l.difference_db > 6.0).map(|l| (l.order as f64 - 0.15, l.measured_db)).collect();
         let lo = c.lines.iter().map(|l| l.measured_db.min(l.model_db)).fold(0.0, f64::min) - 5.0;
         let hi = c.lines.iter().map(|l| l.measured_db.max(l.model_db)).fold(0.0, f64::max) + 8.0;
         let mut series = vec![
@@ -479,6 +475,70 @@ fn cepstrum_chart(stem: &str, d: &Diagnosis, c: &crate::report::summary::Cepstru
         markers,
         ..Default::default()
     }
+}
+
+/// Trend chart: for each gear on the first channel, every scored indicator in spreads from the baseline's
+/// centre over the recordings in time order, the suspect limit, and a marker at the first recording that
+/// leaves the band.
+///
+/// # Errors
+/// Nothing scored (no baseline), or the image cannot be written.
+pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
+    let Some(ch) = done.first().and_then(|d| d.channels.first().copied()) else {
+        return Err(ReportError::BadData { what: "trend".into(), why: "no recording".into() });
+    };
+    let mut gears: Vec<Shaft> = Vec::new();
+    for s in done.iter().flat_map(|d| &d.scores) {
+        if !gears.contains(&s.gear) {
+            gears.push(s.gear);
+        }
+    }
+    let mut charts = Vec::new();
+    for gear in gears {
+        let scores = |i: usize| done[i].scores.iter().filter(move |s| s.gear == gear && s.channel == ch);
+        let names: Vec<String> = scores(0).map(|s| s.indicator.clone()).collect();
+        let series: Vec<Series> = names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| Series {
+                name: name.replace('_', " "),
+                points: (0..done.len())
+                    .filter_map(|i| scores(i).find(|s| &s.indicator == name).map(|s| ((i + 1) as f64, s.spreads)))
+                    .collect(),
+                style: Style::LinePoints,
+                color: k,
+            })
+            .collect();
+        let limit = scores(0).map(|s| s.suspect_at).fold(0.0, f64::max);
+        let first = (0..done.len()).find(|&i| scores(i).any(|s| s.decides && s.spreads >= s.suspect_at));
+        let mut all = series;
+        all.push(Series {
+            name: format!("suspect limit ({limit:.1} spreads)"),
+            points: vec![(1.0, limit), (done.len() as f64, limit)],
+            style: Style::Line,
+            color: 8,
+        });
+        charts.push(Chart {
+            title: format!("trend of the {gear} (channel {ch}) against the baseline's band"),
+            x_label: "recording (time order)".into(),
+            y_label: "spreads above the baseline's centre [-]".into(),
+            series: all,
+            markers: first
+                .map(|i| Marker { x: (i + 1) as f64, label: format!("first outside: #{}", i + 1), color: 1 })
+                .into_iter()
+                .collect(),
+            x_range: Some((0.5, done.len() as f64 + 0.5)),
+            ..Default::default()
+        });
+    }
+    if charts.is_empty() {
+        return Err(ReportError::BadData {
+            what: "trend".into(),
+            why: "no indicator was scored against a baseline".into(),
+        });
+    }
+    let h = 450 * charts.len() as u32;
+    render_png(png, 1400, h, &charts)
 }
 
 /// A sideband is drawn as detected only above this multiple of the local noise floor (about 10 dB).

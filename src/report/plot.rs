@@ -79,7 +79,8 @@ pub struct Chart {
     pub unit_circle: bool,
 }
 
-const PALETTE: [RGBColor; 8] = [
+/// Colours by index; the last (black) is for limits and references.
+const PALETTE: [RGBColor; 9] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -88,6 +89,7 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(23, 190, 207),
+    RGBColor(0, 0, 0),
 ];
 
 fn color(i: usize) -> RGBColor {

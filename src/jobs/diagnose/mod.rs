@@ -10,6 +10,7 @@
 
 pub mod baseline;
 mod compare;
+pub mod trend;
 mod verdict;
 
 pub use compare::compare;
@@ -97,8 +98,9 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         compatibility(b, &baselines[0])?;
     }
     let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.block_revs())).transpose()?;
+    let recordings = expand_dirs(&job.recordings)?;
     let results: Vec<Result<Diagnosis, Error>> =
-        job.recordings.par_iter().map(|r| diagnose(r, &opts, geometry.as_ref())).collect();
+        recordings.par_iter().map(|r| diagnose(r, &opts, geometry.as_ref())).collect();
     let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let mut caps = vec![None; done.len()];
     if let Some(b) = baselines.first() {
@@ -138,6 +140,19 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             let images: Vec<PathBuf> =
                 files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
             sections.push(crate::report::html::diagnosis_section(d, &images));
+            report_files.extend(files);
+        }
+        if done.len() >= 2 && reference.is_some() {
+            let files = trend::write(dir, &done)?;
+            sections.insert(
+                0,
+                crate::report::html::Section {
+                    heading: format!("Trend over {} recordings (time order as given)", done.len()),
+                    facts: vec!["Every scored indicator in spreads from the baseline's centre; the table is in trend.csv and trend.jsonl.".into()],
+                    images: files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect(),
+                    ..Default::default()
+                },
+            );
             report_files.extend(files);
         }
         report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);
