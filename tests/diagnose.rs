@@ -396,3 +396,20 @@ fn trend_over_a_directory_marks_the_first_recording_outside_the_band() {
     assert_eq!(first_outside, Some(2));
     assert!(out.join("trend.png").exists());
 }
+
+/// The envelope band and kurtogram depth from the command line: a given band is used as it is; an empty
+/// band, one beyond the Nyquist frequency, or a level deeper than the recording allows is refused in one
+/// line.
+#[test]
+fn envelope_band_and_kurtogram_level_flags() {
+    let r = rec("cracked-pinion-tooth3");
+    let d = diag_json(&[&r, "--teeth", "14,39", "--envelope-band", "2500,4500"]);
+    assert_eq!(d["envelope"]["band_hz"], serde_json::json!([2500.0, 4500.0]));
+    assert_eq!(d["envelope"]["level"], 0);
+    for (band, needle) in [("3000,3000", "empty"), ("4000,1000", "empty"), ("abc", "LO,HI"), ("6000,9000", "outside")] {
+        let run = gearvib(&["diagnose", &r, "--teeth", "14,39", "--envelope-band", band]);
+        assert_one_line_error(&run, &[needle]);
+    }
+    let run = gearvib(&["diagnose", &r, "--teeth", "14,39", "--kurtogram-levels", "20"]);
+    assert_one_line_error(&run, &["kurtogram level 20", "allow"]);
+}

@@ -119,6 +119,12 @@ pub struct DiagnoseArgs {
     /// baseline.
     #[arg(long, num_args = 1..)]
     pub baseline: Vec<String>,
+    /// Envelope band in Hz, LO,HI (default: the band of largest spectral kurtosis from the kurtogram).
+    #[arg(long, value_name = "LO,HI")]
+    pub envelope_band: Option<String>,
+    /// Deepest kurtogram level (band width fs / 2^(level + 1)); default 5.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=30))]
+    pub kurtogram_levels: Option<u64>,
     /// Revolutions per block of the statistical baseline (default 8, fewer when the baseline is short).
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000))]
     pub block_revs: Option<u64>,

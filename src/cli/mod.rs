@@ -256,6 +256,8 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         quantity: a.quantity,
         unit: a.unit.clone(),
         sensitivity: a.sensitivity,
+        envelope_band: a.envelope_band.as_deref().map(parse_band).transpose()?,
+        kurtogram_levels: a.kurtogram_levels.map(|l| l as usize),
         block_revs: a.block_revs.map(|r| r as usize),
         ..Default::default()
     };
@@ -338,4 +340,21 @@ fn sweep(out: &mut dyn Write, job: &jobs::sweep::SweepJob, json: bool) -> Result
         writeln!(out, "wrote {}", img.display()).map_err(CliError::from)?;
     }
     Ok(0)
+}
+
+/// `--envelope-band LO,HI` in Hz: two finite numbers, LO >= 0 and HI > LO (the sample rate is checked when
+/// the recording is read).
+fn parse_band(s: &str) -> Result<(f64, f64), Error> {
+    let bad = |why: &str| -> Error {
+        CliError::Flag { flag: "--envelope-band".into(), message: format!("{s:?}: {why}") }.into()
+    };
+    let (lo, hi) = s.split_once(',').ok_or_else(|| bad("expected LO,HI in Hz, e.g. 2000,4000"))?;
+    let (lo, hi): (f64, f64) = match (lo.trim().parse(), hi.trim().parse()) {
+        (Ok(l), Ok(h)) => (l, h),
+        _ => return Err(bad("expected two numbers in Hz, e.g. 2000,4000")),
+    };
+    if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
+        return Err(bad("the band is empty: need 0 <= LO < HI"));
+    }
+    Ok((lo, hi))
 }

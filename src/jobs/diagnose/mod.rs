@@ -326,6 +326,10 @@ pub struct Options {
     pub unit: Option<String>,
     /// Recorded value per physical unit: samples are divided by it.
     pub sensitivity: Option<f64>,
+    /// Envelope band in Hz (`None`: from the kurtogram).
+    pub envelope_band: Option<(f64, f64)>,
+    /// Deepest kurtogram level (`None`: 5, or what the recording allows).
+    pub kurtogram_levels: Option<usize>,
     /// Fewest whole revolutions a TSA needs.
     pub min_revolutions: usize,
     /// Revolutions per block of the statistical baseline (`None`: [`DEFAULT_BLOCK_REVS`], or fewer when
@@ -355,6 +359,8 @@ impl Default for Options {
             quantity: None,
             unit: None,
             sensitivity: None,
+            envelope_band: None,
+            kurtogram_levels: None,
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
@@ -737,8 +743,11 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     }
     if let Some(fs) = fs {
         let x = &rec.channels[channels[0] - 1];
-        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order) {
+        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, o) {
             Ok(e) => d.envelope = Some(e),
+            // a band or level the user asked for that does not fit is an error; the automatic choice
+            // failing on a short recording is a warning
+            Err(e) if o.envelope_band.is_some() || o.kurtogram_levels.is_some() => return Err(bad(path, e)),
             Err(e) => d.warnings.push(format!("no envelope analysis: {e}")),
         }
         d.cepstrum = cepstrum(&mut fft, x, fs, period, &ratios);
@@ -759,6 +768,7 @@ fn envelope(
     map: &AngleMap,
     shafts: &[(Shaft, f64)],
     mesh_order: usize,
+    o: &Options,
 ) -> Result<crate::report::summary::Envelope, crate::signal::SignalError> {
     use crate::signal::envelope as env;
     let n = x.len().min(1 << 20);
@@ -766,8 +776,12 @@ fn envelope(
     // bands from 1.5 mesh frequencies up: below, the shafts' and mesh's own lines beat into a peaky envelope
     let period = map.mean_period_samples();
     let mesh_hz = shafts.first().map_or(0.0, |_| mesh_order as f64 * fs / period);
-    let k = env::kurtogram(fft, x, fs, KURTOGRAM_LEVELS.min(deepest), (1.5 * mesh_hz).min(fs / 4.0))?;
-    let (level, _, lo, hi) = k.best;
+    let levels = o.kurtogram_levels.unwrap_or(KURTOGRAM_LEVELS.min(deepest));
+    let k = env::kurtogram(fft, x, fs, levels, (1.5 * mesh_hz).min(fs / 4.0))?;
+    let (level, _, lo, hi) = match o.envelope_band {
+        Some((lo, hi)) => (0, 0, lo, hi),
+        None => k.best,
+    };
     let e = env::squared_envelope(fft, x, fs, lo, hi)?;
     // points per revolution: twice the envelope's band width in orders, a power of two
     let points = ((2.0 * (hi - lo) * period / fs + 16.0) as usize).next_power_of_two().clamp(32, 4096);
@@ -790,10 +804,15 @@ fn envelope(
             crate::report::summary::EnvelopeLine { shaft, order, reference_order: o, amplitude, over_floor_db }
         })
         .collect();
+    // the band's spectral kurtosis from its squared envelope e = |c|^2: <e^2> / <e>^2 - 2
+    let m1 = e.iter().sum::<f64>() / e.len().max(1) as f64;
+    let m2 = e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64;
+    let spectral_kurtosis =
+        if o.envelope_band.is_some() { m2 / (m1 * m1).max(f64::MIN_POSITIVE) - 2.0 } else { k.best_kurtosis };
     Ok(crate::report::summary::Envelope {
         band_hz: [lo, hi],
         level,
-        spectral_kurtosis: k.best_kurtosis,
+        spectral_kurtosis,
         lines,
         orders,
         amplitudes,

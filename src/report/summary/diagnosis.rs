@@ -309,7 +309,7 @@ pub struct EnvelopeLine {
 pub struct Envelope {
     /// Band, Hz.
     pub band_hz: [f64; 2],
-    /// Kurtogram level of the band (band width fs / 2^(level + 1)).
+    /// Kurtogram level of the band (band width fs / 2^(level + 1)); 0 when the band was given.
     pub level: usize,
     /// Spectral kurtosis of the band (0 for Gaussian noise).
     pub spectral_kurtosis: f64,
