@@ -174,27 +174,9 @@ pub fn cepstrum<T: Sample>(fft: &mut Fft, x: &[T], segment: usize) -> Result<Vec
     if x.len() < segment || segment < 16 {
         return Err(SignalError::TooShort { what: "cepstrum".into(), needed: segment.max(16), got: x.len() });
     }
-    let w = hann(segment);
-    let mut power = vec![0.0; segment / 2 + 1];
-    let mut count = 0usize;
-    let mut buf = vec![0.0; segment];
-    let mut spec = Vec::new();
-    let mut start = 0;
-    while start + segment <= x.len() {
-        let seg = &x[start..start + segment];
-        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / segment as f64;
-        for ((b, v), w) in buf.iter_mut().zip(seg).zip(&w) {
-            *b = (v.f() - mean) * w;
-        }
-        fft.forward(&mut buf, &mut spec);
-        for (p, c) in power.iter_mut().zip(&spec) {
-            *p += c.0 * c.0 + c.1 * c.1;
-        }
-        count += 1;
-        start += segment / 2;
-    }
+    let (power, _) = super::spectrum::averaged_power(fft, x, segment, 0.5, "cepstrum")?;
     let floor = power.iter().copied().fold(0.0, f64::max) * 1e-12 + f64::MIN_POSITIVE;
-    let log: Vec<(f64, f64)> = power.iter().map(|p| ((p / count as f64).max(floor).ln(), 0.0)).collect();
+    let log: Vec<(f64, f64)> = power.iter().map(|p| (p.max(floor).ln(), 0.0)).collect();
     let c = fft.inverse(&log, segment);
     Ok(c[..segment / 2].to_vec())
 }

@@ -188,7 +188,12 @@ pub fn welch_psd<T: Sample>(fft: &mut Fft, x: &[T], fs: f64, nperseg: usize) -> 
 }
 
 /// Mean |X_k|^2 of Hann-windowed, mean-removed segments; returns it and the segment length used.
-fn averaged_power<T: Sample>(
+/// Mean power |X_k|^2 of Hann-windowed, mean-removed segments of `segment` samples (or the record when
+/// shorter) stepping by (1 - `overlap`) segments, and the segment length used.
+///
+/// # Errors
+/// Fewer than 8 samples.
+pub fn averaged_power<T: Sample>(
     fft: &mut Fft,
     x: &[T],
     segment: usize,
