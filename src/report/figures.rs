@@ -259,28 +259,55 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
     let mut out = Vec::new();
     // TSA of each gear (first channel)
     let ch = d.channels[0];
+    // angle axis in teeth of the gear (tooth k between k - 1 and k), the origin at the tachometer pulse or,
+    // with mesh-phase tracking, arbitrary
+    let origin = match d.speed_profile.tracking {
+        crate::report::summary::Tracking::Tachometer => "origin: tachometer pulse",
+        _ => "origin arbitrary (no tachometer)",
+    };
     let tsas: Vec<Chart> = d
         .tsas()
         .filter(|(g, _, _)| g.channel == ch)
-        .map(|(g, t, _)| Chart {
-            title: format!(
-                "{stem}: time-synchronous average, {} (channel {ch}, {} revolutions)",
-                g.gear, g.revolutions
-            ),
-            x_label: format!("{} angle [deg]", g.gear),
-            y_label: format!("TSA [{}]", unit_or(&d.unit)),
-            series: vec![Series {
-                name: "TSA".into(),
-                points: t.iter().enumerate().map(|(i, v)| (360.0 * i as f64 / t.len() as f64, *v)).collect(),
-                style: Style::Line,
-                color: 0,
-            }],
-            ..Default::default()
+        .flat_map(|(g, t, _)| {
+            let z = g.mesh_order as f64;
+            let along = |v: &[f64]| -> Vec<(f64, f64)> {
+                v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
+            };
+            let x_label = format!("{} tooth in mesh (tooth k spans k-1 .. k of {}; {origin})", g.gear, g.mesh_order);
+            [
+                Chart {
+                    title: format!(
+                        "{stem}: time-synchronous average, {} (channel {ch}, {} revolutions)",
+                        g.gear, g.revolutions
+                    ),
+                    x_label: x_label.clone(),
+                    y_label: format!("TSA [{}]", unit_or(&d.unit)),
+                    series: vec![Series { name: "TSA".into(), points: along(t), style: Style::Line, color: 0 }],
+                    x_range: Some((0.0, z)),
+                    ..Default::default()
+                },
+                Chart {
+                    title: format!(
+                        "{stem}: residual signal of the {} (TSA without shaft orders 1-2 and mesh harmonics)",
+                        g.gear
+                    ),
+                    x_label,
+                    y_label: format!("residual [{}]", unit_or(&d.unit)),
+                    series: vec![Series {
+                        name: "residual".into(),
+                        points: along(&g.residual),
+                        style: Style::Line,
+                        color: 1,
+                    }],
+                    x_range: Some((0.0, z)),
+                    ..Default::default()
+                },
+            ]
         })
         .collect();
     if !tsas.is_empty() {
         let p = dir.join(format!("{stem}-tsa.png"));
-        render_png(&p, 1400, 450 * tsas.len() as u32, &tsas)?;
+        render_png(&p, 1400, 380 * tsas.len() as u32, &tsas)?;
         out.push(p);
     }
     // spectrum with mesh harmonics and sidebands (when the sample rate is known)
