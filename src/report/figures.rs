@@ -328,6 +328,17 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             style: Style::Line,
             color: 4,
         }];
+        // the healthy baseline on top, in black: where this recording's lines grew they stand out above it
+        if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
+            let base: Vec<(f64, f64)> = b
+                .freqs_hz
+                .iter()
+                .zip(&b.values)
+                .filter(|(f, _)| **f > 0.0 && **f <= max_f)
+                .map(|(f, v)| (*f, *v))
+                .collect();
+            series.push(Series { name: "baseline (healthy)".into(), points: base, style: Style::Line, color: 8 });
+        }
         // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured, and
         // neither are sidebands under 3x the local noise floor: a marker on the floor would read as a detection
         let side = |shaft: Shaft| -> Vec<(f64, f64)> {

@@ -108,6 +108,9 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             let c = compatibility(d, b)?;
             d.warnings.extend(c.warnings);
             *cap = c.operating_point;
+            if job.report.is_some() {
+                d.baseline_spectra = b.spectra.iter().map(|(ch, amp, _)| (*ch, amp.clone())).collect();
+            }
         }
     }
     ensemble_na4(&mut done);
@@ -736,6 +739,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
         warnings,
         spectra,
+        baseline_spectra: Vec::new(),
     };
     d.mesh_harmonics = mesh_harmonics(&d, channels[0], &ratios);
     if let Some(g) = d.gears.first() {

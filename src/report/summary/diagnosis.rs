@@ -487,6 +487,9 @@ pub struct Diagnosis {
     /// Amplitude spectrum and Welch PSD per analysed channel (empty when the sample rate is unknown).
     #[serde(skip)]
     pub spectra: Vec<(usize, Spectrum, Spectrum)>,
+    /// The first baseline's amplitude spectrum of each channel, for the overlay in the images.
+    #[serde(skip)]
+    pub baseline_spectra: Vec<(usize, Spectrum)>,
 }
 
 impl Diagnosis {
