@@ -388,6 +388,12 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         render_png(&p, 1400, 700, &[chart])?;
         out.push(p);
     }
+    let zooms = mesh_zooms(&stem, d, ch);
+    if !zooms.is_empty() {
+        let p = dir.join(format!("{stem}-zoom.png"));
+        render_png(&p, 1400, 420 * zooms.len() as u32, &zooms)?;
+        out.push(p);
+    }
     if let Some(e) = &d.envelope {
         let p = dir.join(format!("{stem}-envelope.png"));
         render_png(&p, 1400, 600, &[envelope_chart(&stem, d, e)])?;
@@ -435,6 +441,79 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     Ok(out)
+}
+
+/// Zooms centred on each of the first mesh harmonics (+-4.5 reference-shaft orders), the baseline overlaid,
+/// sidebands of each shaft marked where detected (10 dB over the local floor), and sidebands that another
+/// shaft's line lies too close to be told apart marked as unresolved.
+fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
+    let (Some((_, amp, _)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
+        return Vec::new();
+    };
+    let cut = |s: &crate::signal::Spectrum, lo: f64, hi: f64| -> Vec<(f64, f64)> {
+        s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f >= lo && **f <= hi).map(|(f, v)| (*f, *v)).collect()
+    };
+    d.mesh_harmonics
+        .iter()
+        .filter_map(|h| {
+            let fk = h.frequency_hz?;
+            let (lo, hi) = (fk - 4.5 * f1, fk + 4.5 * f1);
+            let pts = cut(amp, lo, hi);
+            let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+            let mut series =
+                vec![Series { name: "amplitude spectrum".into(), points: pts, style: Style::Line, color: 4 }];
+            if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
+                series.push(Series {
+                    name: "baseline (healthy)".into(),
+                    points: cut(b, lo, hi),
+                    style: Style::Line,
+                    color: 8,
+                });
+            }
+            for (i, shaft) in [Shaft::Pinion, Shaft::Wheel, Shaft::Estimated].into_iter().enumerate() {
+                let detected: Vec<(f64, f64)> = h
+                    .sidebands
+                    .iter()
+                    .filter(|s| s.shaft == shaft && s.resolved)
+                    .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
+                    .filter(|&(f, a)| a > DETECTION_OVER_FLOOR * noise_floor(amp, f))
+                    .collect();
+                if !detected.is_empty() {
+                    series.push(Series {
+                        name: format!("{shaft} sidebands (detected)"),
+                        points: detected,
+                        style: Style::Points,
+                        color: 1 + i,
+                    });
+                }
+            }
+            let unresolved: Vec<(f64, f64)> = h
+                .sidebands
+                .iter()
+                .filter(|s| !s.resolved)
+                .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
+                .collect();
+            if !unresolved.is_empty() {
+                series.push(Series {
+                    name: "unresolved (lines of both shafts within 3 bins)".into(),
+                    points: unresolved,
+                    style: Style::Points,
+                    color: 6,
+                });
+            }
+            Some(Chart {
+                title: format!("{stem}: zoom around {} x mesh = {fk:.1} Hz (channel {ch})", h.k),
+                x_label: "frequency [Hz]".into(),
+                y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+                y_log: true,
+                x_range: Some((lo, hi)),
+                y_range: Some((peak * 1e-4, peak * 10.0)),
+                series,
+                markers: vec![Marker { x: fk, label: format!("{}x mesh", h.k), color: 0 }],
+                ..Default::default()
+            })
+        })
+        .collect()
 }
 
 /// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, with the first orders of
