@@ -98,9 +98,9 @@ fn every_report_page_renders_with_its_images() {
         &d_s,
     ]);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    // the trend of the two recordings, and a TSA, a spectrum, a mesh zoom, an envelope and a cepstrum image
-    // each
-    check_page(&d, &["FAULTY", "HEALTHY", "NA4*", "spreads", "Trend over 2 recordings"], 11);
+    // the trend of the two recordings, and a TSA, a spectrum, a mesh zoom, an envelope, a kurtogram and a
+    // cepstrum image each
+    check_page(&d, &["FAULTY", "HEALTHY", "NA4*", "spreads", "Trend over 2 recordings"], 13);
 
     let s = root.join("simulate");
     let scene = repo("data/scenes/paper-gear-fig8a.json");

@@ -59,6 +59,7 @@ fn diagnose_report_writes_images() {
     assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (1400, 600));
     assert_eq!(png_size(&dir.join(format!("{stem}-envelope.png"))), (1400, 600));
     assert_eq!(png_size(&dir.join(format!("{stem}-cepstrum.png"))), (1400, 550));
+    assert_eq!(png_size(&dir.join(format!("{stem}-kurtogram.png"))), (1400, 550));
     // zooms around the first three mesh harmonics
     assert_eq!(png_size(&dir.join(format!("{stem}-zoom.png"))), (1400, 3 * 420));
     assert!(dir.join(format!("{stem}-diagnosis.json")).exists());

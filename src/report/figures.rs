@@ -398,6 +398,11 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         let p = dir.join(format!("{stem}-envelope.png"));
         render_png(&p, 1400, 600, &[envelope_chart(&stem, d, e)])?;
         out.push(p);
+        if let Some(fs) = d.sample_rate_hz {
+            let p = dir.join(format!("{stem}-kurtogram.png"));
+            render_png(&p, 1400, 550, &[kurtogram_chart(&stem, e, fs)])?;
+            out.push(p);
+        }
     }
     if let Some(c) = &d.cepstrum {
         let p = dir.join(format!("{stem}-cepstrum.png"));
@@ -514,6 +519,37 @@ fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
             })
         })
         .collect()
+}
+
+/// The kurtogram as one line per level: spectral kurtosis of each band at its centre frequency (level l has
+/// 2^l bands of width fs / 2^(l+1)), the chosen band shaded.
+fn kurtogram_chart(stem: &str, e: &crate::report::summary::Envelope, fs: f64) -> Chart {
+    let series = e
+        .kurtogram
+        .iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let bw = fs / 2.0 / row.len() as f64;
+            Series {
+                name: format!("level {} (bands of {:.0} Hz)", i + 1, bw),
+                points: row.iter().enumerate().map(|(b, k)| ((b as f64 + 0.5) * bw, *k)).collect(),
+                style: Style::LinePoints,
+                color: i,
+            }
+        })
+        .collect();
+    Chart {
+        title: format!(
+            "{stem}: fast kurtogram; envelope band {:.0}..{:.0} Hz (shaded; bands from 1.5 mesh frequencies up)",
+            e.band_hz[0], e.band_hz[1]
+        ),
+        x_label: "band centre frequency [Hz]".into(),
+        y_label: "spectral kurtosis [-] (0 for Gaussian noise)".into(),
+        series,
+        bands: vec![Band { from: e.band_hz[0], to: e.band_hz[1] }],
+        x_range: Some((0.0, fs / 2.0)),
+        ..Default::default()
+    }
 }
 
 /// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, with the first orders of
