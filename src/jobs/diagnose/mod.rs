@@ -786,10 +786,11 @@ fn envelope(
         Some((lo, hi)) => (0, 0, lo, hi),
         None => k.best,
     };
-    let e = env::squared_envelope(fft, x, fs, lo, hi)?;
-    // points per revolution: twice the envelope's band width in orders, a power of two
-    let points = ((2.0 * (hi - lo) * period / fs + 16.0) as usize).next_power_of_two().clamp(32, 4096);
-    let (orders, amplitudes) = env::order_spectrum(fft, &e, map, points);
+    // the squared envelope at a reduced rate r (it holds twice the band), its revolutions scaled alike
+    let (e, r) = env::squared_envelope_decimated(fft, x, fs, lo, hi)?;
+    let scaled = AngleMap::from_pulses(&map.starts().iter().map(|s| s * r).collect::<Vec<_>>(), 1);
+    let points = ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096);
+    let (orders, amplitudes) = env::order_spectrum(fft, &e, &scaled, points);
     let revs = map.revolutions().max(1) as f64;
     let at = |o: f64| -> (f64, f64) {
         let i = (o * revs).round() as usize;
@@ -810,6 +811,7 @@ fn envelope(
         .collect();
     // the band's spectral kurtosis from its squared envelope e = |c|^2: <e^2> / <e>^2 - 2
     let m1 = e.iter().sum::<f64>() / e.len().max(1) as f64;
+    // (the band's own kurtosis from the decimated envelope: the same moments at a lower rate)
     let m2 = e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64;
     let spectral_kurtosis =
         if o.envelope_band.is_some() { m2 / (m1 * m1).max(f64::MIN_POSITIVE) - 2.0 } else { k.best_kurtosis };
