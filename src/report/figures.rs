@@ -406,7 +406,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
     }
     if let Some(c) = &d.cepstrum {
         let p = dir.join(format!("{stem}-cepstrum.png"));
-        render_png(&p, 1400, 550, &[cepstrum_chart(&stem, d, c)])?;
+        render_png(&p, 1400, 550, &[cepstrum_chart(&stem, c)])?;
         out.push(p);
     }
     if let Some(c) = &d.comparison {
@@ -601,7 +601,7 @@ fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelop
 }
 
 /// The real cepstrum up to 1.2 periods of the slowest shaft, with the rahmonics of each shaft marked.
-fn cepstrum_chart(stem: &str, d: &Diagnosis, c: &crate::report::summary::Cepstrum) -> Chart {
+fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
     let q_max = c.rahmonics.iter().map(|r| r.quefrency_s).fold(0.0, f64::max) * 1.1;
     let pts: Vec<(f64, f64)> = c
         .values
@@ -619,7 +619,6 @@ fn cepstrum_chart(stem: &str, d: &Diagnosis, c: &crate::report::summary::Cepstru
             color: if r.shaft == Shaft::Wheel { 2 } else { 1 },
         })
         .collect();
-    let _ = d;
     Chart {
         title: format!("{stem}: real power cepstrum with the rahmonics of each shaft"),
         x_label: "quefrency [ms]".into(),
