@@ -110,6 +110,21 @@ pub fn kurtogram<T: Sample>(
     Ok(Kurtogram { levels: out, best, best_kurtosis: best_k })
 }
 
+/// The FFT bins lo..=hi of an N-point record inside the band [`lo_hz`, `hi_hz`].
+fn band_bins(n: usize, fs_hz: f64, lo_hz: f64, hi_hz: f64) -> Result<(usize, usize), SignalError> {
+    if !(lo_hz >= 0.0 && hi_hz > lo_hz && hi_hz <= fs_hz / 2.0) {
+        return Err(SignalError::Invalid(format!(
+            "envelope band {lo_hz} .. {hi_hz} Hz is empty or outside 0 .. {} Hz",
+            fs_hz / 2.0
+        )));
+    }
+    let (lo, hi) = ((lo_hz * n as f64 / fs_hz).ceil() as usize, (hi_hz * n as f64 / fs_hz).floor() as usize);
+    if hi <= lo {
+        return Err(SignalError::Invalid(format!("envelope band {lo_hz} .. {hi_hz} Hz holds no frequency bin")));
+    }
+    Ok((lo, hi))
+}
+
 /// Squared envelope of `x` in the band [`lo_hz`, `hi_hz`] at the full sample rate: the band's bins of the
 /// whole record kept, the analytic signal by inverse transform, |.|^2.
 ///
@@ -123,19 +138,10 @@ pub fn squared_envelope<T: Sample>(
     hi_hz: f64,
 ) -> Result<Vec<f64>, SignalError> {
     let n = x.len();
-    if !(lo_hz >= 0.0 && hi_hz > lo_hz && hi_hz <= fs_hz / 2.0) {
-        return Err(SignalError::Invalid(format!(
-            "envelope band {lo_hz} .. {hi_hz} Hz is empty or outside 0 .. {} Hz",
-            fs_hz / 2.0
-        )));
-    }
+    let (lo, hi) = band_bins(n, fs_hz, lo_hz, hi_hz)?;
     let mut buf: Vec<f64> = x.iter().map(|v| v.f()).collect();
     let mut spec = Vec::new();
     fft.forward(&mut buf, &mut spec);
-    let (lo, hi) = ((lo_hz * n as f64 / fs_hz).ceil() as usize, (hi_hz * n as f64 / fs_hz).floor() as usize);
-    if hi <= lo {
-        return Err(SignalError::Invalid(format!("envelope band {lo_hz} .. {hi_hz} Hz holds no frequency bin")));
-    }
     // analytic signal: positive frequencies doubled, the rest zero
     let mut full = vec![(0.0, 0.0); n];
     for k in lo.max(1)..=hi.min(n / 2) {
@@ -161,16 +167,7 @@ pub fn squared_envelope_decimated<T: Sample>(
     hi_hz: f64,
 ) -> Result<(Vec<f64>, f64), SignalError> {
     let n = x.len();
-    if !(lo_hz >= 0.0 && hi_hz > lo_hz && hi_hz <= fs_hz / 2.0) {
-        return Err(SignalError::Invalid(format!(
-            "envelope band {lo_hz} .. {hi_hz} Hz is empty or outside 0 .. {} Hz",
-            fs_hz / 2.0
-        )));
-    }
-    let (lo, hi) = ((lo_hz * n as f64 / fs_hz).ceil() as usize, (hi_hz * n as f64 / fs_hz).floor() as usize);
-    if hi <= lo {
-        return Err(SignalError::Invalid(format!("envelope band {lo_hz} .. {hi_hz} Hz holds no frequency bin")));
-    }
+    let (lo, hi) = band_bins(n, fs_hz, lo_hz, hi_hz)?;
     let mut buf: Vec<f64> = x.iter().map(|v| v.f()).collect();
     let mut spec = Vec::new();
     fft.forward(&mut buf, &mut spec);
@@ -228,16 +225,21 @@ mod tests {
     use super::*;
     use std::f64::consts::TAU;
 
+    /// 1 s of (1 + m cos(2 pi fm t)) cos(2 pi 1000 t) at `fs`.
+    fn am_signal(fs: f64, fm: f64, m: f64) -> Vec<f64> {
+        (0..fs as usize)
+            .map(|i| {
+                let t = i as f64 / fs;
+                (1.0 + m * (TAU * fm * t).cos()) * (TAU * 1000.0 * t).cos()
+            })
+            .collect()
+    }
+
     #[test]
     fn squared_envelope_of_am_signal_is_closed_form() {
         // x = (1 + m cos(2 pi fm t)) cos(2 pi fc t): e = (1 + m cos)^2 = 1 + m^2/2 + 2 m cos + m^2/2 cos(2 .)
-        let (fs, fc, fm, m) = (8192.0, 1000.0, 16.0, 0.3);
-        let x: Vec<f64> = (0..8192)
-            .map(|i| {
-                let t = i as f64 / fs;
-                (1.0 + m * (TAU * fm * t).cos()) * (TAU * fc * t).cos()
-            })
-            .collect();
+        let (fs, fm, m) = (8192.0, 16.0, 0.3);
+        let x = am_signal(fs, fm, m);
         let e = squared_envelope(&mut Fft::new(), &x, fs, 900.0, 1100.0).unwrap();
         // every line is on a bin and inside the band: the envelope is exact to rounding
         for (i, v) in e.iter().enumerate().skip(100).take(7000) {
@@ -251,13 +253,8 @@ mod tests {
     #[test]
     fn decimated_envelope_matches_the_full_rate_one() {
         // the same AM signal: the decimated squared envelope at sample j equals the full-rate one at j / r
-        let (fs, fc, fm, m) = (8192.0, 1000.0, 16.0, 0.3);
-        let x: Vec<f64> = (0..8192)
-            .map(|i| {
-                let t = i as f64 / fs;
-                (1.0 + m * (TAU * fm * t).cos()) * (TAU * fc * t).cos()
-            })
-            .collect();
+        let (fs, fm, m) = (8192.0, 16.0, 0.3);
+        let x = am_signal(fs, fm, m);
         let (e, r) = squared_envelope_decimated(&mut Fft::new(), &x, fs, 900.0, 1100.0).unwrap();
         assert!(r < 0.2, "{r}");
         for (j, v) in e.iter().enumerate() {
