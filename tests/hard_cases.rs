@@ -303,3 +303,41 @@ fn stiff_two_dof_smooth_hill_and_magnus_agree() {
         assert!((p - q).norm() < 2e-7 * hill.floquet.rho_max.max(1e-30), "{p} {q}");
     }
 }
+
+#[test]
+fn a_multiplier_within_1e12_of_plus_one_is_refused_by_time_stepping_and_exact_by_harmonic_balance() {
+    // x'' + c x' + w^2 x = cos(w t) with w T = 2 pi: both multipliers are exp(-c T / 2) e^(+-i w T), within
+    // c T / 2 = 1e-13 of +1. Time stepping solves (I - Phi) x0 = c with cond ~ 1e13: rounding alone costs
+    // ~1e-3 relative, so rk4 and magnus4 must refuse and say why. Harmonic balance solves the diagonal
+    // system (w^2 - w^2 + i w c) Y_1 = 1/2 exactly to rounding: its answer is the closed form
+    // x = sin(w t) / (w c) and it must print it.
+    let period = 1.0;
+    let w = 2.0 * PI / period;
+    let c = 2e-13 / period;
+    let solver = |m: &str| format!(r#"{{"method": "{m}", "tolerance": 1e-8}}"#);
+    let scene = |m: &str| {
+        ltp_scene(
+            period,
+            r#"[[{"mean": 1.0}]]"#,
+            &format!(r#"[[{{"mean": {c}}}]]"#),
+            &format!(r#"[[{{"mean": {}}}]]"#, w * w),
+            r#"[{"mean": 0.0, "cos": [1.0]}]"#,
+            &solver(m),
+        )
+    };
+    let dir = temp_dir("within-1e12");
+    for m in ["rk4", "magnus4"] {
+        let path = write(&dir, &format!("{m}.json"), &scene(m));
+        let run = gearvib(&["simulate", &path, "--json"]);
+        assert_eq!(run.code, 2, "{m}: {}", run.stdout);
+        assert_one_line_error(&run, &[&format!("{m}.json"), "ill-conditioned", "near +1"]);
+    }
+    let s = Scene::from_value(serde_json::from_str(&scene("hill")).unwrap(), "hill").unwrap();
+    let r = solve(s.system(), &with(Method::Hill, 1e-8)).unwrap();
+    assert!(r.trusted, "{:?}", r.warnings);
+    let want = 1.0 / (w * c); // amplitude of sin(w t)
+    let mut x = Vec::new();
+    r.states_at(s.system(), &[period / 4.0], &mut x);
+    // 1e-8: the tolerance asked (the closed form is exact)
+    assert!(rel(x[0], want) < 1e-8, "{} vs {want}", x[0]);
+}

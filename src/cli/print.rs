@@ -13,8 +13,13 @@ pub fn stability(w: &mut dyn Write, s: &StabilitySummary) -> io::Result<()> {
         "method           {} ({} {}; rk4 stability limit {} steps), estimated error {:.2e} (tolerance {:.1e})",
         s.method, s.steps, s.resolution_unit, s.stability_limit_steps, s.error_estimate, s.tolerance
     )?;
+    writeln!(
+        w,
+        "error parts      periodic solution {:.2e}, monodromy (multipliers) {:.2e}",
+        s.state_error, s.multiplier_error
+    )?;
     writeln!(w, "why              {}", s.method_reason)?;
-    writeln!(w, "cond(I - Phi)    {:.3e}", s.cond_i_minus_phi)?;
+    writeln!(w, "conditioning     {:.3e} (||(I - Phi)^-1|| max(||Phi||, 1), balanced state)", s.cond_i_minus_phi)?;
     writeln!(
         w,
         "|rho|max         {:.6e}  -> {}",

@@ -200,7 +200,7 @@ pub fn bench_scene(scene: &Scene, progress: &dyn Fn(&str)) -> Result<(Vec<BenchR
         for _ in 0..10 {
             progress(&format!("{name}: hill {h} harmonics"));
             let (t, sol) = median_time(|| hill::solve_order(f, h));
-            if let Ok(sol) = sol {
+            if let Ok((sol, _)) = sol {
                 results.push(BenchResult {
                     scene: name.clone(),
                     method: "hill".into(),

@@ -305,6 +305,7 @@ pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
                     let b = periodic_amplitudes(&half);
                     let top = a.iter().skip(1).fold(0.0f64, |x, v| x.max(*v)).max(f64::MIN_POSITIVE);
                     let alias = (1..=kmax.min(m / 4)).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max) / top;
+                    steady.state_error = steady.state_error.max(alias);
                     steady.error_estimate = steady.error_estimate.max(alias);
                     a
                 }

@@ -33,6 +33,20 @@ pub enum SolverError {
         /// Error estimate of the last attempt.
         estimate: f64,
     },
+    /// I - Phi is so ill-conditioned that rounding alone exceeds the tolerance, at any step count.
+    #[error(
+        "the periodic solution cannot meet tolerance {tolerance:e}: I - Phi is ill-conditioned (cond {cond:.2e} on the balanced state{nearest}), so rounding alone costs about {roundoff:.1e} relative error at any step count; use method hill for smooth coefficients, or raise solver.tolerance"
+    )]
+    IllConditioned {
+        /// Condition number of the balanced I - Phi.
+        cond: f64,
+        /// Estimated rounding error cond eps sqrt(steps), relative.
+        roundoff: f64,
+        /// Requested tolerance.
+        tolerance: f64,
+        /// ", a multiplier near +1 (within D)" or nothing.
+        nearest: String,
+    },
     /// The work the system needs is beyond the stated budget: refused before anything is allocated.
     #[error(
         "the system's fastest mode (|lambda| = {rate:.3e} 1/s, {hz:.3e} Hz) needs about {needed:.2e} RK4 steps per period of {period_s:.3e} s, beyond the limit of {limit}: a mass, inertia or radius far too small, or a stiffness, damping or period far too large",

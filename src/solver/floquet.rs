@@ -77,11 +77,11 @@ fn repeated_warning(f: &Floquet, phi_error: f64, warnings: &mut Vec<String>) {
     }
 }
 
-/// ", a multiplier lies within D of +1" when one does (D < 1e-3), else nothing: a large cond(I - Phi) is
+/// ", a multiplier near +1 (within D)" when one is (D < 1e-3), else nothing: a large cond(I - Phi) is
 /// only blamed on a multiplier near +1 when there is one.
 pub fn nearest_to_one(f: &Floquet) -> String {
     match f.multipliers.iter().map(|r| (r - 1.0).norm()).reduce(f64::min) {
-        Some(d) if d < 1e-3 => format!(", a multiplier lies within {d:.1e} of +1"),
+        Some(d) if d < 1e-3 => format!(", a multiplier near +1 (within {d:.1e})"),
         _ => String::new(),
     }
 }

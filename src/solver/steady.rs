@@ -2,7 +2,7 @@
 //! step doubling (Richardson: for a fourth-order method the error of the finer result is about
 //! |x_m - x_2m| / 15).
 
-use super::floquet::{Floquet, condition_number, floquet_warnings};
+use super::floquet::{Floquet, floquet_warnings};
 use super::{Method, RK4_STABILITY_LIMIT, SolverError, SolverOptions, hill, rk4};
 use crate::system::PeriodicSystem;
 use nalgebra::{DMatrix, DVector};
@@ -34,15 +34,23 @@ pub struct SteadyState {
     pub period_s: f64,
     /// Steps (or harmonics) used.
     pub resolution: usize,
-    /// Estimated relative error of multipliers and periodic solution.
+    /// Estimated relative error of what is printed: the larger of `state_error` and `multiplier_error`.
     pub error_estimate: f64,
+    /// Estimated error of the periodic solution: largest balanced-state error over the period relative to
+    /// the largest balanced state |x / d|.
+    pub state_error: f64,
+    /// Estimated error of the monodromy, so of the multipliers away from repeated ones: n times the largest
+    /// entry of the balanced D^-1 (Phi - Phi_exact) D (a bound on its 2-norm) relative to the largest entry
+    /// of D^-1 Phi D or 1.
+    pub multiplier_error: f64,
     /// Monodromy matrix.
     pub monodromy: DMatrix<f64>,
     /// Floquet analysis.
     pub floquet: Floquet,
     /// Periodic initial state x0.
     pub x0: DVector<f64>,
-    /// 2-norm condition number of I - Phi.
+    /// Condition number of the periodic problem against errors in Phi, balanced state
+    /// ([`scaled_condition`]).
     pub cond_i_minus_phi: f64,
     /// Smallest step count above the explicit RK4 stability limit.
     pub stability_limit_steps: usize,
@@ -122,24 +130,35 @@ pub fn state_scales(sys: &dyn PeriodicSystem) -> Vec<f64> {
     super::eigen::balance(&mut mean)
 }
 
-/// cond(I - Phi) in the balanced state: cond(D^-1 (I - Phi) D).
+/// Condition number of the periodic problem (I - Phi) x0 = c (Eq 21) against errors in Phi, in the
+/// balanced state B = D^-1 Phi D: kappa = ||(I - B)^-1||_2 max(||B||_2, 1). A relative error e of Phi moves
+/// x0 by about kappa e relative. Equal to cond(I - Phi) when Phi is small (strong damping); unlike it, large
+/// when I - Phi is small in every direction (both multipliers within 1e-13 of +1 give cond(I - Phi) ~ 1 but
+/// kappa ~ 1e13).
 pub fn scaled_condition(a: &DMatrix<f64>, d: &[f64]) -> f64 {
     let n = a.nrows();
     let scaled = DMatrix::from_fn(n, n, |i, j| a[(i, j)] * d[j] / d[i]);
-    condition_number(&scaled)
+    let phi = DMatrix::identity(n, n) - &scaled;
+    let smax = |m: DMatrix<f64>| {
+        nalgebra::linalg::SVD::try_new(m, false, false, f64::EPSILON, 200 * n.max(1)).map(|s| s.singular_values.max())
+    };
+    let (Some(phi_norm), Some(inverse_norm)) = (smax(phi), scaled.try_inverse().and_then(smax)) else {
+        return f64::INFINITY;
+    };
+    if inverse_norm.is_finite() { inverse_norm * phi_norm.max(1.0) } else { f64::INFINITY }
 }
 
-/// Largest change between two attempts (the second on the refined grid of the first) of the balanced
+/// Largest change between two attempts (the second on the refined grid of the first): of the balanced
 /// state z = x / d, relative to the largest |z| over the period; and of the monodromy.
-fn difference(coarse: &Attempt, fine: &Attempt, d: &[f64]) -> f64 {
+fn difference(coarse: &Attempt, fine: &Attempt, d: &[f64]) -> Change {
     let n = d.len();
     let scale = fine.states.chunks(n).flat_map(|x| x.iter().zip(d).map(|(v, s)| (v / s).abs())).fold(0.0, f64::max);
-    let mut worst: f64 = 0.0;
+    let mut state: f64 = 0.0;
     if scale > 0.0 {
         for (i, xc) in coarse.states.chunks(n).enumerate() {
             let xf = &fine.states[2 * i * n..(2 * i + 1) * n];
             for c in 0..n {
-                worst = worst.max((xc[c] - xf[c]).abs() / d[c] / scale);
+                state = state.max((xc[c] - xf[c]).abs() / d[c] / scale);
             }
         }
     }
@@ -149,7 +168,25 @@ fn difference(coarse: &Attempt, fine: &Attempt, d: &[f64]) -> f64 {
     // against the unit circle, so a strongly damped Phi of size 0.01 need not be known to 1e-8 of itself
     let balanced = |m: &DMatrix<f64>| DMatrix::from_fn(n, n, |i, j| m[(i, j)] * d[j] / d[i]);
     let (c, f) = (balanced(&coarse.run.monodromy), balanced(&fine.run.monodromy));
-    worst.max((&c - &f).amax() / f.amax().max(1.0))
+    // n times the largest entry bounds the 2-norm of the change, and through it (Bauer-Fike) the
+    // multipliers' change for a normal Phi
+    Change { state, monodromy: n as f64 * (&c - &f).amax() / f.amax().max(1.0) }
+}
+
+/// Changes of the state and of the monodromy between two attempts, or their estimated errors.
+#[derive(Clone, Copy, Debug)]
+struct Change {
+    state: f64,
+    monodromy: f64,
+}
+
+impl Change {
+    fn scaled(self, k: f64) -> Self {
+        Self { state: self.state * k, monodromy: self.monodromy * k }
+    }
+    fn max(self) -> f64 {
+        self.state.max(self.monodromy)
+    }
 }
 
 pub(super) fn solve_rk4(
@@ -193,7 +230,7 @@ pub(super) fn solve_steps(
         let coarse = attempt(sys, &grid, scheme, &d).map_err(explain)?;
         let fine = attempt(sys, &grid.refined(), scheme, &d).map_err(explain)?;
         // error of the coarse result: |x_m - x_2m| (1 + 1/15)
-        let est = difference(&coarse, &fine, &d) * 16.0 / 15.0;
+        let est = difference(&coarse, &fine, &d).scaled(16.0 / 15.0);
         (grid, coarse, est)
     } else {
         // an explicit scheme must start above its stability limit; Magnus is A-stable
@@ -211,9 +248,20 @@ pub(super) fn solve_steps(
             let fine = attempt(sys, &fine_grid, scheme, &d)?;
             // Richardson: the finer result's error is about |x_m - x_2m| / 15; twice that, because the
             // asymptotic estimate fell a few percent short of the true error on the gear scenes
-            let est = 2.0 * difference(&coarse, &fine, &d) / 15.0;
+            // rounding amplified by cond(I - Phi) does not fall with more steps: refuse at once
+            let roundoff = fine.cond * f64::EPSILON * (fine_grid.steps() as f64).sqrt();
+            if roundoff > opts.tolerance && fine.x0.amax() > 0.0 {
+                return Err(SolverError::IllConditioned {
+                    cond: fine.cond,
+                    roundoff,
+                    tolerance: opts.tolerance,
+                    nearest: super::floquet::nearest_to_one(&fine.floquet),
+                });
+            }
+            let change = difference(&coarse, &fine, &d).scaled(2.0 / 15.0);
+            let est = change.max();
             if est <= opts.tolerance {
-                break (fine_grid, fine, est);
+                break (fine_grid, fine, change);
             }
             // a fourth-order change shrinks 16-fold per doubling; one that no longer halves is rounding, which
             // more steps only make worse: stop at once instead of running to the step cap
@@ -234,10 +282,13 @@ pub(super) fn solve_steps(
             m = next.max(2 * grid.steps()).min((opts.max_steps / 2).max(grid.steps() + 1));
         }
     };
-    let roundoff = fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt();
+    // a zero periodic solution (no forcing) has nothing for rounding to spoil
+    let roundoff = if fine.x0.amax() > 0.0 { fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt() } else { 0.0 };
     // the reported error bounds the product's own rounding too (an exact scheme's step-doubling change can
     // be below it); the amplification by cond(I - Phi) is judged separately just below
-    let estimate = estimate.max(10.0 * f64::EPSILON * (grid.steps() as f64).sqrt());
+    let floor = 10.0 * f64::EPSILON * (grid.steps() as f64).sqrt();
+    let (state_error, multiplier_error) = (estimate.state.max(floor), estimate.monodromy.max(floor));
+    let estimate = state_error.max(multiplier_error);
     let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
     if roundoff > opts.tolerance {
         warnings.push(format!(
@@ -257,13 +308,15 @@ pub(super) fn solve_steps(
         trusted = false;
     }
     let mut floquet = fine.floquet;
-    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), estimate, &mut warnings);
+    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), multiplier_error, &mut warnings);
     Ok(SteadyState {
         method: if scheme == rk4::Scheme::Rk4 { Method::Rk4 } else { Method::Magnus },
         reason: reason.to_string(),
         period_s: period,
         resolution: grid.steps(),
         error_estimate: estimate,
+        state_error,
+        multiplier_error,
         monodromy: fine.run.monodromy,
         floquet,
         x0: fine.x0,

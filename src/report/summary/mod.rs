@@ -132,11 +132,17 @@ pub struct StabilitySummary {
     pub steps: usize,
     /// "steps" or "harmonics".
     pub resolution_unit: String,
-    /// Estimated relative error.
+    /// Estimated relative error of what is printed: the larger of the two below.
     pub error_estimate: f64,
+    /// Estimated relative error of the periodic solution (balanced state, over the period).
+    pub state_error: f64,
+    /// Estimated error of the balanced monodromy (2-norm bound relative to max(|Phi|, 1)): bounds the
+    /// multipliers' error away from repeated multipliers.
+    pub multiplier_error: f64,
     /// Requested tolerance.
     pub tolerance: f64,
-    /// Condition number of I - Phi.
+    /// Condition number of the periodic problem (I - Phi) x0 = c against errors in Phi, balanced state:
+    /// ||(I - Phi)^-1|| max(||Phi||, 1).
     pub cond_i_minus_phi: f64,
     /// Fewest steps above the explicit RK4 stability limit.
     pub stability_limit_steps: usize,
@@ -168,6 +174,8 @@ impl StabilitySummary {
             steps: s.resolution,
             resolution_unit: if s.method == crate::solver::Method::Hill { "harmonics" } else { "steps" }.into(),
             error_estimate: s.error_estimate,
+            state_error: s.state_error,
+            multiplier_error: s.multiplier_error,
             tolerance: scene.solver.tolerance,
             cond_i_minus_phi: s.cond_i_minus_phi,
             stability_limit_steps: s.stability_limit_steps,
