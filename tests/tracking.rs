@@ -83,7 +83,13 @@ fn a_twenty_percent_run_up_is_tracked_and_the_crack_found() {
     let ramp = serde_json::json!({"speed_ramp": {"from": 0.8, "to": 1.2}});
     let base = recording(&dir, "healthy", "base", 800, ramp.clone());
     let cracked = recording(&dir, "cracked-pinion-tooth3", "cracked", 801, ramp);
-    let d = &diagnose(&[cracked], &["--baseline", &base, "--teeth", "14,39", "--rpm", "1800"])[0];
+    let report = dir.join("report");
+    let d = &diagnose(
+        &[cracked],
+        &["--baseline", &base, "--teeth", "14,39", "--rpm", "1800", "--report", report.to_str().unwrap()],
+    )[0];
+    // a speed that changes by more than 2 % gets the rpm-order map
+    assert!(report.join("cracked-order-map.png").is_file());
     let p = &d["speed_profile"];
     assert_eq!(p["tracking"], "mesh phase");
     let hz = |k: &str| p[k].as_f64().unwrap();
@@ -203,4 +209,74 @@ fn tachometer_with_missing_pulses_is_refused() {
     let f = write(&dir, "tacho.csv", &s);
     let run = gearvib(&["diagnose", &f, "--fs", "10000", "--tacho-channel", "2", "--channel", "1"]);
     assert_one_line_error(&run, &["tachometer", "missing"]);
+}
+
+/// Amplitude of `order` in `simulate --json` of the healthy scene at `rpm` (constant speed).
+fn steady_amplitude(dir: &Path, rpm: f64, order: f64) -> f64 {
+    let mut s = read_json(&repo("data/scenes/gear-z14z39-healthy.json"));
+    s["gear_pair"]["speed_rpm"] = rpm.into();
+    s["output"]["max_order"] = 120.into();
+    let path = write(dir, &format!("steady-{rpm}.json"), &s.to_string());
+    let run = gearvib(&["simulate", &path, "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let lines = v["orders"].as_array().unwrap();
+    let line = lines.iter().find(|l| (l["order"].as_f64().unwrap() - order).abs() < 1e-9).unwrap();
+    line["amplitude"].as_f64().unwrap()
+}
+
+#[test]
+fn a_run_up_is_quasi_static_and_its_order_map_follows_the_steady_state_at_each_speed() {
+    use gearvib::signal::order_map::order_map;
+    use gearvib::signal::spectrum::Fft;
+    use gearvib::signal::tsa::AngleMap;
+    let dir = temp_dir("ramp-quasi-static");
+    let mut s = read_json(&repo("data/scenes/gear-z14z39-healthy.json"));
+    let o = s["output"].as_object_mut().unwrap();
+    o.remove("speed_drift");
+    for (k, v) in [
+        ("speed_ramp", serde_json::json!({"from": 0.8, "to": 1.2})),
+        ("tacho", true.into()),
+        ("noise_rms", 0.0.into()),
+        ("wav_format", "f32".into()),
+        ("max_order", 120.into()),
+    ] {
+        o.insert(k.into(), v);
+    }
+    let scene = write(&dir, "ramp.json", &s.to_string());
+    let wav = dir.join("ramp.wav");
+    let run = gearvib(&["simulate", &scene, "-o", wav.to_str().unwrap()]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let rec = gearvib::io::read_recording(&wav).unwrap();
+    let fs = rec.sample_rate_hz.unwrap();
+    // the tachometer's rising edges are the true revolution starts (the synthesiser's own angle)
+    let pulses = gearvib::signal::speed::tacho_pulses(&rec.channels[1]).unwrap();
+    let map = AngleMap::from_pulses(&pulses, 1);
+    let m = order_map(&mut Fft::new(), &rec.channels[0], &map, 512, 8, 4, 50.0).unwrap();
+    // order 14 (mesh, 340 .. 500 Hz) and 42 (3x mesh) at grid speeds of the quasi-static synthesis, where
+    // no interpolation between steady states is involved; rows whose mean speed is within 0.5 % of it
+    let mut checked = 0;
+    for s_rel in [0.85, 1.0, 1.15] {
+        let hz = 30.0 * s_rel;
+        let (row, speed) = m
+            .speeds
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (i, v * fs))
+            .min_by(|a, b| (a.1 - hz).abs().total_cmp(&(b.1 - hz).abs()))
+            .unwrap();
+        assert!((speed / hz - 1.0).abs() < 0.005, "no row near {hz} Hz: {speed}");
+        for order in [14.0, 42.0] {
+            let want = steady_amplitude(&dir, 1800.0 * s_rel, order);
+            let got = m.amplitudes[row][(order * 8.0) as usize];
+            // 5 %: the 8-revolution segment spans +-0.7 % of speed around its mean and the Hann-weighted
+            // amplitude follows the steady state's slope over it; the row's mean is within 0.5 % of s
+            assert!((got / want - 1.0).abs() < 0.05, "order {order} at {hz} Hz: {got:e} vs steady {want:e}");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 6);
+    // the test discriminates: the steady state itself changes over the ramp by far more than 5 %
+    let (a, b) = (steady_amplitude(&dir, 1530.0, 42.0), steady_amplitude(&dir, 2070.0, 42.0));
+    assert!((a / b - 1.0).abs() > 0.2, "{a} {b}");
 }

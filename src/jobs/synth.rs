@@ -132,6 +132,88 @@ fn evaluator<'a>(scene: &'a Scene, sim: &'a Simulation) -> Evaluator<'a> {
     Evaluator::Table(Table { period_s: period, values, slopes })
 }
 
+/// Relative speeds apart on the quasi-static grid of a ramp (one steady state per 5 % of speed).
+const RAMP_GRID_STEP: f64 = 0.05;
+
+/// Steady states on a grid of speeds for a gear pair whose speed ramps: the response is quasi-static, the
+/// steady state at the instantaneous speed, linearly interpolated between the two nearest grid speeds (the
+/// paper's model has no speed-dependent transient). Each grid solution is evaluated at its own time
+/// tau / s_j for the angle reached (tau: the nominal-speed time equivalent of the angle).
+struct SpeedGrid {
+    /// Relative speeds s_j, ascending, evenly spaced.
+    speeds: Vec<f64>,
+    /// The scene at each speed and its simulation.
+    solved: Vec<(Scene, Simulation)>,
+}
+
+impl SpeedGrid {
+    /// The grid for `scene` when its output ramps the speed of a gear pair; `None` otherwise.
+    fn of(scene: &Scene) -> Result<Option<Self>, Error> {
+        let Some(crate::scene::SpeedChange::Ramp { from, to, .. }) = scene.output.speed_change else {
+            return Ok(None);
+        };
+        let Some(rpm) = scene.json.get("gear_pair").and_then(|g| g.get("speed_rpm")).and_then(|v| v.as_f64()) else {
+            return Ok(None);
+        };
+        let (lo, hi) = (from.min(to), from.max(to));
+        let k = (((hi - lo) / RAMP_GRID_STEP).ceil() as usize).max(1) + 1;
+        let speeds: Vec<f64> = (0..k).map(|j| lo + (hi - lo) * j as f64 / (k - 1) as f64).collect();
+        let solved = speeds
+            .iter()
+            .map(|s| {
+                let mut json = scene.json.clone();
+                json["gear_pair"]["speed_rpm"] = (rpm * s).into();
+                let at = Scene::from_value(json, &scene.file)?;
+                let sim = super::simulate::simulate(&at)?;
+                Ok((at, sim))
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        Ok(Some(Self { speeds, solved }))
+    }
+
+    /// Grid cell j (s_j <= s <= s_(j+1)) and the weight of s_(j+1).
+    fn bracket(&self, s: f64) -> (usize, f64) {
+        let (lo, hi) = (self.speeds[0], self.speeds[self.speeds.len() - 1]);
+        if self.speeds.len() < 2 || hi <= lo {
+            return (0, 0.0);
+        }
+        let x = ((s - lo) / (hi - lo) * (self.speeds.len() - 1) as f64).clamp(0.0, (self.speeds.len() - 1) as f64);
+        let j = (x.floor() as usize).min(self.speeds.len() - 2);
+        (j, x - j as f64)
+    }
+
+    /// Output at nominal-time equivalents `taus` with relative speeds `speeds` (same length).
+    fn values(&self, evals: &[Evaluator<'_>], taus: &[f64], speeds: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; taus.len()];
+        let mut i = 0;
+        while i < taus.len() {
+            // a run of samples in the same grid cell: each neighbour evaluated once for the run
+            let (j, _) = self.bracket(speeds[i]);
+            let end = (i..taus.len()).find(|&m| self.bracket(speeds[m]).0 != j).unwrap_or(taus.len());
+            let at = |g: usize| -> Vec<f64> {
+                let sj = self.speeds[g];
+                let local: Vec<f64> = taus[i..end].iter().map(|t| t / sj).collect();
+                evaluate(&evals[g], &local)
+            };
+            let (a, b) = (at(j), at((j + 1).min(self.speeds.len() - 1)));
+            for (m, o) in out[i..end].iter_mut().enumerate() {
+                let (_, w) = self.bracket(speeds[i + m]);
+                *o = (1.0 - w) * a[m] + w * b[m];
+            }
+            i = end;
+        }
+        out
+    }
+}
+
+/// The output of one evaluator at times `taus` (s, reduced modulo its period).
+fn evaluate(e: &Evaluator<'_>, taus: &[f64]) -> Vec<f64> {
+    match e {
+        Evaluator::Table(tab) => taus.iter().map(|&tau| tab.eval(wrap(tau, tab.period_s))).collect(),
+        Evaluator::Direct(sc, si) => super::simulate::output_at(sc, &si.steady, taus),
+    }
+}
+
 /// Tachometer shafts of a scene: (name, revolutions of that shaft per base revolution).
 fn tacho_shafts(scene: &Scene) -> Vec<(String, f64)> {
     match &scene.model {
@@ -223,6 +305,16 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
     let fs = o.sample_rate_hz;
     let frames = (fs * o.duration_s).round() as u64;
     let eval = evaluator(scene, sim);
+    let grid = SpeedGrid::of(scene)?;
+    let grid_evals: Vec<Evaluator<'_>> =
+        grid.as_ref().map(|g| g.solved.iter().map(|(sc, si)| evaluator(sc, si)).collect()).unwrap_or_default();
+    // the largest steady-state value over every speed the recording reaches (integer full scale)
+    let steady_peak = grid
+        .iter()
+        .flat_map(|g| g.solved.iter().map(|(_, si)| si))
+        .chain(std::iter::once(sim))
+        .flat_map(|si| si.period_samples.iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
     let shafts = if o.tacho { tacho_shafts(scene) } else { Vec::new() };
     let q = &o.quantity;
     let mut channels = vec![ChannelInfo {
@@ -235,7 +327,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         (false, _) => ("csv".to_string(), None),
         (true, WavFormat::F32) => ("f32".to_string(), None),
         (true, f) => {
-            let peak = sim.period_samples.iter().fold(0.0f64, |a, v| a.max(v.abs())) + 4.0 * o.noise_rms;
+            let peak = steady_peak + 4.0 * o.noise_rms;
             let fsc = o.full_scale.unwrap_or_else(|| nice_ceiling(1.25 * peak));
             (if f == WavFormat::I16 { "i16" } else { "i24" }.to_string(), Some(fsc))
         }
@@ -272,6 +364,11 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
     let angle_time = o
         .speed_change
         .map_or_else(|| Box::new(|t: f64| t) as Box<dyn Fn(f64) -> f64 + Send + Sync>, |c| c.angle_time(o.duration_s));
+    // relative speed at time t (used by the ramp's speed grid): the derivative of tau(t)
+    let speed_of = |t: f64| {
+        let h = 1e-4 * o.duration_s.max(1e-3);
+        (angle_time(t + h) - angle_time((t - h).max(0.0))) / (t + h - (t - h).max(0.0))
+    };
     let mut start = 0u64;
     while start < frames {
         let len = CHUNK.min((frames - start) as usize);
@@ -280,9 +377,12 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
             let t = (start + i as u64) as f64 / fs;
             times.push(angle_time(t));
         }
-        let values = match &eval {
-            Evaluator::Table(tab) => times.iter().map(|&tau| tab.eval(wrap(tau, period))).collect(),
-            Evaluator::Direct(sc, si) => super::simulate::output_at(sc, &si.steady, &times),
+        let values = match &grid {
+            Some(g) => {
+                let speeds: Vec<f64> = (0..len).map(|i| speed_of((start + i as u64) as f64 / fs)).collect::<Vec<f64>>();
+                g.values(&grid_evals, &times, &speeds)
+            }
+            None => evaluate(&eval, &times),
         };
         buf.clear();
         for (i, v) in values.iter().enumerate() {
@@ -336,7 +436,16 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         speed_change: o.speed_change.map(|c| c.describe()),
         base_hz: o.base_hz,
         period_s: period,
-        evaluation: eval.describe(),
+        evaluation: match &grid {
+            Some(g) => format!(
+                "quasi-static: steady states at {} speeds from {} to {} times the nominal, linearly interpolated at the instantaneous speed; each by {}",
+                g.speeds.len(),
+                g.speeds[0],
+                g.speeds[g.speeds.len() - 1],
+                eval.describe()
+            ),
+            None => eval.describe(),
+        },
         warnings,
     };
     // the pair as a unit: both temporaries written, then the signal renamed and the sidecar last; a

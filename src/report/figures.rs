@@ -1,7 +1,7 @@
 //! The report images: which data, which axes, which labels. Drawing itself is in [`super::plot`].
 
 use super::ReportError;
-use super::plot::{Band, Chart, Marker, Series, Style, render_png};
+use super::plot::{Band, Chart, Heatmap, Marker, Series, Style, render_png, render_png_grid};
 use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Simulation, SweepPoint};
 use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
@@ -184,19 +184,35 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
 pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Path) -> Result<PathBuf, ReportError> {
     let pts: Vec<(f64, f64)> = steady.floquet.multipliers.iter().map(|r| (r.re, r.im)).collect();
     let r = steady.floquet.rho_max.max(1.0) * 1.15;
-    let verdict = if steady.floquet.stable { "asymptotically stable" } else { "NOT asymptotically stable" };
+    let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
     let chart = Chart {
-        title: format!("{}: Floquet multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
+        title: format!("{}: multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
         x_label: "Re rho".into(),
         y_label: "Im rho".into(),
         x_range: Some((-r, r)),
         y_range: Some((-r, r)),
         unit_circle: true,
-        series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
+        series: vec![Series { name: "multipliers".into(), points: pts.clone(), style: Style::Points, color: 1 }],
         ..Default::default()
     };
     let p = dir.join("multipliers.png");
-    render_png(&p, 800, 800, &[chart])?;
+    // multipliers far inside the circle sit on a dot at this scale: a second panel zoomed onto them
+    let rho = steady.floquet.rho_max;
+    if rho > 0.0 && rho < 0.3 {
+        let z = rho * 1.3;
+        let zoom = Chart {
+            title: format!("zoomed to |rho| <= {z:.2e} (the unit circle is off this panel)"),
+            x_label: "Re rho".into(),
+            y_label: "Im rho".into(),
+            x_range: Some((-z, z)),
+            y_range: Some((-z, z)),
+            series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
+            ..Default::default()
+        };
+        render_png_grid(&p, 1500, 760, 2, &[chart, zoom])?;
+    } else {
+        render_png(&p, 800, 800, &[chart])?;
+    }
     Ok(p)
 }
 
@@ -274,6 +290,22 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                 v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
             };
             let x_label = format!("{} tooth in mesh (tooth k spans k-1 .. k of {}; {origin})", g.gear, g.mesh_order);
+            let mut tsa_series = vec![Series { name: "TSA".into(), points: along(t), style: Style::Line, color: 0 }];
+            // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
+            if let Some((_, _, b)) = d.baseline_tsas.iter().find(|b| b.0 == ch && b.1 == g.gear && b.2.len() == t.len())
+            {
+                // without a tachometer both origins are arbitrary: the baseline is turned to fit best
+                let (b, how) = match d.speed_profile.tracking {
+                    crate::report::summary::Tracking::Tachometer => (b.clone(), "tachometer-aligned"),
+                    _ => (aligned(b, t), "turned to the best fit"),
+                };
+                tsa_series.push(Series {
+                    name: format!("healthy baseline TSA ({how})"),
+                    points: along(&b),
+                    style: Style::Line,
+                    color: 8,
+                });
+            }
             [
                 Chart {
                     title: format!(
@@ -282,23 +314,26 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                     ),
                     x_label: x_label.clone(),
                     y_label: format!("TSA [{}]", unit_or(&d.unit)),
-                    series: vec![Series { name: "TSA".into(), points: along(t), style: Style::Line, color: 0 }],
+                    series: tsa_series,
                     x_range: Some((0.0, z)),
                     ..Default::default()
                 },
                 Chart {
                     title: format!(
-                        "{stem}: residual signal of the {} (TSA without shaft orders 1-2 and mesh harmonics)",
+                        "{stem}: residual (TSA without shaft orders 1-2 and mesh harmonics) and difference, {}",
                         g.gear
                     ),
                     x_label,
-                    y_label: format!("residual [{}]", unit_or(&d.unit)),
-                    series: vec![Series {
-                        name: "residual".into(),
-                        points: along(&g.residual),
-                        style: Style::Line,
-                        color: 1,
-                    }],
+                    y_label: format!("residual, difference [{}]", unit_or(&d.unit)),
+                    series: vec![
+                        Series { name: "residual".into(), points: along(&g.residual), style: Style::Line, color: 1 },
+                        Series {
+                            name: "difference (residual without the first sidebands)".into(),
+                            points: along(&g.difference),
+                            style: Style::Line,
+                            color: 2,
+                        },
+                    ],
                     x_range: Some((0.0, z)),
                     ..Default::default()
                 },
@@ -409,6 +444,11 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         render_png(&p, 1400, 550, &[cepstrum_chart(&stem, c)])?;
         out.push(p);
     }
+    if let (Some(m), Some(fs)) = (&d.order_map, d.sample_rate_hz) {
+        let p = dir.join(format!("{stem}-order-map.png"));
+        render_png(&p, 1400, 800, &[order_map_chart(&stem, d, m, fs)])?;
+        out.push(p);
+    }
     if let Some(c) = &d.comparison {
         // one overlay: measured and model bars side by side at each order, the lines the model misses
         // (measured more than 6 dB above it) ringed
@@ -502,7 +542,7 @@ fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
                 series.push(Series {
                     name: "unresolved (lines of both shafts within 3 bins)".into(),
                     points: unresolved,
-                    style: Style::Points,
+                    style: Style::Hatched,
                     color: 6,
                 });
             }
@@ -601,6 +641,58 @@ fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelop
 }
 
 /// The real cepstrum up to 1.2 periods of the slowest shaft, with the rahmonics of each shaft marked.
+/// `b` circularly shifted to the lag of largest correlation with `a` (same length; O(n^2), n <= 4096).
+fn aligned(b: &[f64], a: &[f64]) -> Vec<f64> {
+    let n = a.len();
+    let corr = |lag: usize| (0..n).map(|i| a[i] * b[(i + lag) % n]).sum::<f64>();
+    let best = (0..n).max_by(|&x, &y| corr(x).total_cmp(&corr(y))).unwrap_or(0);
+    (0..n).map(|i| b[(i + best) % n]).collect()
+}
+
+/// Dynamic range of the order map's colour scale, dB below its strongest cell.
+const ORDER_MAP_RANGE_DB: f64 = 60.0;
+
+/// The rpm-order map as coloured cells: order across, speed up, colour the amplitude in dB re the
+/// strongest cell; the mesh harmonics marked. A resonance shows as a curve order = f / speed.
+fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::order_map::OrderMap, fs: f64) -> Chart {
+    let rpm: Vec<f64> = m.speeds.iter().map(|s| s * fs * 60.0).collect();
+    let edges = |c: &[f64]| -> Vec<f64> {
+        let mut e = Vec::with_capacity(c.len() + 1);
+        let gap = |i: usize| if c.len() > 1 { c[i.min(c.len() - 2) + 1] - c[i.min(c.len() - 2)] } else { 1.0 };
+        e.push(c[0] - 0.5 * gap(0));
+        e.extend(c.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+        e.push(c[c.len() - 1] + 0.5 * gap(c.len() - 1));
+        e
+    };
+    let top = m.amplitudes.iter().flatten().copied().fold(f64::MIN_POSITIVE, f64::max);
+    let values = m
+        .amplitudes
+        .iter()
+        .map(|r| r.iter().map(|a| 20.0 * (a.max(f64::MIN_POSITIVE) / top).log10()).collect())
+        .collect();
+    let z = d.mesh_order as f64;
+    let markers = (1..=3)
+        .map(|h| Marker { x: h as f64 * z, label: format!("{h}x mesh"), color: 8 })
+        .filter(|mk| mk.x <= *m.orders.last().unwrap_or(&0.0))
+        .collect();
+    Chart {
+        title: format!(
+            "{stem}: rpm-order map, channel {} (colour: amplitude, dark blue -{ORDER_MAP_RANGE_DB:.0} dB to yellow 0 dB re the strongest line)",
+            d.channels[0]
+        ),
+        x_label: "order of the reference shaft".into(),
+        y_label: "reference shaft speed [rpm]".into(),
+        heatmap: Some(Heatmap {
+            x_edges: edges(&m.orders),
+            y_edges: edges(&rpm),
+            values,
+            range: (-ORDER_MAP_RANGE_DB, 0.0),
+        }),
+        markers,
+        ..Default::default()
+    }
+}
+
 fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
     let q_max = c.rahmonics.iter().map(|r| r.quefrency_s).fold(0.0, f64::max) * 1.1;
     let pts: Vec<(f64, f64)> = c

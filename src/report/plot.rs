@@ -17,6 +17,8 @@ pub enum Style {
     Stems,
     /// Circles only.
     Points,
+    /// Hatched squares only (a value that could not be resolved: "there, but not measured alone").
+    Hatched,
 }
 
 /// One data series.
@@ -77,6 +79,33 @@ pub struct Chart {
     pub y_range: Option<(f64, f64)>,
     /// A unit circle (for Floquet multipliers; equal axes expected).
     pub unit_circle: bool,
+    /// Cells coloured by value, drawn under the series.
+    pub heatmap: Option<Heatmap>,
+}
+
+/// A grid of coloured cells (an order map): cell (i, j) spans x_edges[i]..x_edges[i + 1] and
+/// y_edges[j]..y_edges[j + 1]; its value is mapped from `range` onto a dark-blue-to-yellow scale.
+#[derive(Clone, Debug, Default)]
+pub struct Heatmap {
+    /// Cell edges on x (one more than the columns).
+    pub x_edges: Vec<f64>,
+    /// Cell edges on y (one more than the rows).
+    pub y_edges: Vec<f64>,
+    /// Values row by row (`values[j][i]` for row j, column i).
+    pub values: Vec<Vec<f64>>,
+    /// Values at the bottom and top of the colour scale.
+    pub range: (f64, f64),
+}
+
+/// Dark blue (0) through teal and green to yellow (1): a perceptually ordered scale close to viridis.
+fn heat_color(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] =
+        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 } * (STOPS.len() - 1) as f64;
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let f = t - i as f64;
+    let mix = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
+    RGBColor(mix(STOPS[i].0, STOPS[i + 1].0), mix(STOPS[i].1, STOPS[i + 1].1), mix(STOPS[i].2, STOPS[i + 1].2))
 }
 
 /// Colours by index; the last (black) is for limits and references.
@@ -109,7 +138,16 @@ type Ranges = ((f64, f64), (f64, f64));
 
 fn data_range(chart: &Chart) -> Result<Ranges, ReportError> {
     let bad = |why: &str| ReportError::BadData { what: chart.title.clone(), why: why.into() };
-    let pts: Vec<(f64, f64)> = chart.series.iter().flat_map(|s| s.points.iter().copied()).collect();
+    let mut pts: Vec<(f64, f64)> = chart.series.iter().flat_map(|s| s.points.iter().copied()).collect();
+    if let Some(h) = &chart.heatmap {
+        if h.values.len() + 1 != h.y_edges.len() || h.values.iter().any(|r| r.len() + 1 != h.x_edges.len()) {
+            return Err(bad("heat map cells do not match their edges"));
+        }
+        let (x, y) = (&h.x_edges, &h.y_edges);
+        if let (Some(x0), Some(x1), Some(y0), Some(y1)) = (x.first(), x.last(), y.first(), y.last()) {
+            pts.extend([(*x0, *y0), (*x1, *y1)]);
+        }
+    }
     if pts.is_empty() {
         return Err(bad("no data points"));
     }
@@ -132,17 +170,41 @@ fn data_range(chart: &Chart) -> Result<Ranges, ReportError> {
             (lo - pad, hi + pad)
         }
     };
-    Ok((
-        chart.x_range.unwrap_or_else(|| span(&xs, chart.x_log)),
-        chart.y_range.unwrap_or_else(|| span(&ys, chart.y_log)),
-    ))
+    // a legend (two or more series) sits in the upper right: room above the data so it covers none
+    let legend = chart.series.len() > 1;
+    let y = chart.y_range.unwrap_or_else(|| {
+        let (lo, hi) = span(&ys, chart.y_log);
+        match (legend, chart.y_log) {
+            (false, _) => (lo, hi),
+            (true, false) => (lo, hi + LEGEND_ROOM * (hi - lo)),
+            (true, true) => (lo, hi * (hi / lo).powf(LEGEND_ROOM)),
+        }
+    });
+    Ok((chart.x_range.unwrap_or_else(|| span(&xs, chart.x_log)), y))
 }
+
+/// Share of the data's height added above it for the legend of a chart with several series.
+const LEGEND_ROOM: f64 = 0.3;
 
 /// Renders `charts` stacked vertically into a PNG of `width` x `height` pixels, written atomically.
 ///
 /// # Errors
 /// Empty or non-finite data, drawing or writing failures.
 pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Result<(), ReportError> {
+    render_png_grid(path, width, height, 1, charts)
+}
+
+/// Renders `charts` row by row into a grid of `columns` columns, written atomically.
+///
+/// # Errors
+/// Empty or non-finite data, drawing or writing failures.
+pub fn render_png_grid(
+    path: &Path,
+    width: u32,
+    height: u32,
+    columns: usize,
+    charts: &[Chart],
+) -> Result<(), ReportError> {
     register_font()?;
     for c in charts {
         data_range(c)?;
@@ -162,7 +224,8 @@ pub fn render_png(path: &Path, width: u32, height: u32, charts: &[Chart]) -> Res
     let result = (|| -> Result<(), ReportError> {
         let root = BitMapBackend::new(&tmp, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw_err(path, e))?;
-        let areas = root.split_evenly((charts.len(), 1));
+        let columns = columns.clamp(1, charts.len().max(1));
+        let areas = root.split_evenly((charts.len().div_ceil(columns), columns));
         for (chart, area) in charts.iter().zip(areas.iter()) {
             draw(chart, area).map_err(|e| draw_err(path, e))?;
         }
@@ -220,6 +283,16 @@ where
         .x_label_formatter(&|v| fmt_tick(*v))
         .draw()?;
     let (xr, yr) = (c.x_range(), c.y_range());
+    if let Some(h) = &chart.heatmap {
+        let (lo, hi) = h.range;
+        let span = (hi - lo).max(f64::MIN_POSITIVE);
+        for (j, row) in h.values.iter().enumerate() {
+            let (y0, y1) = (h.y_edges[j], h.y_edges[j + 1]);
+            c.draw_series(row.iter().enumerate().map(|(i, v)| {
+                Rectangle::new([(h.x_edges[i], y0), (h.x_edges[i + 1], y1)], heat_color((v - lo) / span).filled())
+            }))?;
+        }
+    }
     for b in &chart.bands {
         c.draw_series(std::iter::once(Rectangle::new(
             [(b.from, yr.start), (b.to, yr.end)],
@@ -280,6 +353,23 @@ where
                 c.draw_series(pts.into_iter().map(|p| Circle::new(p, 5, col.filled())))?
                     .label(s.name.as_str())
                     .legend(legend);
+            }
+            Style::Hatched => {
+                // a square of half-width 7 px: outline and three diagonals
+                let (h, style) = (7, col.stroke_width(2));
+                c.draw_series(pts.into_iter().map(|p| {
+                    EmptyElement::at(p)
+                        + Rectangle::new([(-h, -h), (h, h)], style)
+                        + PathElement::new(vec![(-h, h), (h, -h)], style)
+                        + PathElement::new(vec![(-h, 0), (0, -h)], style)
+                        + PathElement::new(vec![(0, h), (h, 0)], style)
+                }))?
+                .label(s.name.as_str())
+                .legend(move |(x, y)| {
+                    EmptyElement::at((x + 9, y))
+                        + Rectangle::new([(-6, -6), (6, 6)], col.stroke_width(2))
+                        + PathElement::new(vec![(-6, 6), (6, -6)], col.stroke_width(2))
+                });
             }
             Style::Stems => {
                 let base = yr.start;

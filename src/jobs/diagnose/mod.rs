@@ -25,6 +25,7 @@ use crate::report::summary::{
     Tracking, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
+use crate::signal::order_map::OrderMap;
 use crate::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
 use crate::signal::tsa::{self, AngleMap, Decomposition};
 use crate::signal::{angle, speed};
@@ -110,6 +111,7 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             *cap = c.operating_point;
             if job.report.is_some() {
                 d.baseline_spectra = b.spectra.iter().map(|(ch, amp, _)| (*ch, amp.clone())).collect();
+                d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
             }
         }
     }
@@ -740,6 +742,8 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         warnings,
         spectra,
         baseline_spectra: Vec::new(),
+        baseline_tsas: Vec::new(),
+        order_map: None,
     };
     d.mesh_harmonics = mesh_harmonics(&d, channels[0], &ratios);
     if let Some(g) = d.gears.first() {
@@ -756,7 +760,22 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         }
         d.cepstrum = cepstrum(&mut fft, x, fs, period, &ratios);
     }
+    if (profile.max - profile.min) > ORDER_MAP_SPEED_CHANGE * profile.mean {
+        d.order_map = order_map(&mut fft, &rec.channels[channels[0] - 1], &map, d.mesh_order);
+    }
     Ok(d)
+}
+
+/// Speed range (slowest to fastest revolution, over the mean) above which the rpm-order map is drawn.
+const ORDER_MAP_SPEED_CHANGE: f64 = 0.02;
+
+/// The rpm-order map of a recording whose speed changes: segments of 8 revolutions advancing by 4 (order
+/// resolution 1/8), orders up to 3.5 mesh orders (three mesh harmonics and their sidebands). `None` when
+/// the recording holds too few revolutions.
+fn order_map(fft: &mut Fft, x: &[f32], map: &AngleMap, mesh_order: usize) -> Option<OrderMap> {
+    let max_order = 3.5 * mesh_order.max(1) as f64;
+    let points = ((3.0 * max_order) as usize).next_power_of_two().max(64);
+    crate::signal::order_map::order_map(fft, x, map, points, 8, 4, max_order).ok()
 }
 
 /// Kurtogram levels searched (band widths down to fs / 64).
@@ -1150,6 +1169,7 @@ fn gear_indicators(
         revolutions: t.revolutions,
         indicators,
         residual: d.residual,
+        difference: d.difference,
         tsa_amplitudes: d.amplitudes,
         tsa: t.samples.clone(),
         blocks: Vec::new(),

@@ -255,6 +255,9 @@ pub struct GearIndicators {
     /// Residual signal (TSA without shaft and mesh lines) over one revolution.
     #[serde(skip)]
     pub residual: Vec<f64>,
+    /// Difference signal (the residual without the first-order sidebands) over one revolution.
+    #[serde(skip)]
+    pub difference: Vec<f64>,
     /// One-sided amplitude spectrum of the TSA, by order of this shaft.
     #[serde(skip)]
     pub tsa_amplitudes: Vec<f64>,
@@ -490,6 +493,14 @@ pub struct Diagnosis {
     /// The first baseline's amplitude spectrum of each channel, for the overlay in the images.
     #[serde(skip)]
     pub baseline_spectra: Vec<(usize, Spectrum)>,
+    /// The first baseline's TSA of each channel and gear (channel, gear, TSA over one revolution), for the
+    /// overlay in the images.
+    #[serde(skip)]
+    pub baseline_tsas: Vec<(usize, Shaft, Vec<f64>)>,
+    /// Order amplitudes against speed of the deciding channel, when the speed changed by more than 2 %
+    /// over the recording (orders of the reference shaft; speeds in rev/sample).
+    #[serde(skip)]
+    pub order_map: Option<crate::signal::order_map::OrderMap>,
 }
 
 impl Diagnosis {
