@@ -83,6 +83,7 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     let geometry = first.as_ref().map(|b| Geometry {
         period_samples: (b.speed_source == SpeedSource::Estimated).then_some(b.shaft_period_samples),
         mesh_order: (b.teeth_source == TeethSource::Estimated).then_some(b.mesh_order),
+        envelope_band: b.envelope.as_ref().map(|e| (e.band_hz[0], e.band_hz[1])),
     });
     let mut baselines: Vec<Diagnosis> = first.into_iter().collect();
     let rest: Vec<Result<Diagnosis, Error>> = baseline_files
@@ -120,6 +121,9 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     let thresholds = Thresholds::default();
     for (d, cap) in done.iter_mut().zip(caps) {
         judge(d, reference.as_ref(), &thresholds);
+        if let Some(e) = baselines.first().and_then(|b| b.envelope.as_ref()) {
+            verdict::envelope_evidence(d, e);
+        }
         if let Some(why) = cap {
             verdict::cap_at_suspect(d, why);
         }
@@ -385,6 +389,9 @@ pub struct Geometry {
     pub period_samples: Option<f64>,
     /// Mesh order, when known.
     pub mesh_order: Option<usize>,
+    /// The baseline's envelope band in Hz: recordings are demodulated in the same band, so their envelope
+    /// lines compare with the baseline's.
+    pub envelope_band: Option<(f64, f64)>,
 }
 
 /// Diagnoses one recording.
@@ -751,7 +758,10 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     }
     if let Some(fs) = fs {
         let x = &rec.channels[channels[0] - 1];
-        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, o) {
+        let baseline_band = geometry.and_then(|g| g.envelope_band);
+        let band = o.envelope_band.or(baseline_band);
+        let choice = BandChoice { levels: o.kurtogram_levels, band };
+        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, choice) {
             Ok(e) => d.envelope = Some(e),
             // a band or level the user asked for that does not fit is an error; the automatic choice
             // failing on a short recording is a warning
@@ -778,6 +788,14 @@ fn order_map(fft: &mut Fft, x: &[f32], map: &AngleMap, mesh_order: usize) -> Opt
     crate::signal::order_map::order_map(fft, x, map, points, 8, 4, max_order).ok()
 }
 
+/// How the envelope band is chosen: kurtogram depth, and a band (given, or the baseline's) that overrides
+/// the kurtogram's choice.
+#[derive(Clone, Copy, Debug)]
+struct BandChoice {
+    levels: Option<usize>,
+    band: Option<(f64, f64)>,
+}
+
 /// Kurtogram levels searched (band widths down to fs / 64).
 const KURTOGRAM_LEVELS: usize = 5;
 
@@ -791,17 +809,19 @@ fn envelope(
     map: &AngleMap,
     shafts: &[(Shaft, f64)],
     mesh_order: usize,
-    o: &Options,
+    choice: BandChoice,
 ) -> Result<crate::report::summary::Envelope, crate::signal::SignalError> {
+    let BandChoice { levels, band } = choice;
     use crate::signal::envelope as env;
     let n = x.len().min(1 << 20);
     let deepest = ((n.next_power_of_two() / 4 / 64) as f64).log2().floor().max(1.0) as usize;
     // bands from 1.5 mesh frequencies up: below, the shafts' and mesh's own lines beat into a peaky envelope
     let period = map.mean_period_samples();
     let mesh_hz = shafts.first().map_or(0.0, |_| mesh_order as f64 * fs / period);
-    let levels = o.kurtogram_levels.unwrap_or(KURTOGRAM_LEVELS.min(deepest));
+    let levels = levels.unwrap_or(KURTOGRAM_LEVELS.min(deepest));
     let k = env::kurtogram(fft, x, fs, levels, (1.5 * mesh_hz).min(fs / 4.0))?;
-    let (level, _, lo, hi) = match o.envelope_band {
+    // a given band first, then the baseline's (so the lines compare with it), else the kurtogram's choice
+    let (level, _, lo, hi) = match band {
         Some((lo, hi)) => (0, 0, lo, hi),
         None => k.best,
     };
@@ -832,8 +852,7 @@ fn envelope(
     let m1 = e.iter().sum::<f64>() / e.len().max(1) as f64;
     // (the band's own kurtosis from the decimated envelope: the same moments at a lower rate)
     let m2 = e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64;
-    let spectral_kurtosis =
-        if o.envelope_band.is_some() { m2 / (m1 * m1).max(f64::MIN_POSITIVE) - 2.0 } else { k.best_kurtosis };
+    let spectral_kurtosis = if band.is_some() { m2 / (m1 * m1).max(f64::MIN_POSITIVE) - 2.0 } else { k.best_kurtosis };
     Ok(crate::report::summary::Envelope {
         band_hz: [lo, hi],
         level,

@@ -3,7 +3,9 @@
 //! ensemble of recordings in time order.
 
 use super::baseline::{self, Reference};
-use crate::report::summary::{Diagnosis, GearIndicators, Score, Shaft, Verdict, VerdictGear, VerdictState};
+use crate::report::summary::{
+    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Score, Shaft, Verdict, VerdictGear, VerdictState,
+};
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
 
@@ -222,6 +224,58 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
         reasons.push("without a baseline only absolute thresholds apply; a healthy recording of the same machine makes the verdict much stronger".into());
     }
     d.verdict = Verdict { state, gear, reasons };
+}
+
+/// Rise of a shaft's first envelope order over the baseline's that counts as evidence, dB (an engineering
+/// choice: 10 dB is a tripling of the line against its neighbourhood).
+pub const ENVELOPE_RISE_DB: f64 = 10.0;
+/// Height over its neighbourhood the line must have in the recording itself, dB.
+pub const ENVELOPE_LINE_DB: f64 = 10.0;
+
+/// Adds the envelope spectrum's evidence against the baseline's: a shaft whose first envelope order rose
+/// by more than [`ENVELOPE_RISE_DB`] (and stands [`ENVELOPE_LINE_DB`] over its neighbourhood) has
+/// impacts once per revolution. One value per recording, without a spread: it makes a healthy verdict
+/// suspect, never faulty on its own, and supports a suspect or faulty one on the same gear.
+pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
+    let Some(e) = &d.envelope else { return };
+    let base_db = |l: &EnvelopeLine| {
+        baseline.lines.iter().find(|b| b.shaft == l.shaft && b.order == l.order).map(|b| b.over_floor_db)
+    };
+    let strongest = e
+        .lines
+        .iter()
+        .filter(|l| l.order == 1 && l.over_floor_db > ENVELOPE_LINE_DB)
+        .filter_map(|l| base_db(l).map(|b| (l, b, l.over_floor_db - b)))
+        .filter(|(_, _, r)| *r > ENVELOPE_RISE_DB)
+        .max_by(|a, b| a.2.total_cmp(&b.2));
+    let Some((line, base_db, rise_db)) = strongest else { return };
+    let same_band =
+        (e.band_hz[0] - baseline.band_hz[0]).abs() < 1.0 && (e.band_hz[1] - baseline.band_hz[1]).abs() < 1.0;
+    let reason = format!(
+        "envelope spectrum ({:.0}..{:.0} Hz band{}): {} order 1 stands {:.1} dB above its neighbourhood against {:.1} dB in the baseline (+{:.1} dB): impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
+        e.band_hz[0],
+        e.band_hz[1],
+        if same_band {
+            String::new()
+        } else {
+            format!("; the baseline's band was {:.0}..{:.0} Hz", baseline.band_hz[0], baseline.band_hz[1])
+        },
+        line.shaft,
+        line.over_floor_db,
+        base_db,
+        rise_db,
+        line.shaft
+    );
+    let gear = VerdictGear::from(line.shaft);
+    match d.verdict.state {
+        VerdictState::Healthy => {
+            d.verdict.state = VerdictState::Suspect;
+            d.verdict.gear = gear;
+            d.verdict.reasons.insert(0, reason);
+        }
+        _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
+        _ => d.verdict.reasons.push(reason),
+    }
 }
 
 /// Lowers a faulty verdict to suspect when the recording's operating point differs from the baseline's,
