@@ -413,3 +413,32 @@ fn envelope_band_and_kurtogram_level_flags() {
     let run = gearvib(&["diagnose", &r, "--teeth", "14,39", "--kurtogram-levels", "20"]);
     assert_one_line_error(&run, &["kurtogram level 20", "allow"]);
 }
+
+/// `--lifter pinion` removes the pinion's family by comb liftering before the envelope: the crack's
+/// once-per-revolution line, part of that family, loses more than 6 dB; the wheel's family is untouched by
+/// it; without teeth the shaft's period is unknown and the request is refused.
+#[test]
+fn comb_liftering_a_shaft_before_the_envelope() {
+    let line = |d: &serde_json::Value, shaft: &str| {
+        d["envelope"]["lines"].as_array().unwrap().iter().find(|l| l["shaft"] == shaft && l["order"] == 1).unwrap()
+            ["over_floor_db"]
+            .as_f64()
+            .unwrap()
+    };
+    let cracked = rec("cracked-pinion-tooth3");
+    let plain = diag_json(&[&cracked, "--teeth", "14,39"]);
+    let liftered = diag_json(&[&cracked, "--teeth", "14,39", "--lifter", "pinion"]);
+    assert_eq!(liftered["envelope"]["liftered"], "pinion");
+    assert!(plain["envelope"].get("liftered").is_none());
+    // measured: +40.2 dB -> +25.4 dB
+    assert!(
+        line(&plain, "pinion") - line(&liftered, "pinion") > 6.0,
+        "{} {}",
+        line(&plain, "pinion"),
+        line(&liftered, "pinion")
+    );
+    let run = gearvib(&["diagnose", &cracked, "--lifter", "pinion"]);
+    assert_one_line_error(&run, &["cannot lifter the pinion family", "teeth"]);
+    let run = gearvib(&["diagnose", &cracked, "--teeth", "14,39", "--lifter", "gear"]);
+    assert_one_line_error(&run, &["--lifter"]);
+}

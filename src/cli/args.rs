@@ -59,7 +59,7 @@ pub enum Command {
         json: bool,
     },
     /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
-    Diagnose(DiagnoseArgs),
+    Diagnose(Box<DiagnoseArgs>),
     /// Speed against error of every solver on the paper's scenes and the hard cases.
     Bench {
         /// Scenes (default: the paper's cases and the hard cases in data/scenes).
@@ -122,6 +122,11 @@ pub struct DiagnoseArgs {
     /// Envelope band in Hz, LO,HI (default: the band of largest spectral kurtosis from the kurtogram).
     #[arg(long, value_name = "LO,HI")]
     pub envelope_band: Option<String>,
+    /// Remove this shaft's family of lines (pinion or wheel; needs --teeth) by comb liftering of the real
+    /// cepstrum before the envelope analysis, so what does not repeat with that shaft (a bearing, the other
+    /// gear) shows in the envelope.
+    #[arg(long, value_parser = ["pinion", "wheel"])]
+    pub lifter: Option<String>,
     /// Deepest kurtogram level (band width fs / 2^(level + 1)); default 5.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=30))]
     pub kurtogram_levels: Option<u64>,

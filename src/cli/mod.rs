@@ -258,6 +258,11 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         sensitivity: a.sensitivity,
         envelope_band: a.envelope_band.as_deref().map(parse_band).transpose()?,
         kurtogram_levels: a.kurtogram_levels.map(|l| l as usize),
+        lifter: match a.lifter.as_deref() {
+            Some("pinion") => Some(crate::report::summary::Shaft::Pinion),
+            Some(_) => Some(crate::report::summary::Shaft::Wheel),
+            None => None,
+        },
         block_revs: a.block_revs.map(|r| r as usize),
         ..Default::default()
     };

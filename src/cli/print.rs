@@ -104,10 +104,11 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             .collect();
         writeln!(
             w,
-            "envelope         band {:.0}..{:.0} Hz (spectral kurtosis {:.2}): {}",
+            "envelope         band {:.0}..{:.0} Hz (spectral kurtosis {:.2}{}): {}",
             e.band_hz[0],
             e.band_hz[1],
             e.spectral_kurtosis,
+            e.liftered.map_or(String::new(), |s| format!("; {s} family removed by comb liftering")),
             lines.join("; ")
         )?;
     }

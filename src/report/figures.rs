@@ -626,8 +626,11 @@ fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelop
     }
     Chart {
         title: format!(
-            "{stem}: envelope spectrum, band {:.0}..{:.0} Hz (kurtogram, spectral kurtosis {:.1})",
-            e.band_hz[0], e.band_hz[1], e.spectral_kurtosis
+            "{stem}: envelope spectrum, band {:.0}..{:.0} Hz (spectral kurtosis {:.1}){}",
+            e.band_hz[0],
+            e.band_hz[1],
+            e.spectral_kurtosis,
+            e.liftered.map_or(String::new(), |s| format!(", {s} family liftered out"))
         ),
         x_label: format!("order of the {reference} (tracked angle)"),
         y_label: format!("squared envelope [({})^2]", unit_or(&d.unit)),

@@ -339,6 +339,8 @@ pub struct Options {
     pub envelope_band: Option<(f64, f64)>,
     /// Deepest kurtogram level (`None`: 5, or what the recording allows).
     pub kurtogram_levels: Option<usize>,
+    /// Shaft whose family of lines is removed by comb liftering before the envelope analysis.
+    pub lifter: Option<Shaft>,
     /// Fewest whole revolutions a TSA needs.
     pub min_revolutions: usize,
     /// Revolutions per block of the statistical baseline (`None`: [`DEFAULT_BLOCK_REVS`], or fewer when
@@ -370,6 +372,7 @@ impl Default for Options {
             sensitivity: None,
             envelope_band: None,
             kurtogram_levels: None,
+            lifter: None,
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
@@ -761,7 +764,21 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         let baseline_band = geometry.and_then(|g| g.envelope_band);
         let band = o.envelope_band.or(baseline_band);
         let choice = BandChoice { levels: o.kurtogram_levels, band };
-        match envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, choice) {
+        let result = match o.lifter {
+            Some(shaft) => {
+                let ratio = ratios.iter().find(|r| r.0 == shaft).map(|r| r.1).ok_or_else(|| {
+                    bad(path, format!("cannot lifter the {shaft} family: give the teeth so that its speed is known"))
+                })?;
+                let y =
+                    crate::signal::envelope::lifter_comb(&mut fft, x, period / ratio, 1).map_err(|e| bad(path, e))?;
+                envelope(&mut fft, &y, fs, &map, &ratios, d.mesh_order, choice)
+            }
+            None => envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, choice),
+        };
+        match result.map(|mut e| {
+            e.liftered = o.lifter;
+            e
+        }) {
             Ok(e) => d.envelope = Some(e),
             // a band or level the user asked for that does not fit is an error; the automatic choice
             // failing on a short recording is a warning
@@ -802,9 +819,9 @@ const KURTOGRAM_LEVELS: usize = 5;
 /// Envelope analysis of one channel: the band of largest spectral kurtosis (from 1.5 mesh frequencies up,
 /// at most from fs / 4), the squared envelope there,
 /// its order spectrum on the tracked angle, and its lines at orders 1..=3 of each shaft.
-fn envelope(
+fn envelope<T: crate::signal::Sample>(
     fft: &mut Fft,
-    x: &[f32],
+    x: &[T],
     fs: f64,
     map: &AngleMap,
     shafts: &[(Shaft, f64)],
@@ -861,6 +878,7 @@ fn envelope(
         orders,
         amplitudes,
         kurtogram: k.levels,
+        liftered: None,
     })
 }
 

@@ -318,6 +318,9 @@ pub struct Envelope {
     pub spectral_kurtosis: f64,
     /// Lines at orders 1..=3 of each shaft.
     pub lines: Vec<EnvelopeLine>,
+    /// The shaft whose family was removed by comb liftering before demodulation (`--lifter`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub liftered: Option<Shaft>,
     /// Order axis of the envelope spectrum (reference shaft orders).
     #[serde(skip)]
     pub orders: Vec<f64>,
