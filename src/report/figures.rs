@@ -93,11 +93,14 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
     let copies = (3.0 / revs).ceil().clamp(1.0, 64.0) as usize;
     let m = sim.period_samples.len();
     let shown = (copies * m).min(20_000);
+    // seconds for slow machines (the press turns at 0.83 Hz), milliseconds for a gear mesh
+    let span = period * shown as f64 / m as f64;
+    let (to_unit, time_unit) = if span >= 1.0 { (1.0, "s") } else { (1e3, "ms") };
     let pts: Vec<(f64, f64)> =
-        (0..shown).map(|i| (1e3 * period * i as f64 / m as f64, sim.period_samples[i % m])).collect();
+        (0..shown).map(|i| (to_unit * period * i as f64 / m as f64, sim.period_samples[i % m])).collect();
     let wave = Chart {
-        title: format!("{}: {} over {:.3} s of steady state", scene.name, q.name(), period * shown as f64 / m as f64),
-        x_label: "time [ms]".into(),
+        title: format!("{}: {} over {span:.3} s of steady state", scene.name, q.name()),
+        x_label: format!("time [{time_unit}]"),
         y_label: format!("{}{unit}", q.name()),
         series: vec![Series { name: q.name().into(), points: pts, style: Style::Line, color: 0 }],
         ..Default::default()
@@ -110,20 +113,45 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
     let floor = peak * 1e-5;
     let teeth = gear_teeth(scene);
     let max_hz = sim.orders.last().map_or(1.0, |l| l.frequency_hz);
-    let spectrum = Chart {
-        title: format!("{}: amplitude spectrum of {} (steady state, one period)", scene.name, q.name()),
-        x_label: format!(
-            "frequency [Hz]   (orders of the {} = {:.2} Hz)",
-            scene.output.base_name, scene.output.base_hz
-        ),
-        y_label: format!("amplitude{unit}"),
-        y_log: true,
-        // room on the right for the legend, above the data for the labels
-        x_range: Some((0.0, max_hz * 1.22)),
-        y_range: Some((floor, peak * 10.0)),
-        series: order_stems(&sim.orders, teeth, floor),
-        markers: mesh_markers(scene, max_hz),
-        ..Default::default()
+    // a gear pair reads in Hz (the mesh frequency is what an analyser shows); any other machine in orders
+    // of its base rotation, where its harmonics fall on integers
+    let spectrum = match teeth {
+        Some(_) => Chart {
+            title: format!("{}: amplitude spectrum of {} (steady state, one period)", scene.name, q.name()),
+            x_label: format!(
+                "frequency [Hz]   (orders of the {} = {:.2} Hz)",
+                scene.output.base_name, scene.output.base_hz
+            ),
+            y_label: format!("amplitude{unit}"),
+            y_log: true,
+            // room on the right for the legend, above the data for the labels
+            x_range: Some((0.0, max_hz * 1.22)),
+            y_range: Some((floor, peak * 10.0)),
+            series: order_stems(&sim.orders, teeth, floor),
+            markers: mesh_markers(scene, max_hz),
+            ..Default::default()
+        },
+        None => {
+            let by_order: Vec<OrderLine> =
+                sim.orders.iter().map(|l| OrderLine { frequency_hz: l.order, ..*l }).collect();
+            let max_order = sim.orders.last().map_or(1.0, |l| l.order);
+            Chart {
+                title: format!(
+                    "{}: amplitude spectrum of {} (steady state, one period; {} = {:.3} Hz)",
+                    scene.name,
+                    q.name(),
+                    scene.output.base_name,
+                    scene.output.base_hz
+                ),
+                x_label: format!("order of the {}", scene.output.base_name),
+                y_label: format!("amplitude{unit}"),
+                y_log: true,
+                x_range: Some((0.0, max_order + 1.0)),
+                y_range: Some((floor, peak * 10.0)),
+                series: order_stems(&by_order, None, floor),
+                ..Default::default()
+            }
+        }
     };
     let p = dir.join("spectrum.png");
     render_png(&p, 1400, 700, &[spectrum])?;
