@@ -44,6 +44,8 @@ fn closed_stdout_ends_quietly() {
     ] {
         let (code, err) = closed_early(args, 10);
         assert_eq!(code, 0, "{args:?}: {err}");
-        assert!(err.is_empty(), "{args:?}: stderr {err:?}");
+        // nothing on stderr but, on a slow or busy machine, a sweep's run-time estimate (said when the
+        // estimate exceeds 2 s, which depends on the machine)
+        assert!(err.lines().all(|l| l.contains("estimated run time")), "{args:?}: stderr {err:?}");
     }
 }
