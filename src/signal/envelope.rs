@@ -55,7 +55,7 @@ pub struct Kurtogram {
 /// Fewest envelope samples a band needs for its kurtosis to mean anything.
 const MIN_BAND_SAMPLES: usize = 64;
 
-/// Fast kurtogram over levels 1..=`levels` of the first 2^20 samples of `x` (sample rate `fs_hz`); the best
+/// Fast kurtogram over levels 1..=`levels` of the first 2^18 samples of `x` (sample rate `fs_hz`); the best
 /// band is sought among bands starting at `min_hz` or above (below it, a machine's own deterministic lines
 /// beat into a peaky but fault-free envelope). Bands holding fewer than 64 envelope samples cannot be
 /// estimated: asking for such a level is an error.
@@ -69,7 +69,9 @@ pub fn kurtogram<T: Sample>(
     levels: usize,
     min_hz: f64,
 ) -> Result<Kurtogram, SignalError> {
-    let n = x.len().min(1 << 20);
+    // 2^18 samples (5 s at 51.2 kHz) choose the band as well as the whole record: the deepest default level
+    // still leaves each band 4096 envelope samples
+    let n = x.len().min(1 << 18);
     if n < 256 {
         return Err(SignalError::TooShort { what: "kurtogram".into(), needed: 256, got: x.len() });
     }

@@ -830,7 +830,7 @@ fn envelope<T: crate::signal::Sample>(
 ) -> Result<crate::report::summary::Envelope, crate::signal::SignalError> {
     let BandChoice { levels, band } = choice;
     use crate::signal::envelope as env;
-    let n = x.len().min(1 << 20);
+    let n = x.len().min(1 << 18);
     let deepest = ((n.next_power_of_two() / 4 / 64) as f64).log2().floor().max(1.0) as usize;
     // bands from 1.5 mesh frequencies up: below, the shafts' and mesh's own lines beat into a peaky envelope
     let period = map.mean_period_samples();
@@ -845,7 +845,11 @@ fn envelope<T: crate::signal::Sample>(
     // the squared envelope at a reduced rate r (it holds twice the band), its revolutions scaled alike
     let (e, r) = env::squared_envelope_decimated(fft, x, fs, lo, hi)?;
     let scaled = AngleMap::from_pulses(&map.starts().iter().map(|s| s * r).collect::<Vec<_>>(), 1);
-    let points = ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096);
+    // the envelope holds 0 .. (hi - lo) Hz: 2.5 points per cycle of that per revolution suffice
+    let needed = 2.5 * (hi - lo) * period / fs;
+    let points = (needed.ceil() as usize)
+        .next_power_of_two()
+        .clamp(32, ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096));
     let (orders, amplitudes) = env::order_spectrum(fft, &e, &scaled, points);
     let revs = map.revolutions().max(1) as f64;
     let at = |o: f64| -> (f64, f64) {
@@ -1095,19 +1099,27 @@ fn track(
             fundamental_mesh(&views, period, z)
         }
     };
-    // on each channel the strongest of the first four mesh harmonics below 0.4 cycles per sample is tracked
-    // (a resonance can make the second ten times the first)
-    let tracked: Vec<Result<angle::Tracked, _>> = channels
+    // the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
+    // second ten times the first) on each channel, relative to the channel's RMS; the two channels where it
+    // stands out most are tracked and the one whose tracked line has the better SNR is used
+    let mut candidates: Vec<(usize, f64, f64)> = channels
         .par_iter()
         .map(|&c| {
             let x = &rec.channels[c - 1];
-            let order = (1..=4)
+            let (order, amp) = (1..=4)
                 .map(|k| (k * z) as f64)
                 .filter(|o| o / period < 0.4)
-                .max_by(|a, b| ind_line(x, a / period, 0.2 / period).total_cmp(&ind_line(x, b / period, 0.2 / period)))
-                .unwrap_or(z as f64);
-            angle::track_mesh(&mut Fft::new(), x, period, order)
+                .map(|o| (o, ind_line(x, o / period, 0.2 / period)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((z as f64, 0.0));
+            (c, order, amp / ind::rms(&x[..x.len().min(1 << 16)]).max(f64::MIN_POSITIVE))
         })
+        .collect();
+    candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
+    let tracked: Vec<Result<angle::Tracked, _>> = candidates
+        .par_iter()
+        .take(2)
+        .map(|&(c, order, _)| angle::track_mesh(&mut Fft::new(), &rec.channels[c - 1], period, order))
         .collect();
     let best = tracked.into_iter().reduce(|a, b| match (&a, &b) {
         (Ok(x), Ok(y)) => {
