@@ -272,6 +272,7 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
         baselines: a.baseline.iter().map(PathBuf::from).collect(),
         scene: a.scene.as_ref().map(PathBuf::from),
         report: a.report.as_ref().map(PathBuf::from),
+        in_memory: Vec::new(),
     })
 }
 

@@ -79,21 +79,7 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
     if let Some(out) = &job.output {
         synth::check_request(&scene, out, job.allow_aliasing, &mut Vec::new())?;
     }
-    let sim = simulate(&scene).map_err(|e| scene_error(&scene, e))?;
-    let mut summary = SimulateSummary::new(&scene, &sim);
-    if !sim.steady.trusted {
-        return Err(JobError::Untrusted {
-            file: scene.file.clone(),
-            message: format!(
-                "periodic solution not printed: it cannot meet solver.tolerance {:.1e} (estimated error {:.2e}, cond(I - Phi) {:.2e}){}",
-                scene.solver.tolerance,
-                sim.steady.error_estimate,
-                sim.steady.cond_i_minus_phi,
-                main_reason(&summary.stability.warnings)
-            ),
-        }
-        .into());
-    }
+    let (sim, mut summary) = summarize(&scene)?;
     let signal = match &job.output {
         Some(out) => {
             let info = synth::write_signal(&scene, &sim, out, job.allow_aliasing)?;
@@ -114,16 +100,38 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
     Ok(SimulateOutcome { summary, signal, report_files })
 }
 
-/// Floquet analysis of a scene: refuses multipliers that cannot meet the scene's tolerance, writes the
-/// report.
+/// Simulates a loaded scene and builds its `simulate --json` summary; refuses a periodic solution that
+/// cannot meet the scene's tolerance.
 ///
 /// # Errors
-/// Unreadable or invalid scene, a solver failure, an untrusted result, unwritable outputs.
-pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
-    crate::io::begin_run();
-    let scene = Scene::load(&job.scene.display().to_string())?;
-    let steady = solver::solve(scene.system(), &scene.solver).map_err(|e| scene_error(&scene, e))?;
-    let summary = StabilitySummary::new(&scene, &steady);
+/// A solver failure or an untrusted result.
+pub fn summarize(scene: &Scene) -> Result<(Simulation, SimulateSummary), Error> {
+    let sim = simulate(scene).map_err(|e| scene_error(scene, e))?;
+    let summary = SimulateSummary::new(scene, &sim);
+    if !sim.steady.trusted {
+        return Err(JobError::Untrusted {
+            file: scene.file.clone(),
+            message: format!(
+                "periodic solution not printed: it cannot meet solver.tolerance {:.1e} (estimated error {:.2e}, conditioning {:.2e}){}",
+                scene.solver.tolerance,
+                sim.steady.error_estimate,
+                sim.steady.cond_i_minus_phi,
+                main_reason(&summary.stability.warnings)
+            ),
+        }
+        .into());
+    }
+    Ok((sim, summary))
+}
+
+/// Floquet analysis of a loaded scene and its `stability --json` summary; refuses multipliers that cannot
+/// meet the scene's tolerance.
+///
+/// # Errors
+/// A solver failure or untrusted multipliers.
+pub fn stability_of(scene: &Scene) -> Result<(SteadyState, StabilitySummary), Error> {
+    let steady = solver::solve(scene.system(), &scene.solver).map_err(|e| scene_error(scene, e))?;
+    let summary = StabilitySummary::new(scene, &steady);
     if steady.error_estimate > scene.solver.tolerance {
         return Err(JobError::Untrusted {
             file: scene.file.clone(),
@@ -136,6 +144,18 @@ pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
         }
         .into());
     }
+    Ok((steady, summary))
+}
+
+/// Floquet analysis of a scene: refuses multipliers that cannot meet the scene's tolerance, writes the
+/// report.
+///
+/// # Errors
+/// Unreadable or invalid scene, a solver failure, an untrusted result, unwritable outputs.
+pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
+    crate::io::begin_run();
+    let scene = Scene::load(&job.scene.display().to_string())?;
+    let (steady, summary) = stability_of(&scene)?;
     let mut report_files = Vec::new();
     if let Some(dir) = &job.report {
         crate::io::create_dir(dir)?;

@@ -48,6 +48,10 @@ pub struct DiagnoseJob {
     pub scene: Option<PathBuf>,
     /// Directory for the PNG images and the JSON of each recording.
     pub report: Option<PathBuf>,
+    /// Recordings already in memory (from the Python bindings), each with the name it is reported under;
+    /// diagnosed after the files, as if they were files (`--unit`, `--sensitivity` and the channel choice
+    /// apply alike).
+    pub in_memory: Vec<(PathBuf, Recording)>,
 }
 
 /// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
@@ -104,6 +108,9 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     let results: Vec<Result<Diagnosis, Error>> =
         recordings.par_iter().map(|r| diagnose(r, &opts, geometry.as_ref())).collect();
     let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    for (name, rec) in &job.in_memory {
+        done.push(diagnose_in_memory(name, rec.clone(), &opts, geometry.as_ref())?);
+    }
     let mut caps = vec![None; done.len()];
     if let Some(b) = baselines.first() {
         for (d, cap) in done.iter_mut().zip(&mut caps) {
@@ -414,6 +421,21 @@ pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result
     let mut rec = io::read_recording_channels(path, keep.as_deref())?;
     apply_units(&mut rec, o, tacho);
     analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+}
+
+/// Diagnoses a recording held in memory under `name` (no sidecar: a tachometer channel must be named by
+/// `tacho_channel`).
+///
+/// # Errors
+/// As [`diagnose`], without the reading.
+pub fn diagnose_in_memory(
+    name: &Path,
+    mut rec: Recording,
+    o: &Options,
+    geometry: Option<&Geometry>,
+) -> Result<Diagnosis, Error> {
+    apply_units(&mut rec, o, o.tacho_channel);
+    analyse(name, rec, o, geometry)
 }
 
 /// `--sensitivity` (samples divided by it) and `--unit` (for channels whose file names no unit, or for all

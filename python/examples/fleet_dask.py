@@ -1,0 +1,61 @@
+"""Diagnose a directory of recordings on Dask distributed: one task per recording, results gathered into
+one table (a list of dicts, one per recording, in name order).
+
+    python fleet_dask.py DIR --baseline HEALTHY.wav [--teeth 14,39] [--workers 2] [--scheduler ADDRESS]
+
+Without --scheduler a LocalCluster of --workers processes is started; with it, the same code runs on an
+existing cluster of machines (each worker needs the gearvib package and the files at the same paths).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Optional, Sequence, Tuple
+
+
+def recordings(directory: str) -> list:
+    """The .wav and .csv files of `directory`, in name order (the CLI's order)."""
+    names = sorted(n for n in os.listdir(directory) if n.lower().endswith((".wav", ".csv")))
+    return [os.path.join(directory, n) for n in names]
+
+
+def diagnose_one(path: str, baseline: Sequence[str], teeth: Optional[Tuple[int, int]]) -> dict:
+    """One task: the diagnosis of one recording against the baseline (runs on a worker)."""
+    import gearvib
+
+    return gearvib.diagnose(path, teeth=teeth, baseline=list(baseline))
+
+
+def fleet(directory: str, baseline: Sequence[str], teeth=None, workers: int = 2, scheduler=None) -> list:
+    """Diagnoses every recording of `directory` on Dask, one task per recording; returns the table."""
+    from dask.distributed import Client, LocalCluster
+
+    cluster = None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)
+    client = Client(scheduler or cluster)
+    try:
+        futures = [client.submit(diagnose_one, p, list(baseline), teeth, pure=False) for p in recordings(directory)]
+        return client.gather(futures)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("directory")
+    ap.add_argument("--baseline", action="append", default=[])
+    ap.add_argument("--teeth", type=lambda s: tuple(int(v) for v in s.split(",")))
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--scheduler")
+    a = ap.parse_args(argv)
+    for row in fleet(a.directory, a.baseline, a.teeth, a.workers, a.scheduler):
+        sys.stdout.write(json.dumps(row) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,33 @@
+import os
+from typing import Any, Iterable, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+SceneLike = Union[dict, str, os.PathLike[str]]
+PathLike = Union[str, os.PathLike[str]]
+
+class GearvibError(Exception):
+    """A result gearvib cannot trust (tolerance not met) or could not compute."""
+
+def simulate(scene: SceneLike) -> dict[str, Any]:
+    """Periodic steady state: the `simulate --json` keys plus `time_s` [s], `output` [output unit],
+    `order` [-] and `amplitude` [output unit] arrays."""
+
+def stability(scene: SceneLike) -> dict[str, Any]:
+    """Floquet multipliers: the `stability --json` keys."""
+
+def diagnose(
+    samples: Union[np.ndarray, PathLike, Sequence[Any]],
+    fs: Optional[float] = ...,
+    *,
+    rpm: Optional[float] = ...,
+    teeth: Optional[Tuple[int, int]] = ...,
+    tacho: Optional[int] = ...,
+    channel: Optional[int] = ...,
+    unit: Optional[str] = ...,
+    baseline: Union[None, PathLike, Iterable[PathLike]] = ...,
+) -> Union[dict[str, Any], list[dict[str, Any]]]:
+    """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys."""
+
+def read_recording(path: PathLike) -> dict[str, Any]:
+    """`samples` (float32, channels x samples), `fs` [Hz] or None, `names`, `units`."""

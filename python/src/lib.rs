@@ -1,0 +1,211 @@
+//! Python bindings of gearvib (module `gearvib._gearvib`): thin calls into the library's jobs, never the
+//! CLI. Results cross as the same JSON the CLI prints with `--json` plus numpy arrays; the pure-Python
+//! package `gearvib` wraps them. Every call releases the GIL while it computes.
+
+use gearvib::io::Recording;
+use gearvib::jobs::diagnose::{DiagnoseJob, Options};
+use gearvib::scene::Scene;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+create_exception!(_gearvib, GearvibError, PyException, "A result gearvib cannot trust or could not compute.");
+
+/// Bad input (scene, data, a value that does not fit) raises `ValueError`; the rest `GearvibError`. The
+/// message is the CLI's one line.
+fn to_py(e: gearvib::Error) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        gearvib::Error::Scene(_) | gearvib::Error::Data(_) | gearvib::Error::Signal(_) | gearvib::Error::Cli(_) => {
+            PyValueError::new_err(msg)
+        }
+        gearvib::Error::Job(gearvib::jobs::JobError::Untrusted { .. }) | gearvib::Error::Solver(_) => {
+            GearvibError::new_err(msg)
+        }
+        _ => PyValueError::new_err(msg),
+    }
+}
+
+fn scene_from(text: &str, name: &str) -> Result<Scene, gearvib::Error> {
+    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+        gearvib::Error::from(gearvib::jobs::JobError::Input { file: name.into(), message: format!("not JSON: {e}") })
+    })?;
+    Ok(Scene::from_value(value, name)?)
+}
+
+/// simulate(scene_json, name) -> (summary_json, period_samples, period_s): the `simulate --json` summary,
+/// the output quantity over one period at equally spaced times from 0, and the period in s.
+#[pyfunction]
+fn simulate(py: Python<'_>, scene_json: &str, name: &str) -> PyResult<(String, Py<PyArray1<f64>>, f64)> {
+    let (text, samples, period) = py
+        .detach(|| {
+            let scene = scene_from(scene_json, name)?;
+            let (sim, summary) = gearvib::jobs::simulate::summarize(&scene)?;
+            let text = serde_json::to_string(&summary).unwrap_or_default();
+            Ok::<_, gearvib::Error>((text, sim.period_samples, sim.steady.period_s))
+        })
+        .map_err(to_py)?;
+    Ok((text, samples.into_pyarray(py).unbind(), period))
+}
+
+/// stability(scene_json, name) -> summary_json (`stability --json`).
+#[pyfunction]
+fn stability(py: Python<'_>, scene_json: &str, name: &str) -> PyResult<String> {
+    py.detach(|| {
+        let scene = scene_from(scene_json, name)?;
+        let (_, summary) = gearvib::jobs::simulate::stability_of(&scene)?;
+        Ok(serde_json::to_string(&summary).unwrap_or_default())
+    })
+    .map_err(to_py)
+}
+
+/// Diagnosis options from the keyword arguments the Python wrapper passes on.
+#[derive(Default)]
+struct Kw {
+    rpm: Option<f64>,
+    teeth: Option<(usize, usize)>,
+    tacho: Option<usize>,
+    channel: Option<usize>,
+    unit: Option<String>,
+}
+
+fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
+    if let Some(r) = k.rpm {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(gearvib::jobs::JobError::Value {
+                what: "rpm".into(),
+                message: format!("{r} is not a positive speed"),
+            }
+            .into());
+        }
+    }
+    if let Some((a, b)) = k.teeth {
+        if a < 3 || b < 3 {
+            return Err(gearvib::jobs::JobError::Value {
+                what: "teeth".into(),
+                message: format!("({a}, {b}): at least 3 teeth each"),
+            }
+            .into());
+        }
+    }
+    Ok(Options {
+        fs_hz: fs,
+        shaft_hz: k.rpm.map(|r| r / 60.0),
+        teeth: k.teeth,
+        tacho_channel: k.tacho,
+        channel: k.channel,
+        unit: k.unit.clone(),
+        ..Default::default()
+    })
+}
+
+/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline) -> list of `diagnose --json`
+/// objects as JSON strings: files first, then the in-memory recordings (channels x samples, float32 or
+/// float64, any layout) named "array 1", "array 2", ...
+#[pyfunction]
+#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new()))]
+#[allow(clippy::too_many_arguments)]
+fn diagnose(
+    py: Python<'_>,
+    paths: Vec<String>,
+    arrays: Vec<Bound<'_, PyAny>>,
+    fs: Option<f64>,
+    rpm: Option<f64>,
+    teeth: Option<(usize, usize)>,
+    tacho: Option<usize>,
+    channel: Option<usize>,
+    unit: Option<String>,
+    baseline: Vec<String>,
+) -> PyResult<Vec<String>> {
+    let mut in_memory = Vec::new();
+    for (i, a) in arrays.iter().enumerate() {
+        let rec = recording_of(a, fs)?;
+        in_memory.push((PathBuf::from(format!("array {}", i + 1)), rec));
+    }
+    let kw = Kw { rpm, teeth, tacho, channel, unit };
+    let job_options = options(&kw, fs).map_err(to_py)?;
+    py.detach(|| {
+        let job = DiagnoseJob {
+            recordings: paths.iter().map(PathBuf::from).collect(),
+            options: job_options,
+            baselines: baseline.iter().map(PathBuf::from).collect(),
+            in_memory,
+            ..Default::default()
+        };
+        let done = gearvib::jobs::diagnose::run(&job)?;
+        Ok(done.diagnoses.iter().map(|d| serde_json::to_string(d).unwrap_or_default()).collect())
+    })
+    .map_err(to_py)
+}
+
+/// A numpy array (1-D: one channel; 2-D: channels x samples) as a recording at `fs` Hz.
+fn recording_of(a: &Bound<'_, PyAny>, fs: Option<f64>) -> PyResult<Recording> {
+    let fs = fs
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .ok_or_else(|| PyValueError::new_err("fs: a positive sample rate in Hz is needed for an array"))?;
+    let two_d =
+        if a.getattr("ndim")?.extract::<usize>()? == 1 { a.call_method1("reshape", (1, -1))? } else { a.clone() };
+    let channels: Vec<Vec<f32>> = if let Ok(x) = two_d.extract::<PyReadonlyArray2<'_, f32>>() {
+        rows(&x)
+    } else if let Ok(x) = two_d.extract::<PyReadonlyArray2<'_, f64>>() {
+        rows(&x).into_iter().map(|r| r.into_iter().map(|v| v as f32).collect()).collect()
+    } else {
+        return Err(PyValueError::new_err("samples: a 1-D or 2-D (channels x samples) float32 or float64 array"));
+    };
+    if channels.is_empty() || channels[0].len() < 2 {
+        return Err(PyValueError::new_err("samples: an empty array"));
+    }
+    if channels.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(PyValueError::new_err("samples: NaN or infinite values"));
+    }
+    let n = channels.len();
+    Ok(Recording {
+        channels,
+        sample_rate_hz: Some(fs),
+        names: (1..=n).map(|c| format!("ch{c}")).collect(),
+        units: vec![String::new(); n],
+    })
+}
+
+/// Rows of a 2-D array in any layout (C, Fortran, strided): contiguous rows are copied at once.
+fn rows<T: numpy::Element + Copy>(x: &PyReadonlyArray2<'_, T>) -> Vec<Vec<T>> {
+    let view = x.as_array();
+    let (r, _) = (x.shape()[0], x.shape()[1]);
+    (0..r)
+        .map(|i| {
+            let row = view.row(i);
+            match row.as_slice() {
+                Some(s) => s.to_vec(),
+                None => row.iter().copied().collect(),
+            }
+        })
+        .collect()
+}
+
+/// A recording for Python: samples (float32, channels x samples), sample rate in Hz, names, units.
+type PyRecording = (Py<PyArray2<f32>>, Option<f64>, Vec<String>, Vec<String>);
+
+/// read_recording(path) -> (samples float32 channels x samples, fs or None, names, units).
+#[pyfunction]
+fn read_recording(py: Python<'_>, path: &str) -> PyResult<PyRecording> {
+    let rec = py.detach(|| gearvib::io::read_recording(std::path::Path::new(path))).map_err(|e| to_py(e.into()))?;
+    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    let flat: Vec<f32> =
+        rec.channels.iter().flat_map(|c| c.iter().copied().chain(std::iter::repeat_n(0.0, n - c.len()))).collect();
+    let array = numpy::ndarray::Array2::from_shape_vec((rec.channels.len(), n), flat)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok((array.into_pyarray(py).unbind(), rec.sample_rate_hz, rec.names, rec.units))
+}
+
+/// The compiled part of the `gearvib` package.
+#[pymodule]
+fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("GearvibError", m.py().get_type::<GearvibError>())?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(stability, m)?)?;
+    m.add_function(wrap_pyfunction!(diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    Ok(())
+}
