@@ -442,3 +442,35 @@ fn comb_liftering_a_shaft_before_the_envelope() {
     let run = gearvib(&["diagnose", &cracked, "--teeth", "14,39", "--lifter", "gear"]);
     assert_one_line_error(&run, &["--lifter"]);
 }
+
+/// `diagnose DIR --json` streams JSON Lines, judging a few recordings at a time (bounded memory): the lines
+/// come in name order and equal the batch run's (the `--report` path), NA4 over the ensemble included,
+/// which is carried from one group of recordings to the next.
+#[test]
+fn a_directory_streams_as_json_lines_equal_to_the_batch_run() {
+    let dir = temp_dir("diag-stream");
+    let fleet = dir.join("fleet");
+    std::fs::create_dir_all(&fleet).unwrap();
+    let names = ["healthy", "pitted-pinion-tooth3", "cracked-pinion-tooth3"];
+    for k in 0..12 {
+        let src = rec(names[k % 3]);
+        let dst = fleet.join(format!("{k:02}-{}.wav", names[k % 3]));
+        std::fs::copy(&src, &dst).unwrap();
+        std::fs::copy(format!("{src}.json"), format!("{}.json", dst.display())).unwrap();
+    }
+    let fleet_s = fleet.to_string_lossy().into_owned();
+    let run = gearvib(&["diagnose", &fleet_s, "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let streamed: Vec<serde_json::Value> = run.stdout.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(streamed.len(), 12);
+    let report = dir.join("report");
+    let run = gearvib(&["diagnose", &fleet_s, "--teeth", "14,39", "--report", &report.to_string_lossy()]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    for (k, d) in streamed.iter().enumerate() {
+        let stem = format!("{k:02}-{}", names[k % 3]);
+        assert!(d["file"].as_str().unwrap().ends_with(&format!("{stem}.wav")), "{}", d["file"]);
+        let batch = read_json(&report.join(format!("{stem}-diagnosis.json")).to_string_lossy());
+        assert_eq!(d["gears"], batch["gears"], "{stem}");
+        assert_eq!(d["verdict"], batch["verdict"], "{stem}");
+    }
+}

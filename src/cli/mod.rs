@@ -278,6 +278,17 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> 
 
 fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
     let job = diagnose_job(a)?;
+    if a.json && job.report.is_none() {
+        // JSON Lines as the recordings are judged: a directory of any size in bounded memory
+        let mut worst = VerdictState::Healthy;
+        jobs::diagnose::run_streaming(&job, &mut |d| {
+            worst = worst.max(d.verdict.state);
+            json_line(out, &d)?;
+            out.flush().map_err(CliError::from)?;
+            Ok(())
+        })?;
+        return Ok(fail_code(a.fail_on, worst));
+    }
     let done = with_spinner("diagnosing", || jobs::diagnose::run(&job))?;
     if !a.json && !done.report_files.is_empty() {
         writeln!(out, "report: {}", list(&done.report_files)).map_err(CliError::from)?;
@@ -290,11 +301,16 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
         }
     }
     let worst = done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy);
-    Ok(match a.fail_on {
+    Ok(fail_code(a.fail_on, worst))
+}
+
+/// Exit code of `diagnose`: 1 when `--fail-on` is given and the worst verdict reaches it, else 0.
+fn fail_code(fail_on: Option<FailOn>, worst: VerdictState) -> u8 {
+    match fail_on {
         Some(FailOn::Faulty) if worst >= VerdictState::Faulty => 1,
         Some(FailOn::Suspect) if worst >= VerdictState::Suspect => 1,
         _ => 0,
-    })
+    }
 }
 
 fn bench(out: &mut dyn Write, job: &jobs::bench::BenchJob, json: bool) -> Result<u8, Error> {

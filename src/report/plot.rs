@@ -83,8 +83,8 @@ pub struct Chart {
     pub heatmap: Option<Heatmap>,
 }
 
-/// A grid of coloured cells (an order map): cell (i, j) spans x_edges[i]..x_edges[i + 1] and
-/// y_edges[j]..y_edges[j + 1]; its value is mapped from `range` onto a dark-blue-to-yellow scale.
+/// A grid of coloured cells (an order map): cell (i, j) spans `x_edges[i]..x_edges[i + 1]` and
+/// `y_edges[j]..y_edges[j + 1]`; its value is mapped from `range` onto a dark-blue-to-yellow scale.
 #[derive(Clone, Debug, Default)]
 pub struct Heatmap {
     /// Cell edges on x (one more than the columns).

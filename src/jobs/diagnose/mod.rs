@@ -70,7 +70,50 @@ pub struct DiagnoseOutcome {
 /// # Errors
 /// Any recording, the baseline or the scene cannot be read or analysed; the report cannot be written.
 pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
-    crate::io::begin_run();
+    let mut done = Vec::new();
+    let reference = run_streaming(job, &mut |d| {
+        done.push(d);
+        Ok(())
+    })?;
+    let mut report_files = Vec::new();
+    if let Some(dir) = &job.report {
+        let mut sections = Vec::new();
+        for d in &done {
+            let files = write_report(d, dir)?;
+            let images: Vec<PathBuf> =
+                files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
+            sections.push(crate::report::html::diagnosis_section(d, &images));
+            report_files.extend(files);
+        }
+        if done.len() >= 2 && reference {
+            let files = trend::write(dir, &done)?;
+            sections.insert(
+                0,
+                crate::report::html::Section {
+                    heading: format!("Trend over {} recordings (time order as given)", done.len()),
+                    facts: vec!["Every scored indicator in spreads from the baseline's centre; the table is in trend.csv and trend.jsonl.".into()],
+                    images: files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect(),
+                    ..Default::default()
+                },
+            );
+            report_files.extend(files);
+        }
+        report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);
+    }
+    Ok(DiagnoseOutcome { diagnoses: done, report_files })
+}
+
+/// The baseline side of a call, prepared once: options as fixed by the first baseline, the baselines'
+/// diagnoses, what they fix for the recordings, the statistical reference and the comparison scene.
+struct Prepared {
+    opts: Options,
+    baselines: Vec<Diagnosis>,
+    geometry: Option<Geometry>,
+    reference: Option<baseline::Reference>,
+    scene: Option<compare::ModelScene>,
+}
+
+fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     let mut opts = job.options.clone();
     let baseline_files = expand_dirs(&job.baselines)?;
     // the first baseline fixes what was estimated (speed, mesh order) and the block length; the others
@@ -104,76 +147,76 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         compatibility(b, &baselines[0])?;
     }
     let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.block_revs())).transpose()?;
-    let recordings = expand_dirs(&job.recordings)?;
-    let results: Vec<Result<Diagnosis, Error>> =
-        recordings.par_iter().map(|r| diagnose(r, &opts, geometry.as_ref())).collect();
-    let mut done = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    for (name, rec) in &job.in_memory {
-        done.push(diagnose_in_memory(name, rec.clone(), &opts, geometry.as_ref())?);
-    }
-    let mut caps = vec![None; done.len()];
-    if let Some(b) = baselines.first() {
-        for (d, cap) in done.iter_mut().zip(&mut caps) {
-            let c = compatibility(d, b)?;
-            d.warnings.extend(c.warnings);
-            *cap = c.operating_point;
-            if job.report.is_some() {
-                d.baseline_spectra = b.spectra.iter().map(|(ch, amp, _)| (*ch, amp.clone())).collect();
-                d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
-            }
-        }
-    }
-    ensemble_na4(&mut done);
     let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
-    let thresholds = Thresholds::default();
-    for (d, cap) in done.iter_mut().zip(caps) {
-        judge(d, reference.as_ref(), &thresholds);
-        if let Some(e) = baselines.first().and_then(|b| b.envelope.as_ref()) {
-            verdict::envelope_evidence(d, e);
-        }
-        if let Some(why) = cap {
-            verdict::cap_at_suspect(d, why);
-        }
-        if let Some(s) = &scene {
-            let quantity = match opts.quantity.or_else(|| Quantity::from_unit(&d.unit)) {
-                Some(q) => q,
-                None => {
-                    d.warnings.push(format!(
-                        "the recording's unit ({}) does not say what it measures: taken as velocity for the model comparison; give --quantity",
-                        if d.unit.is_empty() { "none" } else { &d.unit }
-                    ));
-                    Quantity::Velocity
-                }
-            };
-            compare(d, s, quantity)?;
+    Ok(Prepared { opts, baselines, geometry, reference, scene })
+}
+
+/// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
+/// directory of any size needs the memory of this many diagnoses.
+fn chunk_size() -> usize {
+    2 * rayon::current_num_threads().max(1)
+}
+
+/// [`run`] without the report: each diagnosis is handed to `emit` as soon as it and every recording before
+/// it are judged (time order kept; NA4 over the ensemble carried from one to the next), so a directory of
+/// any size runs in bounded memory. Returns whether a statistical baseline was used.
+///
+/// # Errors
+/// As [`run`], or what `emit` returns.
+pub fn run_streaming(job: &DiagnoseJob, emit: &mut dyn FnMut(Diagnosis) -> Result<(), Error>) -> Result<bool, Error> {
+    crate::io::begin_run();
+    let p = prepare(job)?;
+    let recordings = expand_dirs(&job.recordings)?;
+    let mut history = verdict::Na4History::default();
+    for chunk in recordings.chunks(chunk_size()) {
+        let results: Vec<Result<Diagnosis, Error>> =
+            chunk.par_iter().map(|r| diagnose(r, &p.opts, p.geometry.as_ref())).collect();
+        for d in results {
+            emit(finish(d?, &p, &mut history, job.report.is_some())?)?;
         }
     }
-    let mut report_files = Vec::new();
-    if let Some(dir) = &job.report {
-        let mut sections = Vec::new();
-        for d in &done {
-            let files = write_report(d, dir)?;
-            let images: Vec<PathBuf> =
-                files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
-            sections.push(crate::report::html::diagnosis_section(d, &images));
-            report_files.extend(files);
-        }
-        if done.len() >= 2 && reference.is_some() {
-            let files = trend::write(dir, &done)?;
-            sections.insert(
-                0,
-                crate::report::html::Section {
-                    heading: format!("Trend over {} recordings (time order as given)", done.len()),
-                    facts: vec!["Every scored indicator in spreads from the baseline's centre; the table is in trend.csv and trend.jsonl.".into()],
-                    images: files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect(),
-                    ..Default::default()
-                },
-            );
-            report_files.extend(files);
-        }
-        report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);
+    for (name, rec) in &job.in_memory {
+        let d = diagnose_in_memory(name, rec.clone(), &p.opts, p.geometry.as_ref())?;
+        emit(finish(d, &p, &mut history, job.report.is_some())?)?;
     }
-    Ok(DiagnoseOutcome { diagnoses: done, report_files })
+    Ok(p.reference.is_some())
+}
+
+/// Judges one diagnosis (the next in time order): against the baseline when there is one, NA4 over the
+/// ensemble so far, the envelope's evidence, the operating-point cap, the model comparison.
+fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, report: bool) -> Result<Diagnosis, Error> {
+    let mut cap = None;
+    if let Some(b) = p.baselines.first() {
+        let c = compatibility(&d, b)?;
+        d.warnings.extend(c.warnings);
+        cap = c.operating_point;
+        if report {
+            d.baseline_spectra = b.spectra.iter().map(|(ch, amp, _)| (*ch, amp.clone())).collect();
+            d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
+        }
+    }
+    history.apply(&mut d);
+    judge(&mut d, p.reference.as_ref(), &Thresholds::default());
+    if let Some(e) = p.baselines.first().and_then(|b| b.envelope.as_ref()) {
+        verdict::envelope_evidence(&mut d, e);
+    }
+    if let Some(why) = cap {
+        verdict::cap_at_suspect(&mut d, why);
+    }
+    if let Some(s) = &p.scene {
+        let quantity = match p.opts.quantity.or_else(|| Quantity::from_unit(&d.unit)) {
+            Some(q) => q,
+            None => {
+                d.warnings.push(format!(
+                    "the recording's unit ({}) does not say what it measures: taken as velocity for the model comparison; give --quantity",
+                    if d.unit.is_empty() { "none" } else { &d.unit }
+                ));
+                Quantity::Velocity
+            }
+        };
+        compare(&mut d, s, quantity)?;
+    }
+    Ok(d)
 }
 
 /// Revolutions per baseline block unless given: 8, or fewer (down to 2) when the baseline would otherwise

@@ -59,10 +59,24 @@ const NOMINAL_NA4: f64 = 3.0;
 /// Fills NA4 over the ensemble (recordings in time order): NA4 of record M uses the mean residual sum of
 /// squares of records 1..=M of the same gear and channel.
 pub fn ensemble_na4(results: &mut [Diagnosis]) {
-    let mut history: BTreeMap<(Shaft, usize), Vec<f64>> = BTreeMap::new();
+    let mut history = Na4History::default();
     for d in results.iter_mut() {
+        history.apply(d);
+    }
+}
+
+/// The residual sums of squares seen so far per gear and channel: NA4 over the ensemble, one recording at a
+/// time (so a stream of recordings needs no more than this).
+#[derive(Default, Debug)]
+pub struct Na4History {
+    seen: BTreeMap<(Shaft, usize), Vec<f64>>,
+}
+
+impl Na4History {
+    /// Adds the next recording (time order) and fills its NA4.
+    pub fn apply(&mut self, d: &mut Diagnosis) {
         for g in &mut d.gears {
-            let h = history.entry((g.gear, g.channel)).or_default();
+            let h = self.seen.entry((g.gear, g.channel)).or_default();
             h.push(ind::sum_sq_dev(&g.residual));
             g.indicators.insert("na4".into(), ind::na4(&g.residual, h));
         }
