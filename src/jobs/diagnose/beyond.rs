@@ -1,0 +1,122 @@
+//! Beyond the TSA in a diagnosis: the envelope analysis (band from the kurtogram, the baseline or the
+//! user), the cepstrum's rahmonics and the rpm-order map of a recording whose speed changes.
+
+use super::*;
+
+/// Speed range (slowest to fastest revolution, over the mean) above which the rpm-order map is drawn.
+pub(super) const ORDER_MAP_SPEED_CHANGE: f64 = 0.02;
+
+/// The rpm-order map of a recording whose speed changes: segments of 8 revolutions advancing by 4 (order
+/// resolution 1/8), orders up to 3.5 mesh orders (three mesh harmonics and their sidebands). `None` when
+/// the recording holds too few revolutions.
+pub(super) fn order_map(fft: &mut Fft, x: &[f32], map: &AngleMap, mesh_order: usize) -> Option<OrderMap> {
+    let max_order = 3.5 * mesh_order.max(1) as f64;
+    let points = ((3.0 * max_order) as usize).next_power_of_two().max(64);
+    crate::signal::order_map::order_map(fft, x, map, points, 8, 4, max_order).ok()
+}
+
+/// How the envelope band is chosen: kurtogram depth, and a band (given, or the baseline's) that overrides
+/// the kurtogram's choice.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BandChoice {
+    pub(super) levels: Option<usize>,
+    pub(super) band: Option<(f64, f64)>,
+}
+
+/// Kurtogram levels searched (band widths down to fs / 64).
+const KURTOGRAM_LEVELS: usize = 5;
+
+/// Envelope analysis of one channel: the band of largest spectral kurtosis (from 1.5 mesh frequencies up,
+/// at most from fs / 4), the squared envelope there,
+/// its order spectrum on the tracked angle, and its lines at orders 1..=3 of each shaft.
+pub(super) fn envelope<T: crate::signal::Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    fs: f64,
+    map: &AngleMap,
+    shafts: &[(Shaft, f64)],
+    mesh_order: usize,
+    choice: BandChoice,
+) -> Result<crate::report::summary::Envelope, crate::signal::SignalError> {
+    let BandChoice { levels, band } = choice;
+    use crate::signal::envelope as env;
+    let n = x.len().min(1 << 18);
+    let deepest = ((n.next_power_of_two() / 4 / 64) as f64).log2().floor().max(1.0) as usize;
+    // bands from 1.5 mesh frequencies up: below, the shafts' and mesh's own lines beat into a peaky envelope
+    let period = map.mean_period_samples();
+    let mesh_hz = shafts.first().map_or(0.0, |_| mesh_order as f64 * fs / period);
+    let levels = levels.unwrap_or(KURTOGRAM_LEVELS.min(deepest));
+    let k = env::kurtogram(fft, x, fs, levels, (1.5 * mesh_hz).min(fs / 4.0))?;
+    // a given band first, then the baseline's (so the lines compare with it), else the kurtogram's choice
+    let (level, _, lo, hi) = match band {
+        Some((lo, hi)) => (0, 0, lo, hi),
+        None => k.best,
+    };
+    // the squared envelope at a reduced rate r (it holds twice the band), its revolutions scaled alike
+    let (e, r) = env::squared_envelope_decimated(fft, x, fs, lo, hi)?;
+    let scaled = AngleMap::from_pulses(&map.starts().iter().map(|s| s * r).collect::<Vec<_>>(), 1);
+    // the envelope holds 0 .. (hi - lo) Hz: 2.5 points per cycle of that per revolution suffice
+    let needed = 2.5 * (hi - lo) * period / fs;
+    let points = (needed.ceil() as usize)
+        .next_power_of_two()
+        .clamp(32, ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096));
+    let (orders, amplitudes) = env::order_spectrum(fft, &e, &scaled, points);
+    let revs = map.revolutions().max(1) as f64;
+    let at = |o: f64| -> (f64, f64) {
+        let i = (o * revs).round() as usize;
+        let a = (i.saturating_sub(2)..=i + 2).filter_map(|j| amplitudes.get(j)).copied().fold(0.0, f64::max);
+        let w = (2.0 * revs) as usize;
+        let mut near: Vec<f64> = (i.saturating_sub(w)..=i + w).filter_map(|j| amplitudes.get(j)).copied().collect();
+        near.sort_by(f64::total_cmp);
+        let floor = near.get(near.len() / 2).copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
+        (a, 20.0 * (a / floor).max(f64::MIN_POSITIVE).log10())
+    };
+    let lines = shafts
+        .iter()
+        .flat_map(|&(shaft, ratio)| (1..=3).map(move |k| (shaft, k, k as f64 * ratio)))
+        .map(|(shaft, order, o)| {
+            let (amplitude, over_floor_db) = at(o);
+            crate::report::summary::EnvelopeLine { shaft, order, reference_order: o, amplitude, over_floor_db }
+        })
+        .collect();
+    // the band's spectral kurtosis from its squared envelope e = |c|^2: <e^2> / <e>^2 - 2
+    let m1 = e.iter().sum::<f64>() / e.len().max(1) as f64;
+    // (the band's own kurtosis from the decimated envelope: the same moments at a lower rate)
+    let m2 = e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64;
+    let spectral_kurtosis = if band.is_some() { m2 / (m1 * m1).max(f64::MIN_POSITIVE) - 2.0 } else { k.best_kurtosis };
+    Ok(crate::report::summary::Envelope {
+        band_hz: [lo, hi],
+        level,
+        spectral_kurtosis,
+        lines,
+        orders,
+        amplitudes,
+        kurtogram: k.levels,
+        liftered: None,
+    })
+}
+
+/// Real power cepstrum over segments of about 4 revolutions, with the first 3 rahmonics of each shaft.
+pub(super) fn cepstrum(
+    fft: &mut Fft,
+    x: &[f32],
+    fs: f64,
+    period: f64,
+    shafts: &[(Shaft, f64)],
+) -> Option<crate::report::summary::Cepstrum> {
+    let slowest = shafts.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+    let segment = ((8.0 * period / slowest) as usize).next_power_of_two().clamp(256, 1 << 18);
+    let values = crate::signal::envelope::cepstrum(fft, x, segment).ok()?;
+    let rahmonics = shafts
+        .iter()
+        .flat_map(|&(shaft, ratio)| (1..=3).map(move |k| (shaft, k, k as f64 * period / ratio)))
+        .filter(|(_, _, q)| (*q as usize) + 2 < values.len())
+        .map(|(shaft, k, q)| {
+            let w = (q * 0.01).ceil() as usize;
+            let i = q.round() as usize;
+            let value = (i.saturating_sub(w)..=i + w).filter_map(|j| values.get(j)).copied().fold(f64::MIN, f64::max);
+            crate::report::summary::Rahmonic { shaft, k, quefrency_s: q / fs, value }
+        })
+        .collect();
+    Some(crate::report::summary::Cepstrum { rahmonics, dq_s: 1.0 / fs, values })
+}

@@ -1,0 +1,92 @@
+//! Whether a baseline fits a recording: unit, channels, speed and operating point.
+
+use super::*;
+
+/// Relative speed difference from the baseline beyond which a recording is refused: indicators change with
+/// speed (resonances move against the mesh orders), so a baseline at another speed is another machine state.
+pub const MAX_SPEED_DIFFERENCE: f64 = 0.10;
+/// Relative speed difference from the baseline that is warned about.
+pub const WARN_SPEED_DIFFERENCE: f64 = 0.03;
+
+/// Relative speed difference from the baseline above which the operating point is taken to differ: 20
+/// times the drift of a speed-controlled rig (100 ppm); an induction motor slows by about 0.4 % from no
+/// load to 90 % load on the SpectraQuest rig of `data/realdata`, while a broken tooth changes its speed by
+/// less than 0.05 %.
+pub const OPERATING_POINT_SPEED_DIFFERENCE: f64 = 0.002;
+
+/// What [`compatibility`] found.
+#[derive(Clone, Debug, Default)]
+pub struct Compatibility {
+    /// Warnings for the recording.
+    pub warnings: Vec<String>,
+    /// Why the operating point differs from the baseline's (the verdict then stays at most suspect).
+    pub operating_point: Option<String>,
+}
+
+/// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
+/// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
+/// [`WARN_SPEED_DIFFERENCE`], operating point taken as different beyond
+/// [`OPERATING_POINT_SPEED_DIFFERENCE`]), sample rate and overall level (warned).
+///
+/// # Errors
+/// An incompatible baseline, naming both files and what differs.
+pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Error> {
+    let refuse = |what: String| -> Error {
+        JobError::Value {
+            what: "baseline".into(),
+            message: format!("{} is not comparable with {}: {what}", b.file, d.file),
+        }
+        .into()
+    };
+    let mut warnings = Vec::new();
+    if !d.unit.is_empty() && !b.unit.is_empty() && d.unit != b.unit {
+        return Err(refuse(format!("it is in {} and the recording in {}", b.unit, d.unit)));
+    }
+    if let Some(c) = d.channels.iter().find(|c| !b.channels.contains(c)) {
+        return Err(refuse(format!(
+            "the recording's channel {c} is not among the baseline's analysed channels {:?}",
+            b.channels
+        )));
+    }
+    let speed = |x: &Diagnosis| x.speed_profile.mean_hz.unwrap_or(1.0 / x.shaft_period_samples);
+    let ratio = speed(d) / speed(b) - 1.0;
+    if ratio.abs() > MAX_SPEED_DIFFERENCE {
+        return Err(refuse(format!(
+            "its shaft speed differs by {:+.1} % (at most {} % is accepted: another operating point)",
+            -100.0 * ratio / (1.0 + ratio),
+            100.0 * MAX_SPEED_DIFFERENCE
+        )));
+    }
+    if ratio.abs() > WARN_SPEED_DIFFERENCE {
+        warnings.push(format!(
+            "the shaft speed differs from the baseline's by {:+.1} %: indicators that depend on speed may move",
+            100.0 * ratio
+        ));
+    }
+    let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE).then(|| {
+        format!(
+            "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
+            100.0 * ratio.abs(),
+            if ratio > 0.0 { "faster" } else { "slower" },
+            (OPERATING_POINT_SPEED_DIFFERENCE * 1e6 / 20.0) as u32
+        )
+    });
+    if let (Some(fd), Some(fb)) = (d.sample_rate_hz, b.sample_rate_hz) {
+        if (fd / fb - 1.0).abs() > 1e-3 {
+            warnings.push(format!("the baseline was sampled at {fb} Hz and this recording at {fd} Hz: the orders are compared, the raw spectra differ"));
+        }
+    }
+    for (i, c) in d.channels.iter().enumerate() {
+        let j = b.channels.iter().position(|x| x == c);
+        let level = |x: &Diagnosis, k: usize| x.raw.get(k).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
+        if let Some(j) = j {
+            let r = level(d, i) / level(b, j);
+            if !(0.5..=2.0).contains(&r) {
+                warnings.push(format!(
+                    "channel {c}: the overall level is {r:.2} times the baseline's: the operating condition (load) may differ, and the indicators that scale with it move too"
+                ));
+            }
+        }
+    }
+    Ok(Compatibility { warnings, operating_point })
+}

@@ -1,0 +1,293 @@
+//! Speed and mesh order of a recording: the nominal speed (given, tachometer or repetition period), the
+//! mesh order when the teeth are not given, and order tracking on the phase of a mesh harmonic.
+
+use super::*;
+
+/// The speed before tracking: revolution starts from the tachometer, or a constant nominal speed (given,
+/// or estimated from the repetition period).
+pub(super) struct Nominal {
+    /// Revolution starts at the nominal speed.
+    pub(super) map: AngleMap,
+    /// Where the speed came from.
+    pub(super) source: SpeedSource,
+    /// Confidence of an estimated speed (1 when given).
+    pub(super) confidence: f64,
+    /// Mesh order from the ratio of the repetition period to the mesh lag (estimated speed only).
+    pub(super) mesh_order: Option<usize>,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn nominal_speed(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    fs: Option<f64>,
+    geometry: Option<&Geometry>,
+    fft: &mut Fft,
+    warnings: &mut Vec<String>,
+) -> Result<Nominal, Error> {
+    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    if let Some(t) = o.tacho_channel {
+        let pulses = speed::tacho_pulses(&rec.channels[t - 1])
+            .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
+            .map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
+        return Ok(Nominal { map: pulses, source: SpeedSource::Tachometer, confidence: 1.0, mesh_order: None });
+    }
+    if let Some(hz) = o.shaft_hz {
+        let fs = fs
+            .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
+        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
+        return Ok(Nominal {
+            map: AngleMap::constant(fs / hz, 0.0, n),
+            source: SpeedSource::Given,
+            confidence: 1.0,
+            mesh_order: None,
+        });
+    }
+    let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
+    let est = match geometry.and_then(|g| g.period_samples) {
+        Some(p) => speed::refine_near(fft, &views, p, 0.03),
+        None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
+    }
+    .map_err(|e| bad(path, e))?;
+    if est.mesh_lag.is_none() && est.period_samples < MIN_SAMPLES_PER_REV {
+        return Err(bad(
+            path,
+            format!(
+                "no plausible shaft speed: the signal repeats every {:.2} samples, too short for a shaft (likely the tooth mesh), and no longer period stands out (the speed may vary too much to estimate); give --rpm or a tachometer channel",
+                est.period_samples
+            ),
+        ));
+    }
+    warnings.push(format!(
+        "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
+        est.period_samples, est.confidence
+    ));
+    if let Some((zp, _)) = o.teeth {
+        // the signal may repeat over several pinion revolutions (a hunting period): the pinion revolution
+        // is the fraction of the period where the given mesh order has its strongest line
+        let line = |k: usize| -> f64 {
+            let f = (zp * k) as f64 / est.period_samples;
+            if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.3 / est.period_samples)).sum() }
+        };
+        // the smallest k whose line reaches a quarter of the strongest (k = 2 would otherwise take the
+        // second mesh harmonic, often stronger than the first, for the mesh of half the shaft period)
+        let lines: Vec<f64> = (1..=8).map(line).collect();
+        let top = lines.iter().copied().fold(0.0, f64::max);
+        let k = lines.iter().position(|&a| a >= 0.25 * top && a > 0.0).map_or(1, |i| i + 1);
+        if k > 1 {
+            warnings.push(format!(
+                "the signal repeats every {k} pinion revolutions (the given mesh order {zp} fits a period of {:.3} samples): the pinion period is taken as that",
+                est.period_samples / k as f64
+            ));
+            return Ok(Nominal {
+                map: AngleMap::constant(est.period_samples / k as f64, 0.0, n),
+                source: SpeedSource::Estimated,
+                confidence: est.confidence,
+                mesh_order: None,
+            });
+        }
+    }
+    Ok(Nominal {
+        map: AngleMap::constant(est.period_samples, 0.0, n),
+        source: SpeedSource::Estimated,
+        confidence: est.confidence,
+        mesh_order: est
+            .mesh_lag
+            .map(|m| (est.period_samples / m).round() as usize)
+            .map(|z| fundamental_mesh(&views, est.period_samples, z))
+            .filter(|&z| z >= 8),
+    })
+}
+
+/// Largest relative difference between the tracked mean speed and the nominal one that is accepted: the
+/// nominal speed is the mean (estimated) or what the user gave; further away the ridge followed another line.
+const MAX_TRACKING_SHIFT: f64 = 0.05;
+
+/// The mesh order whose fundamental is really there: a repetition lag can hold two or three mesh periods,
+/// or only half or a third of one (a strong second harmonic), and a harmonic family can score through its
+/// even harmonics; so among z / 3, z / 2, z, 2z and 3z (whole divisors and multiples, at least 8) the
+/// smallest whose line reaches [`MESH_FUNDAMENTAL_SHARE`] of its strongest harmonic (orders 1..=4 times
+/// it) is taken, summed over channels; a divisor must moreover stand 4 times above the orders around it
+/// (a line at half the mesh order from elsewhere in the machine is not a mesh).
+/// Smallest amplitude of a mesh fundamental relative to its strongest harmonic: the bundled cracked-tooth
+/// scene's first mesh line is 10 % of its second (a resonance near twice the mesh), while on the real
+/// SpectraQuest recordings the lines at half and a quarter of the mesh order are 1.6 % and 4.5 % of the
+/// mesh: an engineering choice between the two.
+const MESH_FUNDAMENTAL_SHARE: f64 = 0.07;
+
+pub(super) fn fundamental_mesh(channels: &[&[f32]], period: f64, z: usize) -> usize {
+    // summed over channels, the strongest line within +-`search` orders of `order`
+    let amp = |order: f64, search: f64| -> f64 {
+        let f = order / period;
+        if f >= 0.5 {
+            return 0.0;
+        }
+        channels.iter().map(|c| ind_line(c, f, search / period)).sum()
+    };
+    // a divisor of z must also be a line of its own: 4 times the median of orders c +- 1..3
+    let clear_line = |c: usize| -> bool {
+        let mut near: Vec<f64> = [-3.0, -2.0, -1.0, 1.0, 2.0, 3.0].iter().map(|d| amp(c as f64 + d, 0.2)).collect();
+        near.sort_by(f64::total_cmp);
+        amp(c as f64, 0.2) >= 4.0 * 0.5 * (near[2] + near[3])
+    };
+    let mut candidates: Vec<usize> =
+        [z / 3, z / 2, z, 2 * z, 3 * z].into_iter().filter(|&c| c >= 8 && (c % z == 0 || z % c == 0)).collect();
+    candidates.dedup();
+    for c in candidates {
+        // +-0.2 orders: a wheel of 2.5 times as many teeth puts lines every 0.4 pinion orders
+        let own = amp(c as f64, 0.2);
+        let strongest = (1..=4).map(|k| amp((k * c) as f64, 0.2)).fold(0.0, f64::max);
+        if own >= MESH_FUNDAMENTAL_SHARE * strongest && own > 0.0 && (c >= z || clear_line(c)) {
+            return c;
+        }
+    }
+    z
+}
+
+pub(super) fn ind_line(x: &[f32], f: f64, search: f64) -> f64 {
+    crate::signal::spectrum::line_amplitude(x, f, search)
+}
+
+/// [`MAX_TRACKING_SHIFT`] when the nominal speed was estimated from the repetition period (the mean speed
+/// itself, good to about 1e-4): 0.5 % leaves room for a drift that is not symmetric in time.
+const MAX_TRACKING_SHIFT_ESTIMATED: f64 = 0.005;
+
+/// Line-to-band ratio below which a tracked mesh line is too weak to trust, dB.
+const MIN_TRACKING_SNR_DB: f64 = 6.0;
+
+/// Follows the shaft angle through the recording. With a tachometer its pulses are the angle. Otherwise the
+/// phase of the first mesh harmonic is tracked on each analysed channel (the mesh order from the teeth, the
+/// baseline, or the harmonic family of a constant-speed TSA) and the channel where the line stands out
+/// most is used; when no channel allows it, the constant nominal speed stays, with a warning.
+pub(super) fn track(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    known_z: Option<usize>,
+    nominal: AngleMap,
+    warnings: &mut Vec<String>,
+) -> Result<(AngleMap, Tracking, Option<f64>, Option<usize>), Error> {
+    if o.tacho_channel.is_some() {
+        return Ok((nominal, Tracking::Tachometer, None, None));
+    }
+    let period = nominal.mean_period_samples();
+    // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
+    let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
+    let z = match known_z {
+        Some(z) => z,
+        None => {
+            let tsas = channels
+                .par_iter()
+                .map(|&c| tsa::tsa(&rec.channels[c - 1], &nominal, 1.0, tsa_points(period), o.min_revolutions))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| bad(path, e))?;
+            let z = mesh_family(&mut Fft::new(), tsas.iter().map(|t| t.samples.as_slice()));
+            let views: Vec<&[f32]> = channels.iter().map(|&c| rec.channels[c - 1].as_slice()).collect();
+            fundamental_mesh(&views, period, z)
+        }
+    };
+    // the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
+    // second ten times the first) on each channel, relative to the channel's RMS; the two channels where it
+    // stands out most are tracked and the one whose tracked line has the better SNR is used
+    let mut candidates: Vec<(usize, f64, f64)> = channels
+        .par_iter()
+        .map(|&c| {
+            let x = &rec.channels[c - 1];
+            let (order, amp) = (1..=4)
+                .map(|k| (k * z) as f64)
+                .filter(|o| o / period < 0.4)
+                .map(|o| (o, ind_line(x, o / period, 0.2 / period)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((z as f64, 0.0));
+            (c, order, amp / ind::rms(&x[..x.len().min(1 << 16)]).max(f64::MIN_POSITIVE))
+        })
+        .collect();
+    candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
+    let tracked: Vec<Result<angle::Tracked, _>> = candidates
+        .par_iter()
+        .take(2)
+        .map(|&(c, order, _)| angle::track_mesh(&mut Fft::new(), &rec.channels[c - 1], period, order))
+        .collect();
+    let best = tracked.into_iter().reduce(|a, b| match (&a, &b) {
+        (Ok(x), Ok(y)) => {
+            if y.line_snr_db > x.line_snr_db {
+                b
+            } else {
+                a
+            }
+        }
+        (Err(_), _) => b,
+        _ => a,
+    });
+    match best {
+        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
+            warnings.push(format!(
+                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
+                100.0 * (period / t.map.mean_period_samples() - 1.0)
+            ));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        Some(Ok(t)) if t.line_snr_db >= MIN_TRACKING_SNR_DB => {
+            Ok((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)))
+        }
+        Some(Ok(t)) => {
+            warnings.push(format!(
+                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed; the TSA assumes a constant speed",
+                t.line_snr_db
+            ));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        Some(Err(e)) => {
+            warnings.push(format!("mesh-phase tracking not possible ({e}); the TSA assumes a constant speed"));
+            Ok((nominal, Tracking::Constant, None, Some(z)))
+        }
+        None => Ok((nominal, Tracking::Constant, None, Some(z))),
+    }
+}
+
+/// A warning when the given teeth do not fit: the TSA line at the mesh order z must stand above every line
+/// of its +-1..3 sideband family (summed over channels), as a mesh line does; a line of the family that is
+/// stronger says the mesh is elsewhere (13 or 15 given for 14 teeth, or the pinion and wheel swapped).
+pub(super) fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, gear: Shaft) -> Option<String> {
+    let mut power: Vec<f64> = Vec::new();
+    for t in tsas {
+        let a = crate::signal::spectrum::periodic_amplitudes(t);
+        power.resize(a.len(), 0.0);
+        power.iter_mut().zip(&a).for_each(|(p, v)| *p += v * v);
+    }
+    let at = |k: usize| power.get(k).copied().unwrap_or(0.0).sqrt();
+    let (best, a_best) = (z.saturating_sub(3).max(1)..=z + 3).map(|k| (k, at(k))).max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (best != z).then(|| {
+        format!(
+            "the given teeth do not fit the {gear}: its TSA line at order {best} is {:.1} times the line at the given mesh order {z}; check --teeth (a mesh line stands above its sidebands)",
+            a_best / at(z).max(f64::MIN_POSITIVE)
+        )
+    })
+}
+
+/// Mesh order: the family z (z >= 8) whose first harmonics hold the most TSA energy per harmonic, summed
+/// over channels.
+pub(super) fn mesh_family<'a>(fft: &mut Fft, tsas: impl Iterator<Item = &'a [f64]>) -> usize {
+    let mut power: Vec<f64> = Vec::new();
+    for t in tsas {
+        let a = crate::signal::spectrum::periodic_amplitudes_with(fft, t);
+        let total: f64 = a.iter().skip(1).map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+        power.resize(a.len(), 0.0);
+        for (p, v) in power.iter_mut().zip(&a) {
+            *p += v * v / total;
+        }
+    }
+    let half = power.len().saturating_sub(1);
+    (8..=(half / 2).max(8))
+        .max_by(|&a, &b| {
+            let score = |z: usize| {
+                let h = (half / z).clamp(1, 4);
+                (1..=h).map(|k| power.get(k * z).copied().unwrap_or(0.0)).sum::<f64>() / h as f64
+            };
+            score(a).total_cmp(&score(b))
+        })
+        .unwrap_or(8)
+}
