@@ -88,6 +88,20 @@ def test_bad_input_raises_value_error_with_the_cli_message():
         gearvib.diagnose(REC.format("healthy"), teeth=(1, 39))
     with pytest.raises(ValueError, match="no-such.wav"):
         gearvib.diagnose("no-such.wav")
+    # the list: a 3-D array, an empty array, a non-numeric object array, fs <= 0
+    with pytest.raises(ValueError, match="samples"):
+        gearvib.diagnose(np.zeros((2, 2, 1000)), 1000.0)
+    with pytest.raises(ValueError, match="samples"):
+        gearvib.diagnose(np.zeros(0), 1000.0)
+    with pytest.raises(ValueError, match="samples"):
+        gearvib.diagnose(np.array([object()] * 1000, dtype=object)[::2], 1000.0)
+    for fs in (0.0, -5.0):
+        with pytest.raises(ValueError, match="fs"):
+            gearvib.diagnose(np.ones(1000), fs)
+    scene = json.load(open(SCENE.format("paper-gear-fig8a"), encoding="utf-8"))
+    scene["gear_pair"]["no_such_field"] = 1.0
+    with pytest.raises(ValueError, match="no_such_field"):
+        gearvib.simulate(scene)
     scene = json.load(open(SCENE.format("paper-gear-fig8a"), encoding="utf-8"))
     scene["gear_pair"]["damping_ratio"] = -1.0
     with pytest.raises(ValueError, match="damping_ratio"):
