@@ -3,13 +3,14 @@
 //! package `gearvib` wraps them. Every call releases the GIL while it computes.
 
 use gearvib::io::Recording;
-use gearvib::jobs::diagnose::{DiagnoseJob, Options};
+use gearvib::jobs::diagnose::{DiagnoseJob, Options, Prepared};
 use gearvib::scene::Scene;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 create_exception!(_gearvib, GearvibError, PyException, "A result gearvib cannot trust or could not compute.");
 
@@ -134,10 +135,39 @@ fn diagnose(
             in_memory,
             ..Default::default()
         };
-        let done = gearvib::jobs::diagnose::run(&job)?;
-        Ok(done.diagnoses.iter().map(|d| serde_json::to_string(d).unwrap_or_default()).collect())
+        let prepared = prepared_for(&job)?;
+        let mut out = Vec::new();
+        gearvib::jobs::diagnose::run_streaming_prepared(&job, &prepared, &mut |d| {
+            out.push(serde_json::to_string(&d).unwrap_or_default());
+            Ok(())
+        })?;
+        Ok(out)
     })
     .map_err(to_py)
+}
+
+/// The baseline side of the last call, kept per process: a worker that diagnoses one recording per call
+/// against the same baseline (a Dask fleet) analyses the baseline once. The key holds the options, the
+/// baseline paths and each file's size and modification time, so a changed baseline is prepared anew.
+static PREPARED: Mutex<Option<(String, Arc<Prepared>)>> = Mutex::new(None);
+
+fn prepared_for(job: &DiagnoseJob) -> Result<Arc<Prepared>, gearvib::Error> {
+    let stamp = |p: &PathBuf| {
+        std::fs::metadata(p).map(|m| (m.len(), m.modified().ok())).map_or_else(|e| e.to_string(), |m| format!("{m:?}"))
+    };
+    let key =
+        format!("{:?}|{:?}", job.options, job.baselines.iter().map(|b| (b.clone(), stamp(b))).collect::<Vec<_>>());
+    let mut cache = PREPARED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((k, p)) = cache.as_ref() {
+        if *k == key {
+            return Ok(Arc::clone(p));
+        }
+    }
+    let p = Arc::new(gearvib::jobs::diagnose::prepare(job)?);
+    if !job.baselines.is_empty() {
+        *cache = Some((key, Arc::clone(&p)));
+    }
+    Ok(p)
 }
 
 /// A numpy array (1-D: one channel; 2-D: channels x samples) as a recording at `fs` Hz.

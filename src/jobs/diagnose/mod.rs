@@ -113,8 +113,10 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
 }
 
 /// The baseline side of a call, prepared once: options as fixed by the first baseline, the baselines'
-/// diagnoses, what they fix for the recordings, the statistical reference and the comparison scene.
-struct Prepared {
+/// diagnoses, what they fix for the recordings, the statistical reference and the comparison scene. A
+/// caller that diagnoses recordings one call at a time against the same baseline (a Dask worker) prepares
+/// it once with [`prepare`] and passes it to [`run_streaming_prepared`].
+pub struct Prepared {
     opts: Options,
     baselines: Vec<Diagnosis>,
     geometry: Option<Geometry>,
@@ -122,7 +124,12 @@ struct Prepared {
     scene: Option<compare::ModelScene>,
 }
 
-fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
+/// Prepares the baseline side of `job` (its recordings are not read).
+///
+/// # Errors
+/// A baseline cannot be read or analysed, baselines that do not fit each other, too short a baseline, an
+/// unreadable comparison scene.
+pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     let mut opts = job.options.clone();
     let baseline_files = expand_dirs(&job.baselines)?;
     // the first baseline fixes what was estimated (speed, mesh order) and the block length; the others
@@ -175,18 +182,31 @@ fn chunk_size() -> usize {
 pub fn run_streaming(job: &DiagnoseJob, emit: &mut dyn FnMut(Diagnosis) -> Result<(), Error>) -> Result<bool, Error> {
     crate::io::begin_run();
     let p = prepare(job)?;
+    run_streaming_prepared(job, &p, emit)
+}
+
+/// [`run_streaming`] with the baseline side already prepared (by [`prepare`] of a job with the same
+/// options, baselines and scene; `job`'s own are not read again).
+///
+/// # Errors
+/// As [`run_streaming`].
+pub fn run_streaming_prepared(
+    job: &DiagnoseJob,
+    p: &Prepared,
+    emit: &mut dyn FnMut(Diagnosis) -> Result<(), Error>,
+) -> Result<bool, Error> {
     let recordings = expand_dirs(&job.recordings)?;
     let mut history = verdict::Na4History::default();
     for chunk in recordings.chunks(chunk_size()) {
         let results: Vec<Result<Diagnosis, Error>> =
             chunk.par_iter().map(|r| diagnose(r, &p.opts, p.geometry.as_ref())).collect();
         for d in results {
-            emit(finish(d?, &p, &mut history, job.report.is_some())?)?;
+            emit(finish(d?, p, &mut history, job.report.is_some())?)?;
         }
     }
     for (name, rec) in &job.in_memory {
         let d = diagnose_in_memory(name, rec.clone(), &p.opts, p.geometry.as_ref())?;
-        emit(finish(d, &p, &mut history, job.report.is_some())?)?;
+        emit(finish(d, p, &mut history, job.report.is_some())?)?;
     }
     Ok(p.reference.is_some())
 }
