@@ -60,6 +60,9 @@ pub enum Command {
     },
     /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
     Diagnose(Box<DiagnoseArgs>),
+    /// Fit a gear-pair scene to a recording: tooth-error harmonics, per-tooth deviation, path gains, and
+    /// optionally a local fault (pit or crack) on one tooth.
+    Identify(Box<IdentifyArgs>),
     /// Speed against error of every solver on the paper's scenes and the hard cases.
     Bench {
         /// Scenes (default: the paper's cases and the hard cases in data/scenes).
@@ -154,6 +157,51 @@ pub struct DiagnoseArgs {
     #[arg(long)]
     pub report: Option<String>,
     /// One JSON object per recording, one per line.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `identify`.
+#[derive(clap::Args, Debug)]
+pub struct IdentifyArgs {
+    /// Recording (.wav or .csv).
+    pub recording: String,
+    /// Scene JSON file of the gear pair (teeth, inertias, radii, Fourier mesh stiffness, damping, speed).
+    #[arg(long)]
+    pub scene: String,
+    /// Pinion error orders 1..N to fit (N below half the pinion teeth).
+    #[arg(long, default_value_t = 6)]
+    pub pinion_orders: usize,
+    /// Wheel error orders 1..M to fit (above 0: averaged over the hunting period; needs a wheel
+    /// tachometer for absolute wheel phases).
+    #[arg(long, default_value_t = 0)]
+    pub wheel_orders: usize,
+    /// Mesh harmonics to use (default: all the sample rate resolves, at most 10).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=200))]
+    pub mesh_harmonics: Option<u64>,
+    /// Local faults to search for on every tooth, comma-separated: crack, pit.
+    #[arg(long, value_delimiter = ',')]
+    pub faults: Vec<crate::jobs::identify::FaultKind>,
+    /// Width of a pit in tooth pitches (6 sigma of its Gaussian profile).
+    #[arg(long, default_value_t = 0.5)]
+    pub pit_width: f64,
+    /// Vibration channel (1-based); default: the first that is not a tachometer.
+    #[arg(long)]
+    pub channel: Option<usize>,
+    /// Tachometer channel (1-based) on the pinion shaft, pulse at angle 0; default: the sidecar's
+    /// "tacho pinion" channel, else the angle comes from the mesh phase (phases then relative).
+    #[arg(long)]
+    pub tacho_channel: Option<usize>,
+    /// Sample rate in Hz (overrides the file).
+    #[arg(long)]
+    pub fs: Option<f64>,
+    /// What the recording measures: acceleration, velocity or displacement (default: from its unit).
+    #[arg(long)]
+    pub quantity: Option<Quantity>,
+    /// Write identify.json, PNG images and index.html into this directory.
+    #[arg(long)]
+    pub report: Option<String>,
+    /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
 }

@@ -6,7 +6,7 @@ pub mod args;
 pub mod print;
 pub mod progress;
 
-pub use args::{Cli, Command, DiagnoseArgs, FailOn, parse_args};
+pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, parse_args};
 
 use crate::Error;
 use crate::jobs::{self, ChannelRole, JobError};
@@ -78,6 +78,7 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
             sweep(&mut out, &job, json)
         }
         Command::Diagnose(args) => diagnose(&mut out, &args),
+        Command::Identify(args) => identify(&mut out, &args),
         Command::Bench { scenes, report, json } => {
             let job = jobs::bench::BenchJob {
                 scenes: scenes.into_iter().map(PathBuf::from).collect(),
@@ -114,6 +115,16 @@ fn restate_for_flags(e: Error) -> Error {
         Error::Job(JobError::Value { what, message }) if what == "shaft speed" => {
             CliError::flag("--rpm/--shaft-hz", message)
         }
+        Error::Job(JobError::Value { what, message }) if what == "pinion orders" => {
+            CliError::flag("--pinion-orders", message)
+        }
+        Error::Job(JobError::Value { what, message }) if what == "wheel orders" => {
+            CliError::flag("--wheel-orders", message)
+        }
+        Error::Job(JobError::Value { what, message }) if what == "orders" => {
+            CliError::flag("--pinion-orders/--wheel-orders", message)
+        }
+        Error::Job(JobError::Value { what, message }) if what == "pit width" => CliError::flag("--pit-width", message),
         Error::Job(JobError::Parameter { scene, name, message }) => {
             CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
         }
@@ -379,4 +390,32 @@ fn parse_band(s: &str) -> Result<(f64, f64), Error> {
         return Err(bad("the band is empty: need 0 <= LO < HI"));
     }
     Ok((lo, hi))
+}
+
+fn identify(out: &mut dyn Write, a: &IdentifyArgs) -> Result<u8, Error> {
+    let job = jobs::identify::IdentifyJob {
+        recording: a.recording.clone().into(),
+        scene: a.scene.clone().into(),
+        pinion_orders: a.pinion_orders,
+        wheel_orders: a.wheel_orders,
+        mesh_harmonics: a.mesh_harmonics.map(|h| h as usize),
+        faults: a.faults.clone(),
+        pit_width_teeth: a.pit_width,
+        channel: a.channel,
+        tacho_channel: a.tacho_channel,
+        fs_hz: a.fs,
+        quantity: a.quantity,
+        report: a.report.clone().map(PathBuf::from),
+    };
+    let result = with_spinner("identifying", || jobs::identify::run(&job))?;
+    if a.json {
+        json_line(out, &result)?;
+        warn_all(&result.warnings);
+    } else {
+        print::identification(out, &result).map_err(CliError::from)?;
+    }
+    if let Some(dir) = &job.report {
+        eprintln!("gearvib: report written to {}", dir.join("index.html").display());
+    }
+    Ok(0)
 }

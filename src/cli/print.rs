@@ -1,7 +1,9 @@
 //! Text output of every command (the JSON forms are `report::summary`). Writes to any `Write`, so a
 //! closed pipe comes back as an `io::Error` of kind `BrokenPipe` instead of a panic.
 
-use crate::report::summary::{BenchReport, Diagnosis, SimulateSummary, StabilitySummary, SweepSummary};
+use crate::report::summary::{
+    BenchReport, Diagnosis, ErrorHarmonic, Identification, PhaseOrigin, SimulateSummary, StabilitySummary, SweepSummary,
+};
 use std::io::{self, Write};
 
 /// The text form of `stability`.
@@ -190,4 +192,110 @@ pub fn sweep(w: &mut dyn Write, s: &SweepSummary) -> io::Result<()> {
 fn table_number(v: f64) -> String {
     let plain = format!("{v:.4}");
     if plain.len() <= 10 && (v == 0.0 || v.abs() >= 1e-3) { plain } else { format!("{v:.3e}") }
+}
+
+fn error_rows(w: &mut dyn Write, gear: &str, e: &[ErrorHarmonic]) -> io::Result<()> {
+    for h in e {
+        writeln!(
+            w,
+            "  {gear:<6} {:>3}   {:>9.3} +- {:<7.3} {:>+8.4} +- {:<7.4}{}",
+            h.order,
+            h.amplitude_m * 1e6,
+            h.amplitude_std_m * 1e6,
+            h.phase_rad,
+            h.phase_std_rad,
+            if h.resolved { "" } else { "  not resolved (under 3 std)" }
+        )?;
+    }
+    Ok(())
+}
+
+fn origin(o: PhaseOrigin) -> &'static str {
+    match o {
+        PhaseOrigin::Tachometer => "absolute (tachometer)",
+        PhaseOrigin::Arbitrary => "relative to an arbitrary origin (no tachometer)",
+    }
+}
+
+/// The text form of `identify`.
+pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
+    writeln!(w, "recording        {}", r.recording)?;
+    writeln!(w, "scene            {} (z1 {}, z2 {})", r.scene, r.pinion_teeth, r.wheel_teeth)?;
+    writeln!(
+        w,
+        "speed            {:.4} Hz mean ({:.4} .. {:.4}; scene {:.4} Hz); model solved at the mean",
+        r.speed.mean_hz, r.speed.min_hz, r.speed.max_hz, r.speed.scene_hz
+    )?;
+    writeln!(
+        w,
+        "averaged         {} periods of {} pinion revolution(s), {} mesh harmonics, {} in {}",
+        r.periods,
+        r.period_revolutions,
+        r.mesh_harmonics,
+        r.quantity.name(),
+        r.unit
+    )?;
+    writeln!(w, "phases           pinion {}, wheel {}", origin(r.phase_origin.pinion), origin(r.phase_origin.wheel))?;
+    writeln!(w, "errors           gear  order  e_i [um] +- std    alpha_i [rad] +- std")?;
+    error_rows(w, "pinion", &r.pinion_errors)?;
+    error_rows(w, "wheel", &r.wheel_errors)?;
+    let teeth = |v: &[f64]| v.iter().map(|d| format!("{:.2}", d * 1e6)).collect::<Vec<_>>().join(" ");
+    writeln!(w, "pinion teeth     deviation [um], tooth 1 first: {}", teeth(&r.tooth_deviation_m.pinion))?;
+    if !r.tooth_deviation_m.wheel.is_empty() {
+        writeln!(w, "wheel teeth      deviation [um], tooth 1 first: {}", teeth(&r.tooth_deviation_m.wheel))?;
+    }
+    let gains: Vec<String> =
+        r.path_gains.iter().map(|g| format!("{}: {:.3}/{:+.2} rad", g.harmonic, g.magnitude, g.phase_rad)).collect();
+    writeln!(w, "path gains       {}", gains.join(", "))?;
+    writeln!(
+        w,
+        "fit              {:.2} % of the sideband energy explained, chi2/dof {:.2}, condition {:.1e}{}",
+        100.0 * r.explained_fraction,
+        r.chi2_per_dof,
+        r.condition,
+        if r.identifiable { "" } else { "  NOT IDENTIFIABLE" }
+    )?;
+    for l in &r.residual_lines {
+        writeln!(
+            w,
+            "missed line      order {:.3} ({:.1} Hz, {}): measured {:.3e}, model {:.3e}, residual {:.1} noise std",
+            l.order,
+            l.frequency_hz,
+            l.label,
+            l.measured,
+            l.model,
+            l.residual / l.noise
+        )?;
+    }
+    match &r.local_fault {
+        Some(f) => writeln!(
+            w,
+            "LOCAL FAULT      {} on {:?} tooth {}: depth {:.4e} {} (removes {:.1} % of the residual, significance {:.0})",
+            f.kind.name(),
+            f.gear,
+            f.tooth,
+            f.depth,
+            f.depth_unit,
+            100.0 * f.improvement,
+            f.significance
+        )?,
+        None if r.fault_candidates.is_empty() => writeln!(w, "local fault      not searched (--faults crack,pit)")?,
+        None => writeln!(w, "local fault      none fits better than none beyond the noise")?,
+    }
+    for c in &r.fault_candidates {
+        writeln!(
+            w,
+            "  candidate      {} on {:?} tooth {}: depth {:.4e} {}, significance {:.1}",
+            c.kind.name(),
+            c.gear,
+            c.tooth,
+            c.depth,
+            c.depth_unit,
+            c.significance
+        )?;
+    }
+    for n in &r.warnings {
+        writeln!(w, "note             {n}")?;
+    }
+    Ok(())
 }

@@ -7,9 +7,11 @@
 //! - [`sweep`]: Floquet analysis and line amplitudes over a parameter range (all cores).
 //! - [`bench`](mod@bench): speed against error of every solver.
 //! - [`diagnose`]: recordings -> speed, TSA, indicators, verdict against a baseline, model comparison.
+//! - [`identify`]: a gear-pair scene fitted to a recording: tooth errors, path gains, a local fault.
 
 pub mod bench;
 pub mod diagnose;
+pub mod identify;
 pub mod simulate;
 pub mod sweep;
 pub mod synth;

@@ -211,15 +211,26 @@ fn fourier_output(q: &OutputQuantity, sol: &HillSolution, kmax: usize) -> Vec<Co
         .collect()
 }
 
-/// Fourier coefficients Z_k, k = 0..=kmax, of the output of a time-stepped solution by Gauss-Legendre
-/// quadrature (4 points) on every step of the solver's own grid, so jumps of the coefficients (and kinks of
-/// the output) sit on step ends and the integrals keep the solver's fourth order; the samples are the
-/// solver's partial steps. Returns `None` for outputs that need x' (then the FFT of samples is used).
+/// Fourier coefficients Z_k, k = 0..=kmax, of the output of a time-stepped solution (the weighted sum of
+/// [`grid_coefficients`] of the state components). Returns `None` for outputs that need x' (then the FFT of
+/// samples is used) and for harmonic-balance solutions.
 fn stepped_output(scene: &Scene, steady: &SteadyState, kmax: usize) -> Option<Vec<Complex<f64>>> {
+    let OutputQuantity::Linear { weights, .. } = &scene.output.quantity else { return None };
+    let per_state = grid_coefficients(scene.system(), steady, kmax)?;
+    Some((0..=kmax).map(|k| weights.iter().zip(&per_state).map(|(w, z)| z[k] * *w).sum::<Complex<f64>>()).collect())
+}
+
+/// Fourier coefficients Z_c(k), k = 0..=kmax, of every state component c of a time-stepped solution
+/// (x_c(t) = Re Z_c(0) + 2 Re sum Z_c(k) e^{i k w t}) by Gauss-Legendre quadrature (4 points) on every step
+/// of the solver's own grid, so jumps of the coefficients (and kinks of the state) sit on step ends and the
+/// integrals keep the solver's fourth order. `None` for a harmonic-balance solution (its coefficients are
+/// exact already).
+pub fn grid_coefficients(
+    sys: &dyn crate::system::PeriodicSystem,
+    steady: &SteadyState,
+    kmax: usize,
+) -> Option<Vec<Vec<Complex<f64>>>> {
     let Trajectory::Grid { grid, .. } = &steady.trajectory else { return None };
-    if scene.output.quantity.needs_derivative() {
-        return None;
-    }
     const NODES: [f64; 4] =
         [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
     const WEIGHTS: [f64; 4] =
@@ -233,17 +244,21 @@ fn stepped_output(scene: &Scene, steady: &SteadyState, kmax: usize) -> Option<Ve
             weights.push(half * g);
         }
     }
-    let values = output_at(scene, steady, &times);
+    let n = sys.dim();
+    let mut states = Vec::new();
+    steady.states_at(sys, &times, &mut states);
     let period = steady.period_s;
     let w0 = 2.0 * std::f64::consts::PI / period;
-    let mut z = vec![Complex::new(0.0, 0.0); kmax + 1];
-    for ((t, wt), v) in times.iter().zip(&weights).zip(&values) {
+    let mut z = vec![vec![Complex::new(0.0, 0.0); kmax + 1]; n];
+    for (i, (t, wt)) in times.iter().zip(&weights).enumerate() {
         let (s, c) = (w0 * t).sin_cos();
         let step = Complex::new(c, -s);
-        let mut e = Complex::new(wt * v / period, 0.0);
-        for zk in z.iter_mut() {
-            *zk += e;
-            e *= step;
+        for (zc, v) in z.iter_mut().zip(&states[i * n..(i + 1) * n]) {
+            let mut e = Complex::new(wt * v / period, 0.0);
+            for zk in zc.iter_mut() {
+                *zk += e;
+                e *= step;
+            }
         }
     }
     Some(z)

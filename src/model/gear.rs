@@ -44,7 +44,7 @@ impl MeshStiffness {
 }
 
 /// Which gear of the pair.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Gear {
     /// The driving gear (index 1 in the paper).
@@ -215,7 +215,9 @@ impl GearPair {
         let tau = if rev - tau < 1e-12 * rev { 0.0 } else { tau };
         let inside = match side {
             Side::Right => tau >= a && tau < b,
-            Side::Left => (tau > a && tau <= b) || (a == 0.0 && tau == 0.0),
+            // the left limit at a revolution start is the end of the previous revolution: inside only when
+            // the window is the last tooth's
+            Side::Left => (tau > a && tau <= b) || (tau == 0.0 && b >= rev * (1.0 - 1e-12)),
         };
         if inside { 1.0 - loss } else { 1.0 }
     }
@@ -251,6 +253,55 @@ impl GearPair {
         let p = self.params.pinion_errors.eval_derivatives(t);
         let w = self.params.wheel_errors.eval_derivatives(t);
         (p[0] + w[0], p[1] + w[1])
+    }
+}
+
+impl GearPair {
+    /// Eq 42 as a Fourier form over `revolutions` pinion revolutions (a whole number of mesh cycles, and of
+    /// wheel revolutions when `wheel_errors` is not constant), with the forcing of the given errors alone
+    /// (series in the pinion and wheel angles: only their coefficients are used) plus the static load
+    /// k0 q0 when `static_load`:
+    ///
+    /// ```text
+    /// f(t) = [k0 q0] - (k_z(t) - k0) e(t) - c_z e'(t),   e = pinion_errors(w1 t) + wheel_errors(w2 t)
+    /// ```
+    /// `None` when the mesh stiffness is not a Fourier series or the pair has a crack. The response is
+    /// affine in e: the transfer from each error harmonic to the output is one solve of this form.
+    pub fn fourier_form_with(
+        &self,
+        revolutions: f64,
+        pinion_errors: &FourierSeries,
+        wheel_errors: &FourierSeries,
+        static_load: bool,
+    ) -> Option<FourierForm> {
+        let MeshStiffness::Fourier(mesh) = &self.params.mesh else { return None };
+        if self.params.crack.is_some() {
+            return None;
+        }
+        let period_s = revolutions * self.pinion_period_s();
+        let w = 2.0 * PI / period_s;
+        let per_period = |cycles: f64| cycles.round() as usize;
+        let z1 = self.params.pinion_teeth as f64;
+        let kz = stretch(mesh, per_period(revolutions * z1), w);
+        let e = stretch(pinion_errors, per_period(revolutions), w).plus(&stretch(
+            wheel_errors,
+            per_period(revolutions * z1 / self.params.wheel_teeth as f64),
+            w,
+        ));
+        let dk = kz.plus(&FourierSeries::constant(-self.k0));
+        let mut forcing = dk.times(&e).scaled(-1.0).plus(&e.derivative().scaled(-self.c_z));
+        forcing.omega_rad_s = w;
+        if static_load {
+            forcing.mean += self.k0 * self.params.static_deflection_m;
+        }
+        Some(FourierForm {
+            dof: 1,
+            period_s,
+            mass: vec![FourierSeries::constant(self.m_red)],
+            damping: vec![FourierSeries::constant(self.c_z)],
+            stiffness: vec![kz],
+            forcing: vec![forcing],
+        })
     }
 }
 
@@ -295,31 +346,11 @@ impl PeriodicSystem for GearPair {
         self.breakpoints.clone()
     }
     fn fourier_form(&self) -> Option<FourierForm> {
-        let MeshStiffness::Fourier(mesh) = &self.params.mesh else { return None };
         if self.params.crack.is_some() {
             return None;
         }
-        let w = 2.0 * PI / self.period_s;
-        let per_period = |cycles: f64| cycles.round() as usize;
-        let revs = self.revolutions_per_period();
-        let z1 = self.params.pinion_teeth as f64;
-        let kz = stretch(mesh, per_period(revs * z1), w);
-        let e = stretch(&self.params.pinion_errors, per_period(revs), w).plus(&stretch(
-            &self.params.wheel_errors,
-            per_period(revs * z1 / self.params.wheel_teeth as f64),
-            w,
-        ));
-        let dk = kz.plus(&FourierSeries::constant(-self.k0));
-        let mut forcing = dk.times(&e).scaled(-1.0).plus(&e.derivative().scaled(-self.c_z));
-        forcing.mean += self.k0 * self.params.static_deflection_m;
-        Some(FourierForm {
-            dof: 1,
-            period_s: self.period_s,
-            mass: vec![FourierSeries::constant(self.m_red)],
-            damping: vec![FourierSeries::constant(self.c_z)],
-            stiffness: vec![kz],
-            forcing: vec![forcing],
-        })
+        let p = &self.params;
+        self.fourier_form_with(self.revolutions_per_period(), &p.pinion_errors, &p.wheel_errors, true)
     }
     fn homogeneous_period_s(&self) -> f64 {
         // P(t) holds only k_z(t): one mesh cycle, or the cracked gear's revolution

@@ -2,6 +2,7 @@
 
 pub mod figures;
 pub mod html;
+pub mod identify;
 pub mod plot;
 pub mod summary;
 

@@ -19,6 +19,10 @@ pub enum Style {
     Points,
     /// Hatched squares only (a value that could not be resolved: "there, but not measured alone").
     Hatched,
+    /// Filled bars from y = 0, 0.6 x units wide (per-tooth values).
+    Bars,
+    /// Vertical error bars with caps: the points come in pairs (x, low), (x, high).
+    ErrorBars,
 }
 
 /// One data series.
@@ -370,6 +374,27 @@ where
                         + Rectangle::new([(-6, -6), (6, 6)], col.stroke_width(2))
                         + PathElement::new(vec![(-6, 6), (6, -6)], col.stroke_width(2))
                 });
+            }
+            Style::Bars => {
+                let zero = 0.0f64.clamp(ylo, yhi);
+                c.draw_series(
+                    pts.into_iter()
+                        .map(|(x, y)| Rectangle::new([(x - 0.3, zero), (x + 0.3, y)], col.mix(0.8).filled())),
+                )?
+                .label(s.name.as_str())
+                .legend(legend);
+            }
+            Style::ErrorBars => {
+                let style = col.stroke_width(2);
+                c.draw_series(pts.chunks_exact(2).map(|w| {
+                    let (x, lo, hi) = (w[0].0, w[0].1, w[1].1);
+                    PathElement::new(
+                        vec![(x - 0.15, lo), (x + 0.15, lo), (x, lo), (x, hi), (x - 0.15, hi), (x + 0.15, hi)],
+                        style,
+                    )
+                }))?
+                .label(s.name.as_str())
+                .legend(legend);
             }
             Style::Stems => {
                 let base = yr.start;

@@ -232,65 +232,72 @@ pub fn solve_order(form: &FourierForm, h_trunc: usize) -> Result<(HillSolution, 
     solve_order_with(form, h_trunc, true)
 }
 
-/// [`solve_order`], with the iterative refinement only when `refine` (else the rounding returned is 0).
-fn solve_order_with(form: &FourierForm, h_trunc: usize, refine: bool) -> Result<(HillSolution, f64), SolverError> {
-    let nd = form.dof;
-    let w = 2.0 * std::f64::consts::PI / form.period_s;
-    let hc = form.mass.iter().chain(&form.damping).chain(&form.stiffness).map(|s| s.harmonics()).max().unwrap_or(0);
-    let co = Coefficients {
-        h: hc,
-        mass: form.mass.iter().map(|s| complex(s, hc)).collect(),
-        damping: form.damping.iter().map(|s| complex(s, hc)).collect(),
-        stiffness: form.stiffness.iter().map(|s| complex(s, hc)).collect(),
-    };
-    let hf = form.forcing.iter().map(|s| s.harmonics()).max().unwrap_or(0);
-    let forcing: Vec<Vec<C64>> = form.forcing.iter().map(|s| complex(s, hf)).collect();
-    // coupling stride: gcd of the harmonic indices present in M, C, K
-    let mut g = 0usize;
-    for k in 1..=hc {
-        let present = co.mass.iter().chain(&co.damping).chain(&co.stiffness).any(|c| c[hc + k].norm_sqr() > 0.0);
-        if present {
-            g = gcd(g, k);
+/// The harmonic-balance operator of `form` split into its independent residue classes.
+struct Classes {
+    nd: usize,
+    w: f64,
+    co: Coefficients,
+    stride: usize,
+    band_blocks: usize,
+    h: isize,
+}
+
+impl Classes {
+    fn new(form: &FourierForm, h_trunc: usize) -> Self {
+        let hc = form.mass.iter().chain(&form.damping).chain(&form.stiffness).map(|s| s.harmonics()).max().unwrap_or(0);
+        let co = Coefficients {
+            h: hc,
+            mass: form.mass.iter().map(|s| complex(s, hc)).collect(),
+            damping: form.damping.iter().map(|s| complex(s, hc)).collect(),
+            stiffness: form.stiffness.iter().map(|s| complex(s, hc)).collect(),
+        };
+        // coupling stride: gcd of the harmonic indices present in M, C, K
+        let mut g = 0usize;
+        for k in 1..=hc {
+            let present = co.mass.iter().chain(&co.damping).chain(&co.stiffness).any(|c| c[hc + k].norm_sqr() > 0.0);
+            if present {
+                g = gcd(g, k);
+            }
+        }
+        let stride = if g == 0 { 2 * h_trunc + 1 } else { g };
+        Self {
+            nd: form.dof,
+            w: 2.0 * std::f64::consts::PI / form.period_s,
+            co,
+            stride,
+            band_blocks: hc.checked_div(g).unwrap_or(0),
+            h: h_trunc as isize,
         }
     }
-    let stride = if g == 0 { 2 * h_trunc + 1 } else { g };
-    let band_blocks = hc.checked_div(g).unwrap_or(0);
-    let h = h_trunc as isize;
-    let mut coeffs = vec![vec![C64::new(0.0, 0.0); 2 * h_trunc + 1]; nd];
-    let mut rounding = coeffs.clone();
-    // Y_{-n} = conj(Y_n): class g - r is the mirror of class r, so only r <= g / 2 is solved
-    let classes = stride.min(2 * h_trunc + 1);
-    for r in 0..=classes / 2 {
-        // harmonics of this class within [-H, H]
-        let first = (-h..=h).find(|n| n.rem_euclid(stride as isize) == r as isize);
-        let Some(first) = first else { continue };
-        let members: Vec<isize> = (0..).map(|j| first + j * stride as isize).take_while(|n| *n <= h).collect();
-        let has_forcing = members
-            .iter()
-            .any(|&n| n.unsigned_abs() <= hf && forcing.iter().any(|f| f[(n + hf as isize) as usize].norm_sqr() > 0.0));
-        if !has_forcing {
-            continue; // a non-singular homogeneous class has the zero solution
-        }
-        let m = members.len();
-        let size = m * nd;
-        let bw = (band_blocks + 1) * nd - 1;
-        let mut a = Band::new(size, bw, bw);
-        let mut rhs = vec![C64::new(0.0, 0.0); size];
+
+    /// Harmonics of class r within [-H, H] (Y_{-n} = conj(Y_n): only r <= g / 2 is ever solved).
+    fn members(&self, r: usize) -> Vec<isize> {
+        let h = self.h;
+        let Some(first) = (-h..=h).find(|n| n.rem_euclid(self.stride as isize) == r as isize) else {
+            return Vec::new();
+        };
+        (0..).map(|j| first + j * self.stride as isize).take_while(|n| *n <= h).collect()
+    }
+
+    fn count(&self) -> usize {
+        self.stride.min(2 * self.h as usize + 1)
+    }
+
+    /// The band matrix of one class: row n, column m holds -(m w)^2 M_{n-m} + i m w C_{n-m} + K_{n-m}.
+    fn matrix(&self, members: &[isize]) -> Band {
+        let (nd, m) = (self.nd, members.len());
+        let bw = (self.band_blocks + 1) * nd - 1;
+        let mut a = Band::new(m * nd, bw, bw);
         for (jr, &nr) in members.iter().enumerate() {
-            for i in 0..nd {
-                if nr.unsigned_abs() <= hf {
-                    rhs[jr * nd + i] = forcing[i][(nr + hf as isize) as usize];
-                }
-            }
-            let lo = jr.saturating_sub(band_blocks);
-            let hi = (jr + band_blocks).min(m - 1);
+            let lo = jr.saturating_sub(self.band_blocks);
+            let hi = (jr + self.band_blocks).min(m - 1);
             for (jc, &nc) in members.iter().enumerate().take(hi + 1).skip(lo) {
-                let k = nr - nc;
-                let kk = (k + co.h as isize) as usize;
-                let wn = nc as f64 * w;
+                let kk = (nr - nc + self.co.h as isize) as usize;
+                let wn = nc as f64 * self.w;
                 for i in 0..nd {
                     for l in 0..nd {
                         let e = i * nd + l;
+                        let co = &self.co;
                         let v =
                             co.mass[e][kk] * (-wn * wn) + co.damping[e][kk] * C64::new(0.0, wn) + co.stiffness[e][kk];
                         if v.norm_sqr() > 0.0 {
@@ -300,25 +307,107 @@ fn solve_order_with(form: &FourierForm, h_trunc: usize, refine: bool) -> Result<
                 }
             }
         }
-        let (x, dx) = solve_refined(a, rhs, refine).ok_or(SolverError::Singular)?;
-        for (j, &n) in members.iter().enumerate() {
+        a
+    }
+
+    /// Right-hand side of one class from complex forcing coefficients `f[i][n + hf]`, or `None` when the
+    /// class is not forced (a non-singular homogeneous class has the zero solution).
+    fn rhs(&self, members: &[isize], forcing: &[Vec<C64>], hf: usize) -> Option<Vec<C64>> {
+        let nd = self.nd;
+        let mut rhs = vec![C64::new(0.0, 0.0); members.len() * nd];
+        let mut forced = false;
+        for (jr, &nr) in members.iter().enumerate() {
+            if nr.unsigned_abs() > hf {
+                continue;
+            }
             for i in 0..nd {
-                coeffs[i][(n + h) as usize] = x[j * nd + i];
-                rounding[i][(n + h) as usize] = dx[j * nd + i];
-                if r != 0 && 2 * r != classes {
-                    coeffs[i][(h - n) as usize] = x[j * nd + i].conj();
-                    rounding[i][(h - n) as usize] = dx[j * nd + i].conj();
+                let v = forcing[i][(nr + hf as isize) as usize];
+                forced |= v.norm_sqr() > 0.0;
+                rhs[jr * nd + i] = v;
+            }
+        }
+        forced.then_some(rhs)
+    }
+
+    /// Stores a class solution (and its mirror class) into per-DOF coefficient lists.
+    fn store(&self, r: usize, members: &[isize], x: &[C64], coeffs: &mut [Vec<C64>]) {
+        let h = self.h;
+        for (j, &n) in members.iter().enumerate() {
+            for (i, c) in coeffs.iter_mut().enumerate() {
+                c[(n + h) as usize] = x[j * self.nd + i];
+                if r != 0 && 2 * r != self.count() {
+                    c[(h - n) as usize] = x[j * self.nd + i].conj();
                 }
             }
         }
     }
-    if coeffs.iter().flatten().any(|c| !c.re.is_finite() || !c.im.is_finite()) {
-        return Err(SolverError::NonFinite { what: "harmonic-balance solution".into() });
+
+    fn solution(&self, coeffs: Vec<Vec<C64>>) -> Result<HillSolution, SolverError> {
+        if coeffs.iter().flatten().any(|c| !c.re.is_finite() || !c.im.is_finite()) {
+            return Err(SolverError::NonFinite { what: "harmonic-balance solution".into() });
+        }
+        Ok(HillSolution { omega: self.w, harmonics: self.h as usize, coeffs, stride: self.stride })
     }
-    let solution = HillSolution { omega: w, harmonics: h_trunc, coeffs, stride };
+}
+
+fn complex_forcing(forcing: &[crate::system::FourierSeries]) -> (Vec<Vec<C64>>, usize) {
+    let hf = forcing.iter().map(|s| s.harmonics()).max().unwrap_or(0);
+    (forcing.iter().map(|s| complex(s, hf)).collect(), hf)
+}
+
+/// [`solve_order`], with the iterative refinement only when `refine` (else the rounding returned is 0).
+fn solve_order_with(form: &FourierForm, h_trunc: usize, refine: bool) -> Result<(HillSolution, f64), SolverError> {
+    let classes = Classes::new(form, h_trunc);
+    let (forcing, hf) = complex_forcing(&form.forcing);
+    let mut coeffs = vec![vec![C64::new(0.0, 0.0); 2 * h_trunc + 1]; form.dof];
+    let mut rounding = coeffs.clone();
+    for r in 0..=classes.count() / 2 {
+        let members = classes.members(r);
+        let Some(rhs) = (!members.is_empty()).then(|| classes.rhs(&members, &forcing, hf)).flatten() else {
+            continue;
+        };
+        let (x, dx) = solve_refined(classes.matrix(&members), rhs, refine).ok_or(SolverError::Singular)?;
+        classes.store(r, &members, &x, &mut coeffs);
+        classes.store(r, &members, &dx, &mut rounding);
+    }
+    let solution = classes.solution(coeffs)?;
     let correction = HillSolution { coeffs: rounding, ..solution.clone() };
     let rounding = relative_size(&correction, &solution);
     Ok((solution, rounding))
+}
+
+/// Harmonic balance of one operator (the mass, damping and stiffness of `form`; its own forcing is
+/// ignored) for many forcings at truncation order `h_trunc`: each residue class is factored once and
+/// solved for every right-hand side. The response to forcing j is `result[j]`.
+///
+/// # Errors
+/// [`SolverError::Singular`] when a forced class is singular; non-finite coefficients.
+pub fn solve_many(
+    form: &FourierForm,
+    h_trunc: usize,
+    forcings: &[Vec<crate::system::FourierSeries>],
+) -> Result<Vec<HillSolution>, SolverError> {
+    let classes = Classes::new(form, h_trunc);
+    let forcing: Vec<(Vec<Vec<C64>>, usize)> = forcings.iter().map(|f| complex_forcing(f)).collect();
+    let mut coeffs = vec![vec![vec![C64::new(0.0, 0.0); 2 * h_trunc + 1]; form.dof]; forcings.len()];
+    for r in 0..=classes.count() / 2 {
+        let members = classes.members(r);
+        if members.is_empty() {
+            continue;
+        }
+        let rhs: Vec<Option<Vec<C64>>> = forcing.iter().map(|(f, hf)| classes.rhs(&members, f, *hf)).collect();
+        if rhs.iter().all(Option::is_none) {
+            continue;
+        }
+        let mut lu = classes.matrix(&members);
+        let pivots = lu.factor().ok_or(SolverError::Singular)?;
+        for (j, b) in rhs.into_iter().enumerate() {
+            let Some(mut b) = b else { continue };
+            lu.solve_factored(&pivots, &mut b);
+            classes.store(r, &members, &b, &mut coeffs[j]);
+        }
+    }
+    coeffs.into_iter().map(|c| classes.solution(c)).collect()
 }
 
 /// Relative difference between two solutions (the second with more harmonics): per state component, the

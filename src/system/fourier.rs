@@ -142,15 +142,21 @@ impl FourierSeries {
         }
     }
 
-    /// Exact product of two series of the same base frequency (harmonics add up).
+    /// Exact product of two series of the same base frequency (harmonics add up). Only the non-zero
+    /// coefficients are multiplied: a series stretched over a long period (a mesh over the hunting period)
+    /// holds one harmonic in hundreds.
     pub fn times(&self, other: &Self) -> Self {
         let (a, b) = (self.complex_coefficients(), other.complex_coefficients());
         let (ha, hb) = (self.harmonics() as isize, other.harmonics() as isize);
         let h = ha + hb;
         let mut c = vec![(0.0, 0.0); (2 * h + 1) as usize];
-        for i in -ha..=ha {
+        let nonzero = |v: &[(f64, f64)], off: isize| -> Vec<isize> {
+            (0..v.len()).filter(|&k| v[k] != (0.0, 0.0)).map(|k| k as isize - off).collect()
+        };
+        let nb = nonzero(&b, hb);
+        for i in nonzero(&a, ha) {
             let (ar, ai) = a[(i + ha) as usize];
-            for j in -hb..=hb {
+            for &j in &nb {
                 let (br, bi) = b[(j + hb) as usize];
                 let slot = &mut c[(i + j + h) as usize];
                 slot.0 += ar * br - ai * bi;

@@ -2,8 +2,10 @@
 //! the figures.
 
 mod diagnosis;
+mod identify;
 
 pub use diagnosis::*;
+pub use identify::*;
 
 use crate::scene::Scene;
 use crate::solver::SteadyState;
