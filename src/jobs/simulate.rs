@@ -216,12 +216,17 @@ fn fourier_output(q: &OutputQuantity, sol: &HillSolution, kmax: usize) -> Vec<Co
 /// samples is used) and for harmonic-balance solutions.
 fn stepped_output(scene: &Scene, steady: &SteadyState, kmax: usize) -> Option<Vec<Complex<f64>>> {
     let OutputQuantity::Linear { weights, .. } = &scene.output.quantity else { return None };
-    let per_state = grid_coefficients(scene.system(), steady, kmax)?;
-    Some((0..=kmax).map(|k| weights.iter().zip(&per_state).map(|(w, z)| z[k] * *w).sum::<Complex<f64>>()).collect())
+    let used: Vec<usize> = (0..weights.len()).filter(|&c| weights[c] != 0.0).collect();
+    let per_state = grid_coefficients(scene.system(), steady, kmax, &used)?;
+    Some(
+        (0..=kmax)
+            .map(|k| used.iter().zip(&per_state).map(|(&c, z)| z[k] * weights[c]).sum::<Complex<f64>>())
+            .collect(),
+    )
 }
 
-/// Fourier coefficients Z_c(k), k = 0..=kmax, of every state component c of a time-stepped solution
-/// (x_c(t) = Re Z_c(0) + 2 Re sum Z_c(k) e^{i k w t}) by Gauss-Legendre quadrature (4 points) on every step
+/// Fourier coefficients Z_c(k), k = 0..=kmax, of the state components c in `components` (in that order) of
+/// a time-stepped solution (x_c(t) = Re Z_c(0) + 2 Re sum Z_c(k) e^{i k w t}) by Gauss-Legendre quadrature (4 points) on every step
 /// of the solver's own grid, so jumps of the coefficients (and kinks of the state) sit on step ends and the
 /// integrals keep the solver's fourth order. `None` for a harmonic-balance solution (its coefficients are
 /// exact already).
@@ -229,6 +234,7 @@ pub fn grid_coefficients(
     sys: &dyn crate::system::PeriodicSystem,
     steady: &SteadyState,
     kmax: usize,
+    components: &[usize],
 ) -> Option<Vec<Vec<Complex<f64>>>> {
     let Trajectory::Grid { grid, .. } = &steady.trajectory else { return None };
     const NODES: [f64; 4] =
@@ -249,12 +255,12 @@ pub fn grid_coefficients(
     steady.states_at(sys, &times, &mut states);
     let period = steady.period_s;
     let w0 = 2.0 * std::f64::consts::PI / period;
-    let mut z = vec![vec![Complex::new(0.0, 0.0); kmax + 1]; n];
+    let mut z = vec![vec![Complex::new(0.0, 0.0); kmax + 1]; components.len()];
     for (i, (t, wt)) in times.iter().zip(&weights).enumerate() {
         let (s, c) = (w0 * t).sin_cos();
         let step = Complex::new(c, -s);
-        for (zc, v) in z.iter_mut().zip(&states[i * n..(i + 1) * n]) {
-            let mut e = Complex::new(wt * v / period, 0.0);
+        for (zc, &comp) in z.iter_mut().zip(components) {
+            let mut e = Complex::new(wt * states[i * n + comp] / period, 0.0);
             for zk in zc.iter_mut() {
                 *zk += e;
                 e *= step;

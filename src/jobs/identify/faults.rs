@@ -24,7 +24,7 @@ type C64 = Complex<f64>;
 pub const SIGNIFICANCE: f64 = 25.0;
 
 /// Losses of the crack grid.
-const CRACK_GRID: [f64; 12] = [0.03, 0.06, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8];
+const CRACK_GRID: [f64; 12] = [0.03, 0.06, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.85];
 
 /// The fault chosen and its fit.
 pub struct Chosen {
@@ -128,9 +128,11 @@ fn crack_fit(setup: &Setup, problem: &Problem, healthy: &Fit, change: &[C64], to
     fit::fit(&p, Some(&healthy.params)).ok()
 }
 
-/// Crack on each tooth: a grid of losses (each a solve shared by the teeth, with the error transfers of the
-/// healthy mesh), golden-section search of the loss on the best tooth, then the final fit with the error
-/// transfers of the cracked mesh itself.
+/// Crack on each tooth. The static-load change R_crack(L) - R_crack(0) is solved on a grid of losses (one
+/// solve per loss, shared by the teeth) and interpolated between them (cubic in L, per line); every tooth
+/// and loss is ranked by the fit with the healthy errors kept and the gains refitted (closed form), the best
+/// tooth's loss is found by golden-section search on full fits of the interpolated change, and the final fit
+/// uses one solve at that loss and the cracked mesh's own error transfers.
 fn crack(
     setup: &Setup,
     problem: &Problem,
@@ -144,24 +146,65 @@ fn crack(
         Ok(r.iter().zip(&zero).map(|(a, b)| a - b).collect())
     };
     let changes: Vec<Vec<C64>> = CRACK_GRID.par_iter().map(|&loss| change(loss)).collect::<Result<_, _>>()?;
-    let grid: Vec<(usize, usize, f64)> = (0..CRACK_GRID.len())
+    let ranked: Vec<(usize, usize, f64)> = (0..CRACK_GRID.len())
         .flat_map(|k| (1..=teeth).map(move |t| (k, t)))
         .collect::<Vec<_>>()
         .into_par_iter()
-        .filter_map(|(k, tooth)| crack_fit(setup, problem, healthy, &changes[k], tooth).map(|f| (k, tooth, f.chi2)))
+        .map(|(k, tooth)| (k, tooth, gains_only_chi2(setup, problem, healthy, &changes[k], tooth)))
         .collect();
-    let Some(&(k, tooth, _)) = grid.iter().min_by(|a, b| a.2.total_cmp(&b.2)) else { return Ok(None) };
-    let lo = if k == 0 { 0.005 } else { CRACK_GRID[k - 1] };
-    let hi = CRACK_GRID.get(k + 1).copied().unwrap_or(0.95);
+    let Some(&(k, tooth, _)) = ranked.iter().min_by(|a, b| a.2.total_cmp(&b.2)) else { return Ok(None) };
+    let lo = if k == 0 { 0.0 } else { CRACK_GRID[k - 1] };
+    let hi = CRACK_GRID.get(k + 1).copied().unwrap_or(CRACK_GRID[CRACK_GRID.len() - 1]);
     let eval = |loss: f64| -> Result<(f64, Option<Fit>), Error> {
-        let f = crack_fit(setup, problem, healthy, &change(loss)?, tooth);
+        let f = crack_fit(setup, problem, healthy, &interpolated(&changes, loss), tooth);
         Ok((f.as_ref().map_or(f64::INFINITY, |f| f.chi2), f))
     };
-    let (loss, approx) = golden(lo, hi, 7, eval)?;
-    let Some(approx) = approx else { return Ok(None) };
-    let exact = exact_crack_fit(setup, problem, &approx, gear, tooth, loss, &change(loss)?)?;
-    let f = exact.filter(|e| e.chi2 <= approx.chi2).unwrap_or(approx);
+    let (loss, _) = golden(lo.max(1e-3), hi, 12, eval)?;
+    let at = change(loss)?;
+    let Some(approx) = crack_fit(setup, problem, healthy, &at, tooth) else { return Ok(None) };
+    // the cracked mesh's own error transfers (one solve per column) only for a crack that matters
+    let f = if judged(FaultKind::Crack, gear, tooth, loss, healthy, &approx).significant {
+        let exact = exact_crack_fit(setup, problem, &approx, gear, tooth, loss, &at)?;
+        exact.filter(|e| e.chi2 <= approx.chi2).unwrap_or(approx)
+    } else {
+        approx
+    };
     Ok(Some((judged(FaultKind::Crack, gear, tooth, loss, healthy, &f), f)))
+}
+
+/// Weighted residual with the healthy fit's error parameters kept and only the gains refitted (closed
+/// form): the ranking of crack candidates.
+fn gains_only_chi2(setup: &Setup, problem: &Problem, healthy: &Fit, change: &[C64], tooth: usize) -> f64 {
+    let moved = transfer::delayed(setup, change, tooth);
+    let base: Vec<C64> = problem.base.iter().zip(&moved).map(|(b, d)| b + d).collect();
+    let p = Problem { base: &base, ..*problem };
+    fit::chi2_with_params(&p, &healthy.params)
+}
+
+/// The change at `loss` from the grid: zero at loss 0, cubic (Catmull-Rom) between grid losses, per line.
+fn interpolated(changes: &[Vec<C64>], loss: f64) -> Vec<C64> {
+    // knots: loss 0 (no change) then the grid
+    let xs: Vec<f64> = std::iter::once(0.0).chain(CRACK_GRID).collect();
+    let zero = vec![C64::new(0.0, 0.0); changes[0].len()];
+    let ys: Vec<&Vec<C64>> = std::iter::once(&zero).chain(changes).collect();
+    let last = xs.len() - 1;
+    let i = xs.partition_point(|&x| x <= loss).clamp(1, last) - 1;
+    let t = (loss - xs[i]) / (xs[i + 1] - xs[i]);
+    // Hermite with finite-difference slopes on the uneven grid
+    let slope = |j: usize, l: usize| -> C64 {
+        let (a, b) = (j.saturating_sub(1), (j + 1).min(last));
+        (ys[b][l] - ys[a][l]) / (xs[b] - xs[a])
+    };
+    let h = xs[i + 1] - xs[i];
+    let (h00, h10, h01, h11) = (
+        2.0 * t.powi(3) - 3.0 * t * t + 1.0,
+        t.powi(3) - 2.0 * t * t + t,
+        -2.0 * t.powi(3) + 3.0 * t * t,
+        t.powi(3) - t * t,
+    );
+    (0..zero.len())
+        .map(|l| ys[i][l] * h00 + slope(i, l) * (h10 * h) + ys[i + 1][l] * h01 + slope(i + 1, l) * (h11 * h))
+        .collect()
 }
 
 /// The fit at a found crack with the cracked mesh's own error transfers.

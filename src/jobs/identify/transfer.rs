@@ -282,7 +282,9 @@ pub fn cracked(
     // harmonic k of the solver's period is period order k P / revs
     let per = setup.period_revs as f64 / solver_revs;
     let kmax = (setup.max_m() as f64 / per).ceil() as usize + 1;
-    let z = grid_coefficients(&pair, &steady, kmax).ok_or(SolverError::Singular)?;
+    // velocity is state 1 directly (acceleration i k w times it); displacement state 0
+    let component = usize::from(setup.quantity != Quantity::Displacement);
+    let z = grid_coefficients(&pair, &steady, kmax, &[component]).ok_or(SolverError::Singular)?;
     let w = 2.0 * PI / pair.period_s();
     Ok(setup
         .lines
@@ -293,12 +295,10 @@ pub fn cracked(
             if (k - kr as f64).abs() > 1e-9 || kr > kmax {
                 return C64::new(0.0, 0.0); // not a harmonic of the solver's period
             }
-            // velocity is state 1 directly; displacement state 0; acceleration i k w times state 1
-            let v = 2.0 * z[1][kr];
+            let v = 2.0 * z[0][kr];
             match setup.quantity {
-                Quantity::Displacement => 2.0 * z[0][kr],
-                Quantity::Velocity => v,
                 Quantity::Acceleration => v * C64::new(0.0, kr as f64 * w),
+                Quantity::Displacement | Quantity::Velocity => v,
             }
         })
         .collect())
