@@ -159,6 +159,8 @@ fn pit_found_on_its_tooth_with_its_depth() {
     assert_eq!(f["tooth"], 3);
     let depth = f["depth"].as_f64().unwrap();
     assert!((depth / 20e-6 - 1.0).abs() < 0.2, "pit depth {depth:.3e} against 2e-5");
+    let chi2 = v["chi2_per_dof"].as_f64().unwrap();
+    assert!(chi2 < 3.0, "chi2/dof {chi2} with the pit");
 }
 
 /// The bundled cracked recording (30 % stiffness loss on pinion tooth 3): `--faults crack` finds tooth 3
@@ -177,6 +179,10 @@ fn crack_found_on_its_tooth_with_its_loss() {
     assert_eq!(f["tooth"], 3);
     let loss = f["depth"].as_f64().unwrap();
     assert!((loss / 0.3 - 1.0).abs() < 0.2, "stiffness loss {loss} against 0.3");
+    // with the crack the model explains the lines to the noise (chi2 per degree of freedom near 1; the
+    // healthy model leaves about 400 on this recording)
+    let chi2 = v["chi2_per_dof"].as_f64().unwrap();
+    assert!(chi2 < 3.0, "chi2/dof {chi2} with the crack");
 }
 
 /// The bundled healthy recording: neither a pit nor a crack fits better than none beyond the noise.

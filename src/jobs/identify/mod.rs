@@ -360,16 +360,19 @@ fn origins(angle: &Angle, setup: &Setup, warnings: &mut Vec<String>) -> Origins 
     Origins { pinion, wheel }
 }
 
-/// Noise of each line: the pooled standard error of its mesh harmonic's lines (the noise is smooth over a
-/// band), floored at 1e-9 of the band's mesh line so a noiseless synthetic recording still weighs sensibly.
+/// Noise of each line: the pooled standard error of its mesh harmonic's sidebands (the additive noise is
+/// smooth over a band); the mesh line keeps its own when larger (its scatter between periods also holds
+/// the jitter of the tracked angle, which grows with the line). Floored at 1e-9 of the band's mesh line so a
+/// noiseless synthetic recording still weighs sensibly.
 fn line_noise(setup: &Setup, m: &Coefficients) -> Vec<f64> {
     let mut pooled = vec![(0.0, 0usize, 0.0f64); setup.harmonics];
     for l in &setup.lines {
         let b = &mut pooled[l.harmonic - 1];
-        b.0 += m.std_error[l.m].powi(2);
-        b.1 += 1;
         if l.kind == LineKind::Mesh {
             b.2 = m.mean[l.m].norm();
+        } else {
+            b.0 += m.std_error[l.m].powi(2);
+            b.1 += 1;
         }
     }
     setup
@@ -377,7 +380,9 @@ fn line_noise(setup: &Setup, m: &Coefficients) -> Vec<f64> {
         .iter()
         .map(|l| {
             let (ss, n, mesh) = pooled[l.harmonic - 1];
-            (ss / n as f64).sqrt().max(1e-9 * mesh).max(f64::MIN_POSITIVE)
+            let band = (ss / n.max(1) as f64).sqrt();
+            let own = if l.kind == LineKind::Mesh { m.std_error[l.m] } else { 0.0 };
+            band.max(own).max(1e-9 * mesh).max(f64::MIN_POSITIVE)
         })
         .collect()
 }
