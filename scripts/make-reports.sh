@@ -4,7 +4,7 @@
 # Usage: scripts/make-reports.sh   (from the repository root; about half a minute)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-rm -rf reports/diagnose reports/diagnose-real
+rm -rf reports/diagnose reports/diagnose-real reports/identify
 cargo build --release --quiet
 g=./target/release/gearvib
 for s in paper-gear-fig8a paper-gear-fig8b paper-press-case1 paper-press-case2; do
@@ -17,5 +17,7 @@ $g diagnose data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav --tach
   --report reports/diagnose > /dev/null
 $g diagnose data/realdata/b30hz90.csv --fs-unknown --baseline data/realdata/h30hz90.csv --channel 3 \
   --report reports/diagnose-real > /dev/null
+$g identify data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav \
+  --scene data/scenes/gear-z14z39-healthy.json --faults crack,pit --report reports/identify > reports/identify.txt
 $g bench --report reports > reports/bench.txt
 ls -R reports | head -50

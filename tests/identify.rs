@@ -316,3 +316,36 @@ fn bad_inputs_refused_with_one_line() {
     let nan = write(&dir, "nan.csv", "time_s,v\n0,1\n0.0001,NaN\n0.0002,1\n");
     refused(&["identify", &nan, "--scene", &healthy], "nan.csv");
 }
+
+/// Without a tachometer the angle comes from the mesh phase: the amplitudes are still the scene's (within
+/// 2 %, as with a tachometer), and the phases are said to be relative to an arbitrary origin.
+#[test]
+fn without_tachometer_amplitudes_hold_and_phases_are_flagged_relative() {
+    let dir = temp_dir("identify-no-tacho");
+    let r = gearvib::io::read_recording(Path::new(&repo("data/recordings/gear-z14z39-fs10kHz-healthy.wav"))).unwrap();
+    let fs = r.sample_rate_hz.unwrap();
+    let csv = dir.join("vibration-only.csv");
+    let mut out = gearvib::io::csv::CsvOut::create(&csv, &["dqdt".to_string()], fs).unwrap();
+    let x: Vec<f64> = r.channels[0].iter().map(|v| f64::from(*v)).collect();
+    out.write(&x).unwrap();
+    out.finish().unwrap().commit().unwrap();
+    let cli = gearvib(&[
+        "identify",
+        csv.to_str().unwrap(),
+        "--scene",
+        &repo("data/scenes/gear-z14z39-healthy.json"),
+        "--quantity",
+        "velocity",
+        "--json",
+    ]);
+    assert_eq!(cli.code, 0, "{}", cli.stderr);
+    let v: Value = serde_json::from_str(&cli.stdout).unwrap();
+    assert_eq!(v["phase_origin"]["pinion"], "arbitrary");
+    assert!(cli.stderr.contains("arbitrary origin"), "{}", cli.stderr);
+    for (f, (order, a, _)) in
+        v["pinion_errors"].as_array().unwrap().iter().zip(given_errors("data/scenes/gear-z14z39-healthy.json"))
+    {
+        let fa = f["amplitude_m"].as_f64().unwrap();
+        assert!((fa / a - 1.0).abs() < 0.02, "e_{order} {fa:.4e} against {a:.4e}");
+    }
+}

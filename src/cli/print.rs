@@ -270,9 +270,9 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
     match &r.local_fault {
         Some(f) => writeln!(
             w,
-            "LOCAL FAULT      {} on {:?} tooth {}: depth {:.4e} {} (removes {:.1} % of the residual, significance {:.0})",
+            "LOCAL FAULT      {} on {} tooth {}: depth {:.4e} {} (removes {:.1} % of the residual, significance {:.2e})",
             f.kind.name(),
-            f.gear,
+            f.gear.name(),
             f.tooth,
             f.depth,
             f.depth_unit,
@@ -285,9 +285,9 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
     for c in &r.fault_candidates {
         writeln!(
             w,
-            "  candidate      {} on {:?} tooth {}: depth {:.4e} {}, significance {:.1}",
+            "  candidate      {} on {} tooth {}: depth {:.4e} {}, significance {:.3e} (reported above 25)",
             c.kind.name(),
-            c.gear,
+            c.gear.name(),
             c.tooth,
             c.depth,
             c.depth_unit,

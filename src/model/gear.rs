@@ -53,6 +53,16 @@ pub enum Gear {
     Wheel,
 }
 
+impl Gear {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pinion => "pinion",
+            Self::Wheel => "wheel",
+        }
+    }
+}
+
 /// A stiffness drop on one cracked tooth: k_z is multiplied by `1 - loss` during that tooth's mesh cycle
 /// `[ (tooth-1) T_z, tooth T_z )` of each revolution of its gear.
 #[derive(Clone, Debug, PartialEq)]

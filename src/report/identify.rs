@@ -113,6 +113,17 @@ fn teeth_chart(out: &Identification, stem: &str, gear: &str, dev: &PerTooth, std
         PhaseOrigin::Arbitrary => "numbering from an arbitrary origin: no tachometer",
     };
     let n = d.len() as f64;
+    let gear_of = if pinion { crate::model::gear::Gear::Pinion } else { crate::model::gear::Gear::Wheel };
+    let markers = out
+        .local_fault
+        .iter()
+        .filter(|f| f.gear == gear_of)
+        .map(|f| Marker {
+            x: f.tooth as f64,
+            label: format!("{} {} {}", f.kind.name(), cell(f.depth), if f.depth_unit == "m" { "m" } else { "loss" }),
+            color: 1,
+        })
+        .collect();
     Chart {
         title: format!("{stem}: {gear} profile deviation at each tooth's mesh position"),
         x_label: format!("{gear} tooth ({origin})"),
@@ -122,6 +133,7 @@ fn teeth_chart(out: &Identification, stem: &str, gear: &str, dev: &PerTooth, std
             Series { name: "+-2 standard errors".into(), points: errs, style: Style::ErrorBars, color: 8 },
         ],
         x_range: Some((0.3, n + 0.7)),
+        markers,
         ..Chart::default()
     }
 }
@@ -133,9 +145,9 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             state: VerdictState::Faulty,
             word: "LOCAL FAULT".into(),
             line: format!(
-                "{} on {} tooth {}: depth {} {} (explains {:.0} % of the residual; significance {:.0})",
+                "{} on {} tooth {}: depth {} {} (explains {:.0} % of the residual; significance {:.2e}, reported above 25)",
                 f.kind.name(),
-                gear_name(f.gear),
+                f.gear.name(),
                 f.tooth,
                 cell(f.depth),
                 f.depth_unit,
@@ -193,13 +205,6 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
         facts,
         tables,
         images: images.to_vec(),
-    }
-}
-
-fn gear_name(g: crate::model::gear::Gear) -> &'static str {
-    match g {
-        crate::model::gear::Gear::Pinion => "pinion",
-        crate::model::gear::Gear::Wheel => "wheel",
     }
 }
 
