@@ -162,8 +162,12 @@ fn wrong_teeth_are_warned_about() {
         let w = d["warnings"].to_string();
         assert!(w.contains("do not fit"), "{teeth}: {w}");
     }
+    // equal teeth: the two averages are one signal, and the fault cannot be put on one gear
+    let d = &diagnose(std::slice::from_ref(&rec), &["--teeth", "14,14"])[0];
+    assert!(d["warnings"].to_string().contains("equal teeth"), "{}", d["warnings"]);
     let d = &diagnose(&[rec], &["--teeth", "14,39"])[0];
     assert!(!d["warnings"].to_string().contains("do not fit"), "{}", d["warnings"]);
+    assert!(!d["warnings"].to_string().contains("equal teeth"), "{}", d["warnings"]);
 }
 
 #[test]

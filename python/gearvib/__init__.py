@@ -16,7 +16,7 @@ import numpy as np
 from . import _gearvib
 from ._gearvib import GearvibError
 
-__all__ = ["GearvibError", "simulate", "stability", "diagnose", "read_recording"]
+__all__ = ["GearvibError", "simulate", "stability", "diagnose", "identify", "read_recording"]
 
 SceneLike = Union[dict, str, "os.PathLike[str]"]
 
@@ -96,6 +96,42 @@ def diagnose(
         for x in items
     ]
     return out if many else out[0]
+
+
+def identify(
+    recording: Union[str, "os.PathLike[str]"],
+    scene: Union[str, "os.PathLike[str]"],
+    *,
+    pinion_orders: int = 6,
+    wheel_orders: int = 0,
+    faults: Iterable[str] = (),
+    mesh_harmonics: Optional[int] = None,
+    pit_width: float = 0.5,
+    channel: Optional[int] = None,
+    tacho: Optional[int] = None,
+    quantity: Optional[str] = None,
+) -> dict:
+    """Fit the gear pair of ``scene`` to a WAV/CSV ``recording``: the ``identify --json`` dictionary.
+
+    ``pinion_orders`` / ``wheel_orders``: error orders fitted (below half the teeth); ``faults``: local
+    faults searched on every tooth, "crack" and/or "pit"; ``pit_width``: pit width in tooth pitches;
+    ``channel`` / ``tacho``: 1-based vibration and pinion tachometer channels; ``quantity``:
+    "acceleration", "velocity" or "displacement". Amplitudes of ``pinion_errors`` are in m, phases in rad.
+    """
+    return json.loads(
+        _gearvib.identify(
+            os.fspath(recording),
+            os.fspath(scene),
+            pinion_orders,
+            wheel_orders,
+            list(faults),
+            mesh_harmonics,
+            pit_width,
+            channel,
+            tacho,
+            quantity,
+        )
+    )
 
 
 def read_recording(path: Union[str, "os.PathLike[str]"]) -> dict:

@@ -29,5 +29,20 @@ def diagnose(
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
     """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys."""
 
+def identify(
+    recording: PathLike,
+    scene: PathLike,
+    *,
+    pinion_orders: int = ...,
+    wheel_orders: int = ...,
+    faults: Iterable[str] = ...,
+    mesh_harmonics: Optional[int] = ...,
+    pit_width: float = ...,
+    channel: Optional[int] = ...,
+    tacho: Optional[int] = ...,
+    quantity: Optional[str] = ...,
+) -> dict[str, Any]:
+    """Tooth errors [m, rad], per-tooth deviation [m], path gains and a local fault: the `identify --json` keys."""
+
 def read_recording(path: PathLike) -> dict[str, Any]:
     """`samples` (float32, channels x samples), `fs` [Hz] or None, `names`, `units`."""

@@ -229,6 +229,50 @@ fn read_recording(py: Python<'_>, path: &str) -> PyResult<PyRecording> {
     Ok((array.into_pyarray(py).unbind(), rec.sample_rate_hz, rec.names, rec.units))
 }
 
+/// identify(recording, scene, pinion_orders, wheel_orders, faults, mesh_harmonics, pit_width, channel,
+/// tacho, quantity) -> the `identify --json` object as text.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // the keyword arguments of the Python wrapper, one to one
+fn identify(
+    py: Python<'_>,
+    recording: &str,
+    scene: &str,
+    pinion_orders: usize,
+    wheel_orders: usize,
+    faults: Vec<String>,
+    mesh_harmonics: Option<usize>,
+    pit_width: f64,
+    channel: Option<usize>,
+    tacho: Option<usize>,
+    quantity: Option<String>,
+) -> PyResult<String> {
+    let faults = faults
+        .iter()
+        .map(|f| f.parse::<gearvib::jobs::identify::FaultKind>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| PyValueError::new_err(format!("faults: {e}")))?;
+    let quantity = quantity
+        .map(|q| q.parse::<gearvib::model::Quantity>())
+        .transpose()
+        .map_err(|e| PyValueError::new_err(format!("quantity: {e}")))?;
+    let job = gearvib::jobs::identify::IdentifyJob {
+        recording: PathBuf::from(recording),
+        scene: PathBuf::from(scene),
+        pinion_orders,
+        wheel_orders,
+        mesh_harmonics,
+        faults,
+        pit_width_teeth: pit_width,
+        channel,
+        tacho_channel: tacho,
+        fs_hz: None,
+        quantity,
+        report: None,
+    };
+    py.detach(|| gearvib::jobs::identify::run(&job).map(|r| serde_json::to_string(&r).unwrap_or_default()))
+        .map_err(to_py)
+}
+
 /// The compiled part of the `gearvib` package.
 #[pymodule]
 fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -237,5 +281,6 @@ fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stability, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(identify, m)?)?;
     Ok(())
 }

@@ -52,6 +52,16 @@ def test_diagnose_of_a_file_equals_the_cli():
     assert got["verdict"]["state"] == "faulty" and got["verdict"]["gear"] == "pinion"
 
 
+def test_identify_equals_the_cli():
+    rec, scene = REC.format("pitted-pinion-tooth3"), SCENE.format("gear-z14z39-healthy")
+    got = gearvib.identify(rec, scene, faults=["pit"])
+    want = cli_json("identify", rec, "--scene", scene, "--faults", "pit")[0]
+    assert got == want
+    assert got["local_fault"]["tooth"] == 3
+    with pytest.raises(ValueError, match="pinion-orders|pinion orders"):
+        gearvib.identify(rec, scene, pinion_orders=7)
+
+
 def test_numpy_layouts_give_one_answer_and_match_the_file():
     rec = gearvib.read_recording(REC.format("cracked-pinion-tooth3"))
     x32 = rec["samples"]

@@ -690,6 +690,13 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
                 warnings.push(w);
             }
         }
+        if let (Some((zp, zw)), Shaft::Wheel) = (o.teeth, *name) {
+            if zp == zw {
+                warnings.push(format!(
+                    "--teeth {zp},{zw}: with equal teeth the gears turn together, so their averages are the same signal and a fault cannot be told to be on the pinion or the wheel; check --teeth"
+                ));
+            }
+        }
         mesh_orders.push(z);
         for (c, _, t, blocks) in tsas.iter().filter(|t| t.1 == gi) {
             pending.push((*name, *c, z, t, blocks));

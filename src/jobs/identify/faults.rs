@@ -119,11 +119,16 @@ fn pit(
     }))
 }
 
+/// The healthy static response R0 plus a tooth-1 static-load change moved to `tooth`.
+fn cracked_base(setup: &Setup, problem: &Problem, change: &[C64], tooth: usize) -> Vec<C64> {
+    let moved = transfer::delayed(setup, change, tooth);
+    problem.base.iter().zip(&moved).map(|(b, d)| b + d).collect()
+}
+
 /// The fit with the healthy static response R0 replaced by R0 + (R_crack - R_crack(0)) moved to `tooth`
 /// (the difference of two time-stepped responses on one grid: their discretisation error cancels).
 fn crack_fit(setup: &Setup, problem: &Problem, healthy: &Fit, change: &[C64], tooth: usize) -> Option<Fit> {
-    let moved = transfer::delayed(setup, change, tooth);
-    let base: Vec<C64> = problem.base.iter().zip(&moved).map(|(b, d)| b + d).collect();
+    let base = cracked_base(setup, problem, change, tooth);
     let p = Problem { base: &base, ..*problem };
     fit::fit(&p, Some(&healthy.params)).ok()
 }
@@ -183,8 +188,7 @@ fn crack(
         let refs: Vec<&[C64]> = cols.iter().map(Vec::as_slice).collect();
         let change: Vec<C64> =
             interpolated(&changes, loss).iter().zip(&at_first).zip(&at).map(|((a, b), c)| c + a - b).collect();
-        let moved = transfer::delayed(setup, &change, tooth);
-        let base: Vec<C64> = problem.base.iter().zip(&moved).map(|(b, d)| b + d).collect();
+        let base = cracked_base(setup, problem, &change, tooth);
         let p = Problem { base: &base, columns: &refs, ..*problem };
         fit::fit(&p, Some(&approx.params)).ok()
     };
@@ -200,8 +204,7 @@ fn crack(
 /// Weighted residual with the healthy fit's error parameters kept and only the gains refitted (closed
 /// form): the ranking of crack candidates.
 fn gains_only_chi2(setup: &Setup, problem: &Problem, healthy: &Fit, change: &[C64], tooth: usize) -> f64 {
-    let moved = transfer::delayed(setup, change, tooth);
-    let base: Vec<C64> = problem.base.iter().zip(&moved).map(|(b, d)| b + d).collect();
+    let base = cracked_base(setup, problem, change, tooth);
     let p = Problem { base: &base, ..*problem };
     fit::chi2_with_params(&p, &healthy.params)
 }
