@@ -308,17 +308,13 @@ fn refine_extreme(scene: &Scene, steady: &SteadyState, samples: &[f64], i: usize
     sign * fc.max(fd).max(sign * samples[i])
 }
 
-/// Solves the scene and computes its output over one period and its order spectrum.
-///
-/// The orders come from the solver's own representation: the exact Fourier coefficients of harmonic
-/// balance, or fourth-order quadrature on the step grid of a time-stepping method, never from a DFT of
-/// samples that would alias a kinked output (a DFT of samples remains only for derivative outputs of
-/// time-stepped solutions, which the error estimate then includes). Peak-to-peak is refined between
-/// samples on the exact solution.
+/// The steady state, the output over one period and the order spectrum of [`simulate`], without its RMS
+/// and refined peak-to-peak (what a sweep needs: the extremes' golden-section search on the exact solution
+/// was an eighth of a sweep's time).
 ///
 /// # Errors
 /// Solver failures.
-pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
+pub fn solve_with_orders(scene: &Scene) -> Result<(SteadyState, Vec<f64>, Vec<OrderLine>), Error> {
     let sys = scene.system();
     let mut steady = solver::solve(sys, &scene.solver)?;
     let period = steady.period_s;
@@ -357,6 +353,22 @@ pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
     let orders = (0..=kmax.min(amps.len() - 1))
         .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
         .collect();
+    Ok((steady, period_samples, orders))
+}
+
+/// Solves the scene and computes its output over one period and its order spectrum.
+///
+/// The orders come from the solver's own representation: the exact Fourier coefficients of harmonic
+/// balance, or fourth-order quadrature on the step grid of a time-stepping method, never from a DFT of
+/// samples that would alias a kinked output (a DFT of samples remains only for derivative outputs of
+/// time-stepped solutions, which the error estimate then includes). Peak-to-peak is refined between
+/// samples on the exact solution.
+///
+/// # Errors
+/// Solver failures.
+pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
+    let (steady, period_samples, orders) = solve_with_orders(scene)?;
+    let m = period_samples.len();
     let rms = (period_samples.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
     let argmax = (0..m).max_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
     let argmin = (0..m).min_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);

@@ -213,25 +213,23 @@ fn point(scene: &Scene, path: &str, value: f64, z1: Option<usize>) -> SweepPoint
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),
     };
-    match super::simulate::simulate(&s) {
-        Ok(sim) => {
+    match super::simulate::solve_with_orders(&s) {
+        Ok((steady, _, orders)) => {
             let lines = match z1 {
                 Some(z) => (1..=3)
                     .map(|k| {
                         let order = (k * z) as f64;
-                        let a = sim.orders.iter().find(|l| (l.order - order).abs() < 1e-9).map_or(0.0, |l| l.amplitude);
+                        let a = orders.iter().find(|l| (l.order - order).abs() < 1e-9).map_or(0.0, |l| l.amplitude);
                         (format!("{k}x mesh (order {})", k * z), a)
                     })
                     .collect(),
-                None => {
-                    sim.orders.iter().skip(1).take(3).map(|l| (format!("order {:.3}", l.order), l.amplitude)).collect()
-                }
+                None => orders.iter().skip(1).take(3).map(|l| (format!("order {:.3}", l.order), l.amplitude)).collect(),
             };
             SweepPoint {
                 value,
-                rho_max: Some(sim.steady.floquet.rho_max),
-                stable: Some(sim.steady.floquet.stable),
-                trusted: sim.steady.trusted,
+                rho_max: Some(steady.floquet.rho_max),
+                stable: Some(steady.floquet.stable),
+                trusted: steady.trusted,
                 lines,
                 error: None,
             }
