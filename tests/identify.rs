@@ -349,3 +349,26 @@ fn without_tachometer_amplitudes_hold_and_phases_are_flagged_relative() {
         assert!((fa / a - 1.0).abs() < 0.02, "e_{order} {fa:.4e} against {a:.4e}");
     }
 }
+
+/// Honesty: a scene whose pinion teeth do not fit (13 for a 14-tooth recording) and a model that misses a
+/// fault (the healthy pair on the cracked recording, no fault searched) are said so; an order the recording
+/// does not carry (wheel order 2 of the eccentric wheel, truth 0) is marked unresolved, while the healthy
+/// fit of the healthy recording carries neither warning.
+#[test]
+fn misfits_and_unresolved_orders_are_said() {
+    let dir = temp_dir("identify-honesty");
+    let healthy = repo("data/scenes/gear-z14z39-healthy.json");
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&healthy).unwrap()).unwrap();
+    v["gear_pair"]["pinion"]["teeth"] = serde_json::json!(13);
+    let z13 = write(&dir, "z13.json", &v.to_string());
+    let warnings = |rec: &str, scene: &str| identify(&[&repo(rec), "--scene", scene])["warnings"].to_string();
+    let rec = |name: &str| format!("data/recordings/gear-z14z39-fs10kHz-{name}.wav");
+    assert!(warnings(&rec("healthy"), &z13).contains("do not fit"));
+    let w = warnings(&rec("cracked-pinion-tooth3"), &healthy);
+    assert!(w.contains("does not explain") && w.contains("--faults"), "{w}");
+    let w = warnings(&rec("healthy"), &healthy);
+    assert!(!w.contains("do not fit") && !w.contains("does not explain"), "{w}");
+    let e = identify(&[&repo(&rec("wheel-eccentricity")), "--scene", &healthy, "--wheel-orders", "2"]);
+    assert_eq!(e["wheel_errors"][0]["resolved"], true);
+    assert_eq!(e["wheel_errors"][1]["resolved"], false, "{}", e["wheel_errors"][1]);
+}

@@ -422,6 +422,14 @@ fn identify(
         .zip(&noise)
         .filter(|((l, v), s)| l.kind != LineKind::Mesh && v.norm() < 3.0 * **s)
         .count();
+    warnings.extend(teeth_misfit(setup, &y));
+    let chi2_per_dof = f.chi2 / f.dof as f64;
+    if chi2_per_dof > POOR_FIT_CHI2 {
+        warnings.push(format!(
+            "the fitted model leaves {chi2_per_dof:.0} times the noise on the lines (chi2/dof): it does not explain this recording well{}; read the errors as the best fit of a model that misses something (see the missed lines)",
+            if job.faults.is_empty() { " (a local fault? try --faults crack,pit)" } else { "" }
+        ));
+    }
     let identifiable = f.condition < 1e10;
     if !identifiable {
         warnings.push(format!(
@@ -462,7 +470,7 @@ fn identify(
             .map(|(b, g)| PathGain { harmonic: b + 1, magnitude: g.norm(), phase_rad: g.arg() })
             .collect(),
         explained_fraction: explained(setup, &y, &f.model),
-        chi2_per_dof: f.chi2 / f.dof as f64,
+        chi2_per_dof,
         condition: f.condition,
         identifiable,
         lines_under_noise,
@@ -471,6 +479,33 @@ fn identify(
         local_fault: search.chosen.map(|c| c.fault),
         fault_candidates: search.candidates,
         warnings: Vec::new(),
+    })
+}
+
+/// chi2/dof above which the fit is said not to explain the recording.
+pub const POOR_FIT_CHI2: f64 = 25.0;
+
+/// A warning when the scene's teeth do not fit the recording: the measured line at the first mesh order
+/// h z1 must stand above every sideband of its band, as a mesh line does (a wrong z1 puts the "mesh" on a
+/// sideband or between lines).
+fn teeth_misfit(setup: &Setup, y: &[C64]) -> Option<String> {
+    let mesh = setup.lines.iter().zip(y).find(|(l, _)| l.harmonic == 1 && l.kind == LineKind::Mesh)?.1.norm();
+    let (line, top) = setup
+        .lines
+        .iter()
+        .zip(y)
+        .filter(|(l, _)| l.harmonic == 1 && l.kind != LineKind::Mesh)
+        .map(|(l, v)| (l, v.norm()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (top > mesh).then(|| {
+        format!(
+            "the scene's teeth ({}, {}) do not fit this recording: the line at the mesh order {} is {:.2} times weaker than the one at order {} beside it; check the scene",
+            setup.params.pinion_teeth,
+            setup.params.wheel_teeth,
+            setup.params.pinion_teeth,
+            top / mesh,
+            line.m as f64 / setup.period_revs as f64
+        )
     })
 }
 
