@@ -198,6 +198,73 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             .map(|g| (vec![g.harmonic.to_string(), cell(g.magnitude), format!("{:.3}", g.phase_rad)], false))
             .collect(),
     });
+    if !out.fault_candidates.is_empty() {
+        tables.push(Table {
+            caption: format!(
+                "Best local-fault candidate of each kind (reported when the significance exceeds 25; {} = reported)",
+                "highlighted"
+            ),
+            header: vec![
+                "kind".into(),
+                "gear".into(),
+                "tooth".into(),
+                "depth".into(),
+                "explains".into(),
+                "significance".into(),
+            ],
+            rows: out
+                .fault_candidates
+                .iter()
+                .map(|c| {
+                    let reported = out
+                        .local_fault
+                        .as_ref()
+                        .is_some_and(|f| f.kind == c.kind && f.gear == c.gear && f.tooth == c.tooth);
+                    (
+                        vec![
+                            c.kind.name().into(),
+                            c.gear.name().into(),
+                            c.tooth.to_string(),
+                            format!("{} {}", cell(c.depth), c.depth_unit),
+                            format!("{:.1} %", 100.0 * c.improvement),
+                            format!("{:.3e}", c.significance),
+                        ],
+                        reported,
+                    )
+                })
+                .collect(),
+        });
+    }
+    if !out.residual_lines.is_empty() {
+        tables.push(Table {
+            caption: format!("Lines the fitted model misses by more than 3 noise standard errors ({})", out.unit),
+            header: vec![
+                "line".into(),
+                "order".into(),
+                "Hz".into(),
+                "measured".into(),
+                "model".into(),
+                "residual / noise".into(),
+            ],
+            rows: out
+                .residual_lines
+                .iter()
+                .map(|l| {
+                    (
+                        vec![
+                            l.label.clone(),
+                            format!("{:.3}", l.order),
+                            format!("{:.1}", l.frequency_hz),
+                            cell(l.measured),
+                            cell(l.model),
+                            format!("{:.1}", l.residual / l.noise),
+                        ],
+                        false,
+                    )
+                })
+                .collect(),
+        });
+    }
     Section {
         heading: format!("{} fitted with {}", out.recording, out.scene),
         verdict: Some(badge),
