@@ -310,6 +310,12 @@ fn bad_inputs_refused_with_one_line() {
     let slow = write(&dir, "slow.json", &v.to_string());
     refused(&["identify", &healthy_rec, "--scene", &slow], "operating point");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--pinion-orders", "7"], "--pinion-orders");
+    // coprime 97 / 4001 teeth: a hunting period of 4001 revolutions, lines up to harmonic 388 000 of it
+    let mut big: Value = serde_json::from_str(&std::fs::read_to_string(&healthy).unwrap()).unwrap();
+    big["gear_pair"]["pinion"]["teeth"] = serde_json::json!(97);
+    big["gear_pair"]["wheel"]["teeth"] = serde_json::json!(4001);
+    let big = write(&dir, "big.json", &big.to_string());
+    refused(&["identify", &healthy_rec, "--scene", &big, "--wheel-orders", "1"], "hunting period");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--pinion-orders", "0"], "nothing to fit");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--pit-width=-1"], "--pit-width");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--channel", "9"], "--channel 9");

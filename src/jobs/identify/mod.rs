@@ -198,6 +198,10 @@ fn track(job: &IdentifyJob, rec: &Recording, ch: &Channels, fs: f64, p: &GearPai
     Ok(angle)
 }
 
+/// Highest harmonic of the averaged period the fit may use (the harmonic-balance and averaging work grows
+/// with it; the bundled 14/39 pair with wheel orders needs about 4000).
+pub const MAX_PERIOD_ORDER: usize = 1 << 18;
+
 /// Largest relative difference between the recording's speed and the scene's that the model is re-solved
 /// for (beyond it the scene is another operating point).
 pub const MAX_SPEED_OFFSET: f64 = 0.10;
@@ -279,6 +283,16 @@ pub fn run(job: &IdentifyJob) -> Result<Identification, Error> {
     let per_rev = fs / mean_hz;
     let harmonics = resolvable_harmonics(job, &params, per_rev)?;
     let setup = Setup::new(params, job.pinion_orders, job.wheel_orders, harmonics, quantity);
+    if setup.max_m() > MAX_PERIOD_ORDER {
+        return Err(value(
+            "wheel orders",
+            format!(
+                "the hunting period of {} pinion revolutions puts the lines up to harmonic {} of it (at most {MAX_PERIOD_ORDER}): fit no wheel orders, or fewer mesh harmonics",
+                setup.period_revs,
+                setup.max_m()
+            ),
+        ));
+    }
     let measured = average(job, &rec.channels[ch.vibration], &angle, &setup, per_rev, &mut warnings)?;
     let origins = origins(&angle, &setup, &mut warnings);
     let transfers = transfer::healthy(&setup)?;
