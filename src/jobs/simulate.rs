@@ -255,17 +255,25 @@ pub fn grid_coefficients(
     steady.states_at(sys, &times, &mut states);
     let period = steady.period_s;
     let w0 = 2.0 * std::f64::consts::PI / period;
-    let mut z = vec![vec![Complex::new(0.0, 0.0); kmax + 1]; components.len()];
-    for (i, (t, wt)) in times.iter().zip(&weights).enumerate() {
-        let (s, c) = (w0 * t).sin_cos();
-        let step = Complex::new(c, -s);
-        for (zc, &comp) in z.iter_mut().zip(components) {
-            let mut e = Complex::new(wt * states[i * n + comp] / period, 0.0);
-            for zk in zc.iter_mut() {
-                *zk += e;
-                e *= step;
-            }
+    // harmonic by harmonic over all points (each point's e^{-i k w t} advanced by one multiplication): the
+    // points are independent, so the loop runs at the multipliers' throughput, not their latency
+    let steps: Vec<Complex<f64>> = times
+        .iter()
+        .map(|t| {
+            let (s, c) = (w0 * t).sin_cos();
+            Complex::new(c, -s)
+        })
+        .collect();
+    let mut z = Vec::with_capacity(components.len());
+    for &comp in components {
+        let mut e: Vec<Complex<f64>> =
+            (0..times.len()).map(|i| Complex::new(weights[i] * states[i * n + comp] / period, 0.0)).collect();
+        let mut zc = Vec::with_capacity(kmax + 1);
+        for _ in 0..=kmax {
+            zc.push(e.iter().sum::<Complex<f64>>());
+            e.iter_mut().zip(&steps).for_each(|(v, s)| *v *= s);
         }
+        z.push(zc);
     }
     Some(z)
 }

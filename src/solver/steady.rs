@@ -111,6 +111,42 @@ fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme, d: &
     Ok(Attempt { run, floquet, x0, states, cond })
 }
 
+/// One RK4 run of `steps` steps (breakpoints on step ends) without the step-doubling estimate: the periodic
+/// solution and multipliers at that resolution, with `error_estimate` NaN and `trusted` false. For callers
+/// that check the resolution themselves and use differences of runs on one grid (the fault responses of
+/// `identify`, tested against harmonic balance); it costs a third of a checked run.
+///
+/// # Errors
+/// Fewer steps than the explicit stability limit; a singular or non-finite product.
+pub fn solve_once(sys: &dyn PeriodicSystem, steps: usize) -> Result<SteadyState, SolverError> {
+    let period = sys.period_s();
+    let limit = (period * super::max_rate(sys) / RK4_STABILITY_LIMIT).ceil() as usize;
+    if steps < limit {
+        return Err(SolverError::Unsupported(format!(
+            "{steps} steps is below the explicit RK4 stability limit of {limit} steps"
+        )));
+    }
+    let grid = rk4::Grid::new(period, &sys.breakpoints(), steps);
+    let run = attempt(sys, &grid, rk4::Scheme::Rk4, &state_scales(sys))?;
+    Ok(SteadyState {
+        method: Method::Rk4,
+        reason: "one run of fixed steps, no error estimate".into(),
+        period_s: period,
+        resolution: grid.steps(),
+        error_estimate: f64::NAN,
+        state_error: f64::NAN,
+        multiplier_error: f64::NAN,
+        monodromy: run.run.monodromy,
+        floquet: run.floquet,
+        x0: run.x0,
+        cond_i_minus_phi: run.cond,
+        stability_limit_steps: limit,
+        trusted: false,
+        warnings: vec!["one run of fixed steps: no error estimate".into()],
+        trajectory: Trajectory::Grid { grid, states: run.states, scheme: rk4::Scheme::Rk4 },
+    })
+}
+
 /// Scales of the state components that make them comparable: the diagonal d of a balancing of |P(t)|
 /// averaged over the period (z = x / d is the balanced state). For a second-order model this divides each
 /// velocity by about its natural frequency, so metres and metres per second are not mixed in error
