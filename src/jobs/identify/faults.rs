@@ -196,8 +196,10 @@ fn crack(
         let f = refined(loss);
         Ok((f.as_ref().map_or(f64::INFINITY, |f| f.chi2), f))
     };
-    let (loss, f) = golden(0.8 * first, (1.2 * first).min(0.95), 15, eval)?;
-    let f = f.filter(|f| f.chi2 <= approx.chi2).unwrap_or(approx);
+    let (loss, f) = match golden(0.8 * first, (1.2 * first).min(0.95), 15, eval)? {
+        (loss, Some(f)) if f.chi2 <= approx.chi2 => (loss, f),
+        _ => (first, approx),
+    };
     Ok(Some((judged(FaultKind::Crack, gear, tooth, loss, healthy, &f), f)))
 }
 
