@@ -13,6 +13,7 @@
 //! healthy mesh, one pinion revolution with pinion errors, one wheel revolution with wheel errors only,
 //! and the hunting period z_w / gcd(z_p, z_w) pinion revolutions with both.
 
+use crate::system::gcd;
 use crate::system::{FourierForm, FourierSeries, PeriodicSystem, PiecewiseConstant, Side};
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
@@ -115,10 +116,6 @@ pub struct GearPair {
     k0: f64,
     period_s: f64,
     breakpoints: Vec<f64>,
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 impl GearPair {

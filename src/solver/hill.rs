@@ -18,6 +18,7 @@ use super::steady::{SteadyState, Trajectory};
 use super::{Method, RK4_STABILITY_LIMIT, SolverOptions};
 use crate::system::FourierForm;
 use crate::system::PeriodicSystem;
+use crate::system::gcd;
 use nalgebra::Complex;
 use nalgebra::{DMatrix, DVector};
 
@@ -44,10 +45,6 @@ fn complex(s: &crate::system::FourierSeries, h: usize) -> Vec<C64> {
             }
         })
         .collect()
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// The periodic solution as Fourier coefficients of y (`coeffs[i][n + H]` for DOF i, harmonic n).

@@ -66,6 +66,11 @@ pub trait PeriodicSystem: Sync {
     }
 }
 
+/// Greatest common divisor (gcd(a, 0) = a): coupling strides of harmonics, hunting periods of teeth counts.
+pub fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
 /// x' = P x + f from an evaluated P and f (written into `out`, length n).
 pub fn state_derivative(p: &DMatrix<f64>, f: &DVector<f64>, x: &[f64], out: &mut [f64]) {
     for (r, o) in out.iter_mut().enumerate() {

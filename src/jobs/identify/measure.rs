@@ -14,6 +14,7 @@ use crate::signal::angle::{self, SpeedProfile};
 use crate::signal::spectrum::Fft;
 use crate::signal::speed::tacho_pulses;
 use crate::signal::tsa::{AngleMap, tsa_of_revolutions};
+use crate::system::gcd;
 use nalgebra::Complex;
 
 /// The tracked angle of a recording.
@@ -51,10 +52,6 @@ fn first_common_start(pinion: &[f64], wheel: &[f64], teeth: (usize, usize)) -> O
         let near = |j: usize| wheel.get(j).is_some_and(|w| (w - p).abs() < 0.25 * pitch);
         near(i) || (i > 0 && near(i - 1))
     })
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// Angle from the phase of the first mesh harmonic (no tachometer): `period` is the nominal revolution in

@@ -21,6 +21,7 @@ use crate::jobs::simulate::grid_coefficients;
 use crate::model::Quantity;
 use crate::model::gear::{Crack, Gear, GearPair, GearPairParams, ToothFault, gaussian_tooth_faults};
 use crate::solver::{self, SolverError, hill};
+use crate::system::gcd;
 use crate::system::{FourierSeries, PeriodicSystem};
 use nalgebra::Complex;
 use std::f64::consts::PI;
@@ -66,10 +67,6 @@ pub struct Setup {
     pub lines: Vec<Line>,
     /// What the recording measures.
     pub quantity: Quantity,
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 impl Setup {
