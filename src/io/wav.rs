@@ -127,6 +127,21 @@ impl Encoding {
     }
 }
 
+/// Appends channel samples at byte `offset` of every `frame`-byte frame of `block` to `out`, with the
+/// encoding matched once per block (so the per-sample loop is a plain conversion).
+fn decode_channel(block: &[u8], frame: usize, offset: usize, enc: Encoding, out: &mut Vec<f32>) {
+    let frames = block.chunks_exact(frame);
+    match enc {
+        Encoding::F32 => {
+            out.extend(frames.map(|f| f32::from_le_bytes([f[offset], f[offset + 1], f[offset + 2], f[offset + 3]])))
+        }
+        Encoding::Int(2) => {
+            out.extend(frames.map(|f| f32::from(i16::from_le_bytes([f[offset], f[offset + 1]])) / 32768.0));
+        }
+        _ => out.extend(frames.map(|f| enc.decode(&f[offset..offset + enc.width()]))),
+    }
+}
+
 /// The fmt chunk: channels, rate and encoding (PCM, IEEE float or WAVE_FORMAT_EXTENSIBLE with either).
 fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError> {
     if c.len() < 16 {
@@ -262,12 +277,8 @@ fn read_frames(
         let n = left.min(per_block);
         let block = &mut buf[..n * frame];
         r.read_exact(block).map_err(|e| DataError::io(path, e))?;
-        for f in block.chunks_exact(frame) {
-            for ((c, b), w) in channels.iter_mut().zip(f.chunks_exact(width)).zip(&wanted) {
-                if *w {
-                    c.push(enc.decode(b));
-                }
-            }
+        for (ch, c) in channels.iter_mut().enumerate().filter(|(ch, _)| wanted[*ch]) {
+            decode_channel(block, frame, ch * width, enc, c);
         }
         left -= n;
     }

@@ -204,6 +204,14 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
     let win = hann(nw);
     let mut buf = vec![0.0; nw];
     let mut spec = Vec::new();
+    let bins_per_order = nw as f64 / period;
+    let centre = order * bins_per_order;
+    // only the bins within +-30 % of the nominal line and 2.5 orders more are kept (a run-up of +-20 % stays
+    // inside): the rest of each frame's spectrum is never looked at
+    let keep = (
+        ((0.7 * centre - 2.5 * bins_per_order).floor().max(0.0) as usize).min(nw / 2),
+        ((1.3 * centre + 2.5 * bins_per_order).ceil() as usize).min(nw / 2),
+    );
     let mags: Vec<Vec<f64>> = starts
         .iter()
         .map(|&s| {
@@ -211,26 +219,26 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
                 *b = v.f() * w;
             }
             fft.forward(&mut buf, &mut spec);
-            spec.iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
+            spec[keep.0..=keep.1].iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
         })
         .collect();
-    let bins_per_order = nw as f64 / period;
-    let centre = order * bins_per_order;
-    let top = nw / 2 - 1;
+    // bins searched: inside the kept range with a neighbour each side (entry i of a frame is bin keep.0 + i)
+    let (bottom, top) = (keep.0 + 1, keep.1.saturating_sub(1));
+    let bin = |m: &[f64], k: usize| m[k - keep.0];
     // the line is sought first within +-0.45 orders of the nominal (no neighbouring sideband reaches
     // there), in the frame where it is strongest; from there it is followed frame to frame
     let half = (0.45 * bins_per_order).max(1.0);
-    let (lo, hi) = (((centre - half).floor() as usize).max(1), ((centre + half).ceil() as usize).min(top));
+    let (lo, hi) = (((centre - half).floor() as usize).max(bottom), ((centre + half).ceil() as usize).min(top));
     if lo >= hi {
         return Err(SignalError::Invalid(format!("order {order} is outside the spectrum")));
     }
-    let argmax = |m: &[f64], a: usize, b: usize| (a..=b).max_by(|&i, &j| m[i].total_cmp(&m[j])).unwrap_or(a);
+    let argmax = |m: &[f64], a: usize, b: usize| (a..=b).max_by(|&i, &j| bin(m, i).total_cmp(&bin(m, j))).unwrap_or(a);
     let first = (0..mags.len())
-        .max_by(|&a, &b| mags[a][argmax(&mags[a], lo, hi)].total_cmp(&mags[b][argmax(&mags[b], lo, hi)]))
+        .max_by(|&a, &b| bin(&mags[a], argmax(&mags[a], lo, hi)).total_cmp(&bin(&mags[b], argmax(&mags[b], lo, hi))))
         .unwrap_or(0);
     // the line's height is judged against the median of +-2 orders around it
     let (band_lo, band_hi) = (
-        ((centre - 2.0 * bins_per_order).floor() as usize).max(1),
+        ((centre - 2.0 * bins_per_order).floor() as usize).max(bottom),
         ((centre + 2.0 * bins_per_order).ceil() as usize).min(top),
     );
     let reach = (0.35 * bins_per_order).ceil().max(1.0) as usize;
@@ -238,14 +246,14 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
     let mut ratio = vec![0.0; mags.len()];
     let mut follow = |f: usize, guess: usize| -> usize {
         let m = &mags[f];
-        let k = argmax(m, guess.saturating_sub(reach).max(1), (guess + reach).min(top));
-        let (y0, y1, y2) = (m[k - 1].max(1e-300).ln(), m[k].max(1e-300).ln(), m[k + 1].max(1e-300).ln());
+        let k = argmax(m, guess.saturating_sub(reach).max(bottom), (guess + reach).min(top));
+        let (y0, y1, y2) = (bin(m, k - 1).max(1e-300).ln(), bin(m, k).max(1e-300).ln(), bin(m, k + 1).max(1e-300).ln());
         let den = y0 - 2.0 * y1 + y2;
         peak[f] = k as f64 + if den < 0.0 { (0.5 * (y0 - y2) / den).clamp(-0.5, 0.5) } else { 0.0 };
-        let (a, b) = (band_lo.min(k.saturating_sub(1)).max(1), band_hi.max(k + 1).min(top));
-        let mut band: Vec<f64> = m[a..=b].to_vec();
+        let (a, b) = (band_lo.min(k.saturating_sub(1)).max(bottom), band_hi.max(k + 1).min(top));
+        let mut band: Vec<f64> = (a..=b).map(|i| bin(m, i)).collect();
         band.sort_by(f64::total_cmp);
-        ratio[f] = m[k] / band[band.len() / 2].max(1e-300);
+        ratio[f] = bin(m, k) / band[band.len() / 2].max(1e-300);
         k
     };
     let k0 = follow(first, argmax(&mags[first], lo, hi));

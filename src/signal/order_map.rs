@@ -45,17 +45,16 @@ pub fn order_map<T: Sample>(
     if revs < segment_revs {
         return Err(SignalError::TooShort { what: "order map (revolutions)".into(), needed: segment_revs, got: revs });
     }
-    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
-    let interp = TABLE.get_or_init(Interpolator::new);
+    let interp = Interpolator::shared();
     let n = segment_revs * points;
     let window = hann(n);
     let gain: f64 = window.iter().sum();
     let columns = ((max_order * segment_revs as f64).floor() as usize).min(n / 2);
     let mut rows = Vec::new();
-    let (mut y, mut spec) = (Vec::with_capacity(n), Vec::new());
+    let (mut y, mut at, mut spec) = (vec![0.0; n], vec![0.0; n], Vec::new());
     for first in (0..=revs - segment_revs).step_by(step_revs) {
-        y.clear();
-        y.extend((0..n).map(|i| interp.at(x, map.sample_at(first as f64 + i as f64 / points as f64))));
+        map.fill_positions(first as f64, 1.0 / points as f64, &mut at);
+        interp.fill(x, &at, &mut y);
         let mean = y.iter().sum::<f64>() / n as f64;
         y.iter_mut().zip(&window).for_each(|(v, w)| *v = (*v - mean) * w);
         fft.forward(&mut y, &mut spec);

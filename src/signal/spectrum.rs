@@ -165,10 +165,7 @@ pub fn amplitude_spectrum<T: Sample>(
     o: AmplitudeOptions,
 ) -> Result<Spectrum, SignalError> {
     let (power, n) = averaged_power(fft, x, o.segment, o.overlap, "amplitude spectrum")?;
-    let w = hann(n);
-    let gain = w.iter().sum::<f64>() / n as f64;
-    let values = power.iter().enumerate().map(|(k, p)| bin_scale(k, n) * p.sqrt() / (n as f64 * gain)).collect();
-    Ok(Spectrum { freqs_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(), values })
+    Ok(amplitude_from_power(&power, n, fs))
 }
 
 /// Welch PSD: Hann segments of `nperseg` (or the record length when shorter), 50 % overlap, mean removed
@@ -187,7 +184,6 @@ pub fn welch_psd<T: Sample>(fft: &mut Fft, x: &[T], fs: f64, nperseg: usize) -> 
     Ok(Spectrum { freqs_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(), values })
 }
 
-/// Mean |X_k|^2 of Hann-windowed, mean-removed segments; returns it and the segment length used.
 /// Mean power |X_k|^2 of Hann-windowed, mean-removed segments of `segment` samples (or the record when
 /// shorter) stepping by (1 - `overlap`) segments, and the segment length used.
 ///
@@ -200,6 +196,26 @@ pub fn averaged_power<T: Sample>(
     overlap: f64,
     what: &str,
 ) -> Result<(Vec<f64>, usize), SignalError> {
+    averaged_power_each(fft, x, segment, overlap, what, false, |_, _, _| {})
+}
+
+/// [`averaged_power`], handing every segment's spectrum to `each(fft, start, spectrum)` (start in samples)
+/// as it is made, so one pass of transforms serves several analyses. With `padded`, the segments also run
+/// one step before the record and on past its end, zeros outside it, so that with 50 % overlap every
+/// sample lies under two windows summing to one; those padded segments go to `each` only, not into the
+/// power.
+///
+/// # Errors
+/// Fewer than 8 samples.
+pub fn averaged_power_each<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    segment: usize,
+    overlap: f64,
+    what: &str,
+    padded: bool,
+    mut each: impl FnMut(&mut Fft, isize, &[(f64, f64)]),
+) -> Result<(Vec<f64>, usize), SignalError> {
     if x.len() < 8 {
         return Err(SignalError::TooShort { what: what.into(), needed: 8, got: x.len() });
     }
@@ -210,22 +226,40 @@ pub fn averaged_power<T: Sample>(
     let mut buf = vec![0.0; n];
     let mut out = Vec::new();
     let mut count = 0usize;
-    let mut start = 0;
-    while start + n <= x.len() {
-        let seg = &x[start..start + n];
-        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / n as f64;
-        for ((b, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
-            *b = (v.f() - mean) * wi;
+    let len = x.len() as isize;
+    let mut start: isize = if padded { -(step as isize) } else { 0 };
+    while if padded { start < len } else { start + n as isize <= len } {
+        let inside = start >= 0 && start + n as isize <= len;
+        let (a, b) = (start.max(0) as usize, (start + n as isize).min(len) as usize);
+        let seg = &x[a..b];
+        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / seg.len().max(1) as f64;
+        let offset = (a as isize - start) as usize;
+        if !inside {
+            buf.iter_mut().for_each(|v| *v = 0.0);
+        }
+        for ((bv, v), wi) in buf[offset..].iter_mut().zip(seg).zip(&w[offset..]) {
+            *bv = (v.f() - mean) * wi;
         }
         fft.forward(&mut buf, &mut out);
-        for (a, c) in acc.iter_mut().zip(&out) {
-            *a += c.0 * c.0 + c.1 * c.1;
+        if inside {
+            for (p, c) in acc.iter_mut().zip(&out) {
+                *p += c.0 * c.0 + c.1 * c.1;
+            }
+            count += 1;
         }
-        count += 1;
-        start += step;
+        each(fft, start, &out);
+        start += step as isize;
     }
-    acc.iter_mut().for_each(|a| *a /= count as f64);
+    acc.iter_mut().for_each(|a| *a /= count.max(1) as f64);
     Ok((acc, n))
+}
+
+/// One-sided amplitude spectrum from an averaged power of `n`-point Hann segments ([`averaged_power`]):
+/// what [`amplitude_spectrum`] returns.
+pub fn amplitude_from_power(power: &[f64], n: usize, fs: f64) -> Spectrum {
+    let gain = hann(n).iter().sum::<f64>() / n as f64;
+    let values = power.iter().enumerate().map(|(k, p)| bin_scale(k, n) * p.sqrt() / (n as f64 * gain)).collect();
+    Spectrum { freqs_hz: (0..=n / 2).map(|k| k as f64 * fs / n as f64).collect(), values }
 }
 
 /// Zoom spectrum: the Hann-windowed amplitude spectrum of the whole record (resolution fs / N), returned

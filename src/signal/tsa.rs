@@ -53,14 +53,45 @@ impl AngleMap {
     /// to third order within each revolution (linear at the two end revolutions).
     #[inline]
     pub fn sample_at(&self, rev: f64) -> f64 {
-        let last = self.revolutions();
-        let k = (rev.max(0.0) as usize).min(last.saturating_sub(1));
+        let k = self.segment(rev);
+        let c = self.cubic(k);
         let t = rev - k as f64;
+        c[0] + t * (c[1] + t * (c[2] + t * c[3]))
+    }
+
+    /// Sample indices at the angles `rev0 + i step` (revolutions, `step` > 0) for every entry of `out`:
+    /// [`sample_at`](Self::sample_at) with each revolution's cubic built once.
+    pub fn fill_positions(&self, rev0: f64, step: f64, out: &mut [f64]) {
+        let mut k = usize::MAX;
+        let mut c = [0.0; 4];
+        for (i, o) in out.iter_mut().enumerate() {
+            let rev = rev0 + i as f64 * step;
+            let kk = self.segment(rev);
+            if kk != k {
+                k = kk;
+                c = self.cubic(k);
+            }
+            let t = rev - k as f64;
+            *o = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+        }
+    }
+
+    /// The revolution whose cubic covers angle `rev` (the first or last outside the covered range).
+    #[inline]
+    fn segment(&self, rev: f64) -> usize {
+        (rev.max(0.0) as usize).min(self.revolutions().saturating_sub(1))
+    }
+
+    /// Coefficients c of revolution k's Catmull-Rom cubic, sample = c0 + t (c1 + t (c2 + t c3)) for t in
+    /// [0, 1]; the end revolutions take a mirrored neighbour (linear there).
+    #[inline]
+    fn cubic(&self, k: usize) -> [f64; 4] {
+        let last = self.revolutions();
         let s = &self.starts;
         let (p1, p2) = (s[k], s[k + 1]);
         let p0 = if k > 0 { s[k - 1] } else { 2.0 * p1 - p2 };
         let p3 = if k + 2 <= last { s[k + 2] } else { 2.0 * p2 - p1 };
-        p1 + 0.5 * t * (p2 - p0 + t * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + t * (3.0 * (p1 - p2) + p3 - p0)))
+        [p1, 0.5 * (p2 - p0), 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3), 0.5 * (3.0 * (p1 - p2) + p3 - p0)]
     }
 }
 
@@ -116,8 +147,14 @@ impl Interpolator {
         Self { table }
     }
 
+    /// The table shared by every caller (1025 x 16 Bessel-windowed taps, built once per process).
+    pub fn shared() -> &'static Self {
+        static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
+        TABLE.get_or_init(Self::new)
+    }
+
     /// Value of `x` at fractional index `s` (samples beyond the ends repeat the end values).
-    #[inline]
+    #[inline(always)]
     pub fn at<T: Sample>(&self, x: &[T], s: f64) -> f64 {
         let n = x.len() as isize;
         // casts instead of floor/round: those are library calls on baseline x86-64
@@ -134,6 +171,34 @@ impl Interpolator {
                 .map(|(j, t)| f64::from(*t) * x[(first + j as isize).clamp(0, n - 1) as usize].f())
                 .sum()
         }
+    }
+
+    /// `out[i]` = `x` at fractional index `positions[i]` ([`at`](Self::at) for each), with the 16-tap
+    /// products in 256-bit vectors where the processor has AVX2 and FMA.
+    pub fn fill<T: Sample>(&self, x: &[T], positions: &[f64], out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: `fill_avx2` only differs from `fill_portable` in the instructions the compiler may use,
+            // and both features were detected on this processor just above.
+            unsafe { self.fill_avx2(x, positions, out) };
+            return;
+        }
+        self.fill_portable(x, positions, out);
+    }
+
+    #[inline(always)]
+    fn fill_portable<T: Sample>(&self, x: &[T], positions: &[f64], out: &mut [f64]) {
+        for (o, &s) in out.iter_mut().zip(positions) {
+            *o = self.at(x, s);
+        }
+    }
+
+    /// # Safety
+    /// The processor must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn fill_avx2<T: Sample>(&self, x: &[T], positions: &[f64], out: &mut [f64]) {
+        self.fill_portable(x, positions, out);
     }
 }
 
@@ -161,9 +226,7 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
             got: x.len(),
         });
     }
-    // the table is built once per process (1025 x 16 Bessel-windowed taps)
-    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
-    let interp = TABLE.get_or_init(Interpolator::new);
+    let interp = Interpolator::shared();
     if let Some((offset, period)) = map.constant {
         return Ok(Tsa { samples: tsa_constant(x, interp, offset, period / ratio, revs, points), revolutions: revs });
     }
@@ -195,14 +258,15 @@ pub fn tsa_with_blocks<T: Sample>(
     if revs < min_revs {
         return tsa(x, map, ratio, points, min_revs).map(|t| (t, Vec::new()));
     }
-    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
-    let interp = TABLE.get_or_init(Interpolator::new);
+    let interp = Interpolator::shared();
     let mut full = vec![0.0; points];
     let mut block = vec![0.0; points];
     let mut blocks = Vec::with_capacity(revs / per);
+    let (mut at, mut values) = (vec![0.0; points], vec![0.0; points]);
     for j in 0..revs {
-        for (i, (f, b)) in full.iter_mut().zip(block.iter_mut()).enumerate() {
-            let v = interp.at(x, map.sample_at((j as f64 + i as f64 / points as f64) / ratio));
+        map.fill_positions(j as f64 / ratio, 1.0 / (points as f64 * ratio), &mut at);
+        interp.fill(x, &at, &mut values);
+        for ((f, b), v) in full.iter_mut().zip(block.iter_mut()).zip(&values) {
             *f += v;
             *b += v;
         }
@@ -229,15 +293,14 @@ pub fn tsa_of_revolutions<T: Sample>(
     points: usize,
     revs: std::ops::Range<usize>,
 ) -> Vec<f64> {
-    static TABLE: std::sync::OnceLock<Interpolator> = std::sync::OnceLock::new();
-    let interp = TABLE.get_or_init(Interpolator::new);
+    let interp = Interpolator::shared();
     let count = revs.len().max(1);
     let mut acc = vec![0.0; points];
+    let (mut at, mut values) = (vec![0.0; points], vec![0.0; points]);
     for j in revs {
-        for (i, a) in acc.iter_mut().enumerate() {
-            let rev = (j as f64 + i as f64 / points as f64) / ratio;
-            *a += interp.at(x, map.sample_at(rev));
-        }
+        map.fill_positions(j as f64 / ratio, 1.0 / (points as f64 * ratio), &mut at);
+        interp.fill(x, &at, &mut values);
+        acc.iter_mut().zip(&values).for_each(|(a, v)| *a += v);
     }
     acc.iter_mut().for_each(|a| *a /= count as f64);
     acc

@@ -16,7 +16,9 @@ mod tracking;
 pub mod trend;
 mod verdict;
 
-use beyond::{BandChoice, ORDER_MAP_SPEED_CHANGE, cepstrum, envelope, order_map};
+use beyond::{
+    BandChoice, ORDER_MAP_SPEED_CHANGE, cepstrum, channel_spectra, envelope, envelope_of, envelope_plan, order_map,
+};
 pub use compat::{
     Compatibility, MAX_SPEED_DIFFERENCE, OPERATING_POINT_SPEED_DIFFERENCE, WARN_SPEED_DIFFERENCE, compatibility,
 };
@@ -35,7 +37,7 @@ use crate::report::summary::{
 };
 use crate::signal::indicators as ind;
 use crate::signal::order_map::OrderMap;
-use crate::signal::spectrum::{AmplitudeOptions, Fft, amplitude_spectrum, welch_psd};
+use crate::signal::spectrum::Fft;
 use crate::signal::tsa::{self, AngleMap, Decomposition};
 use crate::signal::{angle, speed};
 use rayon::prelude::*;
@@ -711,17 +713,29 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             g
         })
         .collect();
-    // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now)
+    // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now). The envelope
+    // band of that channel is chosen first, so that the amplitude spectrum's segments also give its envelope.
     let shaft_hz = fs.map(|fs| fs / period);
+    let ratios: Vec<(Shaft, f64)> = gears.iter().map(|g| (g.0, g.1)).collect();
+    let choice =
+        BandChoice { levels: o.kurtogram_levels, band: o.envelope_band.or(geometry.and_then(|g| g.envelope_band)) };
+    let first = channels[0];
+    let mut plan = match (fs, o.lifter) {
+        (Some(fs), None) => Some(envelope_plan(&mut fft, &rec.channels[first - 1], fs, &map, mesh_orders[0], choice)),
+        _ => None,
+    };
+    let ola = std::sync::Mutex::new(match &mut plan {
+        Some(Ok((_, ola))) => ola.take(),
+        _ => None,
+    });
     let spectra = match fs {
         Some(fs) => channels
             .par_iter()
             .map(|&c| {
-                let mut fft = Fft::new();
-                let x = &rec.channels[c - 1];
-                let amp = amplitude_spectrum(&mut fft, x, fs, AmplitudeOptions::default()).map_err(|e| bad(path, e))?;
-                let psd = welch_psd(&mut fft, x, fs, 4096).map_err(|e| bad(path, e))?;
-                Ok((c, amp, psd))
+                let ola = if c == first { ola.lock().map(|mut o| o.take()).unwrap_or(None) } else { None };
+                channel_spectra(&mut Fft::new(), &rec.channels[c - 1], fs, ola)
+                    .map(|s| (c, s))
+                    .map_err(|e| bad(path, e))
             })
             .collect::<Result<Vec<_>, Error>>()?,
         None => Vec::new(),
@@ -737,7 +751,9 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
         None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
     };
-    let ratios: Vec<(Shaft, f64)> = gears.iter().map(|g| (g.0, g.1)).collect();
+    let deciding =
+        spectra.iter().find(|s| s.0 == first).map(|s| (s.1.power.clone(), s.1.segment, s.1.envelope.clone()));
+    let spectra = spectra.into_iter().map(|(c, s)| (c, s.amplitude, s.psd)).collect();
     let mut d = Diagnosis {
         file: path.display().to_string(),
         sample_rate_hz: fs,
@@ -772,20 +788,26 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         d.indicators = g.indicators.clone();
     }
     if let Some(fs) = fs {
-        let x = &rec.channels[channels[0] - 1];
-        let baseline_band = geometry.and_then(|g| g.envelope_band);
-        let band = o.envelope_band.or(baseline_band);
-        let choice = BandChoice { levels: o.kurtogram_levels, band };
-        let result = match o.lifter {
-            Some(shaft) => {
+        let x = &rec.channels[first - 1];
+        let result = match (o.lifter, plan) {
+            (Some(shaft), _) => {
                 let ratio = ratios.iter().find(|r| r.0 == shaft).map(|r| r.1).ok_or_else(|| {
                     bad(path, format!("cannot lifter the {shaft} family: give the teeth so that its speed is known"))
                 })?;
                 let y =
                     crate::signal::envelope::lifter_comb(&mut fft, x, period / ratio, 1).map_err(|e| bad(path, e))?;
-                envelope(&mut fft, &y, fs, &map, &ratios, d.mesh_order, choice)
+                envelope_plan(&mut fft, &y, fs, &map, d.mesh_order, choice).and_then(|(band, ola)| {
+                    let (e, r) = envelope_of(&mut fft, &y, fs, &band, ola)?;
+                    Ok(envelope(&mut fft, band, &e, r, fs, &map, &ratios))
+                })
             }
-            None => envelope(&mut fft, x, fs, &map, &ratios, d.mesh_order, choice),
+            (None, Some(Ok((band, _)))) => match deciding.as_ref().and_then(|s| s.2.as_ref()) {
+                Some((e, r)) => Ok(envelope(&mut fft, band, e, *r, fs, &map, &ratios)),
+                None => envelope_of(&mut fft, x, fs, &band, None)
+                    .map(|(e, r)| envelope(&mut fft, band, &e, r, fs, &map, &ratios)),
+            },
+            (None, Some(Err(e))) => Err(e),
+            (None, None) => unreachable!("a sample rate without a lifter always plans the envelope"),
         };
         match result.map(|mut e| {
             e.liftered = o.lifter;
@@ -797,7 +819,8 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             Err(e) if o.envelope_band.is_some() || o.kurtogram_levels.is_some() => return Err(bad(path, e)),
             Err(e) => d.warnings.push(format!("no envelope analysis: {e}")),
         }
-        d.cepstrum = cepstrum(&mut fft, x, fs, period, &ratios);
+        let power = deciding.as_ref().map(|s| (s.0.as_slice(), s.1));
+        d.cepstrum = cepstrum(&mut fft, x, power, fs, period, &ratios);
     }
     if (profile.max - profile.min) > ORDER_MAP_SPEED_CHANGE * profile.mean {
         d.order_map = order_map(&mut fft, &rec.channels[channels[0] - 1], &map, d.mesh_order);
