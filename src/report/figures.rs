@@ -374,7 +374,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         out.push(p);
     }
     // spectrum with mesh harmonics and sidebands (when the sample rate is known)
-    if let Some((_, amp, _)) = d.spectra().iter().find(|s| s.0 == ch) {
+    if let Some((_, amp)) = d.spectra().iter().find(|s| s.0 == ch) {
         let fm = d.mesh_hz.unwrap_or(0.0);
         let max_f = (3.6 * fm).min(*amp.freqs_hz.last().unwrap_or(&1.0));
         let pts: Vec<(f64, f64)> = amp
@@ -520,7 +520,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
 /// sidebands of each shaft marked where detected (10 dB over the local floor), and sidebands that another
 /// shaft's line lies too close to be told apart marked as unresolved.
 fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
-    let (Some((_, amp, _)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
+    let (Some((_, amp)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
         return Vec::new();
     };
     let cut = |s: &crate::signal::Spectrum, lo: f64, hi: f64| -> Vec<(f64, f64)> {

@@ -154,12 +154,11 @@ pub(super) fn envelope_of<T: crate::signal::Sample>(
     }
 }
 
-/// What one pass of segment transforms gives for a channel: the amplitude spectrum, the Welch PSD, the
-/// averaged power behind the amplitude spectrum (its segment length too) and, for the deciding channel,
-/// the envelope band's squared envelope and rate.
+/// What one pass of segment transforms gives for a channel: the amplitude spectrum, the averaged power
+/// behind it (with its segment length) and, for the deciding channel, the envelope band's squared
+/// envelope and rate.
 pub(super) struct ChannelSpectra {
     pub(super) amplitude: Spectrum,
-    pub(super) psd: Spectrum,
     pub(super) power: Vec<f64>,
     pub(super) segment: usize,
     pub(super) envelope: Option<(Vec<f64>, f64)>,
@@ -173,7 +172,7 @@ pub(super) fn channel_spectra(
     fs: f64,
     ola: Option<BandOverlapAdd>,
 ) -> Result<ChannelSpectra, crate::signal::SignalError> {
-    use crate::signal::spectrum::{amplitude_from_power, averaged_power, averaged_power_each, welch_psd};
+    use crate::signal::spectrum::{amplitude_from_power, averaged_power, averaged_power_each};
     let o = AmplitudeOptions::default();
     let what = "amplitude spectrum";
     let shared = ola.filter(|b| b.segment() == o.segment.min(x.len()).max(8) && o.overlap == 0.5);
@@ -185,8 +184,7 @@ pub(super) fn channel_spectra(
         None => (averaged_power(fft, x, o.segment, o.overlap, what)?, None),
     };
     let amplitude = amplitude_from_power(&power, segment, fs);
-    let psd = welch_psd(fft, x, fs, 4096)?;
-    Ok(ChannelSpectra { amplitude, psd, power, segment, envelope })
+    Ok(ChannelSpectra { amplitude, power, segment, envelope })
 }
 
 /// Real power cepstrum over segments of about 8 revolutions of the slowest shaft, with the first 3

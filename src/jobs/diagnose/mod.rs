@@ -222,7 +222,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.warnings.extend(c.warnings);
         cap = c.operating_point;
         if report {
-            d.baseline_spectra = b.spectra.iter().map(|(ch, amp, _)| (*ch, amp.clone())).collect();
+            d.baseline_spectra = b.spectra.clone();
             d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
         }
     }
@@ -751,9 +751,16 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
         None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
     };
-    let deciding =
-        spectra.iter().find(|s| s.0 == first).map(|s| (s.1.power.clone(), s.1.segment, s.1.envelope.clone()));
-    let spectra = spectra.into_iter().map(|(c, s)| (c, s.amplitude, s.psd)).collect();
+    let mut deciding = None;
+    let spectra = spectra
+        .into_iter()
+        .map(|(c, s)| {
+            if c == first {
+                deciding = Some((s.power, s.segment, s.envelope));
+            }
+            (c, s.amplitude)
+        })
+        .collect();
     let mut d = Diagnosis {
         file: path.display().to_string(),
         sample_rate_hz: fs,

@@ -490,9 +490,9 @@ pub struct Diagnosis {
     pub unit: String,
     /// Warnings (clipping, estimated quantities).
     pub warnings: Vec<String>,
-    /// Amplitude spectrum and Welch PSD per analysed channel (empty when the sample rate is unknown).
+    /// Amplitude spectrum per analysed channel (empty when the sample rate is unknown).
     #[serde(skip)]
-    pub spectra: Vec<(usize, Spectrum, Spectrum)>,
+    pub spectra: Vec<(usize, Spectrum)>,
     /// The first baseline's amplitude spectrum of each channel, for the overlay in the images.
     #[serde(skip)]
     pub baseline_spectra: Vec<(usize, Spectrum)>,
@@ -507,8 +507,8 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
-    /// Amplitude spectrum and Welch PSD per analysed channel (when the sample rate is known).
-    pub fn spectra(&self) -> &[(usize, Spectrum, Spectrum)] {
+    /// Amplitude spectrum per analysed channel (when the sample rate is known).
+    pub fn spectra(&self) -> &[(usize, Spectrum)] {
         &self.spectra
     }
     /// TSA, its order amplitudes and the gear label of each gear and channel.
