@@ -139,6 +139,32 @@ fn comb_outlier(sum: &[f64], m: usize, lag_max: usize) -> Option<usize> {
     (e > 6.0 * mad && e > 0.005).then_some(first)
 }
 
+/// The repetition, in whole cycles, of a signal sampled on the angle of one of its lines (a tracked mesh
+/// line): `c[j]` is its normalised autocorrelation at j cycles (exact lags on that grid). A shaft of q
+/// teeth makes c(q) and its multiples stand above the comb of the mesh. With the excess
+/// e(j) = c(j) - max over d = 1..3 of c(j +- d) (three neighbours each side, so a comb that alternates
+/// between whole and half mesh cycles does not count), the period q is the smallest j >= `min` whose
+/// excess reaches 40 % of the best (the best may be a multiple of the shaft); it stands out when the best
+/// excess is over 0.01 and over twice the largest excess at any j that is not a multiple of q (the
+/// ripple of the comb, or another shaft). None when nothing stands out.
+pub fn whole_cycle_period(c: &[f64], min: usize) -> Option<usize> {
+    let len = c.len();
+    let min = min.max(4);
+    if len < 2 * min + 4 {
+        return None;
+    }
+    let excess: Vec<(usize, f64)> = (min..len - 3)
+        .map(|j| {
+            let near = (1..=3).flat_map(|d| [c[j - d], c[j + d]]).fold(f64::MIN, f64::max);
+            (j, c[j] - near)
+        })
+        .collect();
+    let best = excess.iter().map(|e| e.1).fold(f64::MIN, f64::max);
+    let q = excess.iter().find(|e| e.1 >= 0.4 * best)?.0;
+    let other = excess.iter().filter(|e| e.0 % q != 0).map(|e| e.1).fold(0.0, f64::max);
+    (best > 0.01 && best > 2.0 * other).then_some(q)
+}
+
 /// Refines a period from the autocorrelation peaks near its multiples 2, 4, 8, ... (parabolic vertex).
 pub fn refine(r: &[f64], p0: f64) -> f64 {
     let mut p = p0;
@@ -190,6 +216,23 @@ mod tests {
             assert!((w[1] - w[0] - 100.3).abs() < 1.0, "{k}");
         }
         assert!(tacho_pulses(&[1.0f64; 10]).is_err());
+    }
+
+    /// A comb of mesh cycles with a shaft of 14 teeth standing 0.1 above it, plain, alternating between
+    /// whole and half mesh cycles (the tracked line was the second harmonic: the shaft is then 28 of its
+    /// cycles), with ripple; and a comb with nothing above it.
+    #[test]
+    fn whole_cycle_period_finds_the_shaft_above_the_mesh_comb() {
+        let ripple = |j: usize| 0.004 * ((j as f64 * 1.7).sin());
+        let plain: Vec<f64> =
+            (0..400).map(|j| 0.9 - 1e-4 * j as f64 + ripple(j) + if j % 14 == 0 { 0.1 } else { 0.0 }).collect();
+        assert_eq!(whole_cycle_period(&plain, 8), Some(14));
+        let alternating: Vec<f64> = (0..800)
+            .map(|j| if j % 2 == 0 { 0.9 } else { 0.6 } + ripple(j) + if j % 28 == 0 { 0.05 } else { 0.0 })
+            .collect();
+        assert_eq!(whole_cycle_period(&alternating, 8), Some(28));
+        let comb: Vec<f64> = (0..400).map(|j| 0.9 + ripple(j)).collect();
+        assert_eq!(whole_cycle_period(&comb, 8), None);
     }
 
     #[test]

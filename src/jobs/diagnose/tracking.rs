@@ -51,6 +51,34 @@ pub(super) fn nominal_speed(
         None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
     }
     .map_err(|e| bad(path, e))?;
+    // a mesh-dominated signal (its shortest strong repetition is a tooth mesh): the shaft is sought on the
+    // mesh line's own angle, which holds under speed fluctuation where the raw autocorrelation smears
+    let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
+    if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
+        let full: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 21)]).collect();
+        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, o.teeth.map(|t| t.0)) {
+            Ok(Some(found)) => {
+                warnings.push(found.note);
+                return Ok(Nominal {
+                    map: AngleMap::constant(found.period_samples, 0.0, n),
+                    source: SpeedSource::Estimated,
+                    confidence: found.confidence,
+                    mesh_order: found.mesh_order,
+                });
+            }
+            Ok(None) => {
+                return Err(bad(
+                    path,
+                    format!(
+                        "no plausible shaft speed: the signal follows a tooth mesh ({:.1} Hz at the mesh line's mean speed) but no longer period (a shaft) stands out on its angle; give --rpm (or --teeth) or a tachometer channel",
+                        fs.map_or(f64::NAN, |f| f / lag)
+                    ),
+                ));
+            }
+            // the line cannot be followed: the raw repetition period below is all there is
+            Err(_) => {}
+        }
+    }
     if est.mesh_lag.is_none() && est.period_samples < MIN_SAMPLES_PER_REV {
         return Err(bad(
             path,
@@ -101,6 +129,134 @@ pub(super) fn nominal_speed(
     })
 }
 
+/// Points per mesh cycle when a record is resampled on the mesh line's angle to find its shaft.
+const MESH_CYCLE_POINTS: usize = 32;
+
+/// Mesh cycles in the pseudo-revolution used to follow the mesh line: the line's phase is smoothed over two
+/// of them, so 16 keeps a shaft's sidebands (+-1/z of the mesh, z < 32 for most pinions) out of the tracked
+/// phase while still following a speed that changes over a tenth of a second.
+const MESH_TRACK_CYCLES: f64 = 16.0;
+
+/// Largest relative difference between the mean cycle of the followed mesh line and the repetition lag it
+/// started from: the lag is the mean to a fraction of a sample over thousands of cycles, so 1 % is wide.
+const MAX_MESH_CYCLE_SHIFT: f64 = 0.01;
+
+/// Smallest autocorrelation at one cycle of the signal resampled on the followed line: a mesh-dominated
+/// signal tracked right repeats every cycle (0.78 on the bundled cracked tooth under a 1 % fluctuation,
+/// 0.98 on the healthy mesh); a wandering ridge leaves it near 0 (0.005 on a real recording).
+const MIN_CYCLE_REPEAT: f64 = 0.3;
+
+/// The shaft found on the mesh line's angle.
+struct MeshShaft {
+    /// Mean revolution length, samples.
+    period_samples: f64,
+    /// Mesh order (cycles of the fundamental mesh per revolution), when the teeth were not given.
+    mesh_order: Option<usize>,
+    /// Normalised autocorrelation at the shaft period on the mesh angle (0..1).
+    confidence: f64,
+    /// What was done, for the warnings.
+    note: String,
+}
+
+/// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
+/// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
+/// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
+/// shaft is the repetition of that angle-domain signal over a whole number q >= 8 of cycles, found as for
+/// a raw signal ([`speed::estimate_period`]). On the mesh angle a 1 % speed fluctuation no longer smears
+/// the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
+/// smallest divisor of q whose line stands out ([`fundamental_mesh`]), read on the averaged revolution.
+/// With `pinion_teeth` the revolution is that many fundamental cycles (a longer repetition is a hunting
+/// period). Ok(None): the line was followed but no shaft period stands out (a mesh of identical teeth).
+///
+/// # Errors
+/// The line cannot be followed on any channel.
+fn shaft_through_mesh(
+    fft: &mut Fft,
+    channels: &[&[f32]],
+    mesh_lag: f64,
+    min_revs: usize,
+    pinion_teeth: Option<usize>,
+) -> Result<Option<MeshShaft>, crate::signal::SignalError> {
+    let p = MESH_CYCLE_POINTS;
+    let mut last = None;
+    let (x, tracked) = match channels.iter().find_map(|x| {
+        let t = angle::track_mesh(fft, x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES);
+        match t {
+            Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
+            Ok(_) => None,
+            Err(e) => {
+                last = Some(e);
+                None
+            }
+        }
+    }) {
+        Some(found) => found,
+        None => {
+            return Err(last
+                .unwrap_or_else(|| crate::signal::SignalError::Invalid("the mesh line is too weak to follow".into())));
+        }
+    };
+    let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
+    let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
+    let mut y = vec![0.0; points];
+    {
+        let mut positions = vec![0.0; points];
+        tracked.map.fill_positions(0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut positions);
+        tsa::Interpolator::shared().fill(x, &positions, &mut y);
+    }
+    let cycles_max = (points / p / min_revs.max(2)).min(1 << 14);
+    let r = crate::signal::spectrum::autocorrelation(fft, &y, cycles_max * p);
+    let c: Vec<f64> = r.iter().step_by(p).copied().collect();
+    // a line followed well leaves a signal that repeats every cycle at the mean rate of the repetition
+    // lag; otherwise the ridge wandered off (a weak line in a real machine's noise)
+    if (cycle / mesh_lag - 1.0).abs() > MAX_MESH_CYCLE_SHIFT || c.get(1).is_none_or(|&c1| c1 < MIN_CYCLE_REPEAT) {
+        return Err(crate::signal::SignalError::Invalid(format!(
+            "the mesh line followed ({cycle:.2} samples per cycle) does not repeat like the {mesh_lag:.2}-sample lag"
+        )));
+    }
+    let Some(q) = speed::whole_cycle_period(&c, 8) else {
+        return Ok(pinion_teeth.map(|zp| MeshShaft {
+            period_samples: zp as f64 * cycle,
+            mesh_order: None,
+            confidence: 0.0,
+            note: format!(
+                "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
+            ),
+        }));
+    };
+    let confidence = c[q];
+    // the averaged revolution of q cycles: its order k is line k of the shaft
+    let revs = points / (q * p);
+    let mut avg = vec![0.0; q * p];
+    for r in y.chunks_exact(q * p).take(revs) {
+        avg.iter_mut().zip(r).for_each(|(a, v)| *a += v / revs as f64);
+    }
+    let a = crate::signal::spectrum::periodic_amplitudes_with(fft, &avg);
+    let amp = |order: f64, search: f64| -> f64 {
+        let lo = (order - search).ceil().max(1.0) as usize;
+        let hi = (order + search).floor() as usize;
+        (lo..=hi).map(|k| a.get(k).copied().unwrap_or(0.0)).fold(0.0, f64::max)
+    };
+    let z = fundamental_mesh_by(&amp, q);
+    let (period_samples, mesh_order, what) = match pinion_teeth {
+        // the repetition may hold several pinion revolutions (a hunting period)
+        Some(zp) => (
+            zp as f64 * q as f64 / z as f64 * cycle,
+            None,
+            format!("the pinion revolution is {zp} mesh cycles (the given teeth)"),
+        ),
+        None => (q as f64 * cycle, Some(z), format!("it repeats every {q} cycles of the tracked line, mesh order {z}")),
+    };
+    Ok(Some(MeshShaft {
+        period_samples,
+        mesh_order,
+        confidence,
+        note: format!(
+            "shaft speed estimated on the mesh line's angle (line tracked, {cycle:.3} samples per cycle on average; {what}; autocorrelation {confidence:.2}); give the speed or a tachometer channel when known"
+        ),
+    }))
+}
+
 /// Largest relative difference between the tracked mean speed and the nominal one that is accepted: the
 /// nominal speed is the mean (estimated) or what the user gave; further away the ridge followed another line.
 const MAX_TRACKING_SHIFT: f64 = 0.05;
@@ -126,6 +282,12 @@ pub(super) fn fundamental_mesh(channels: &[&[f32]], period: f64, z: usize) -> us
         }
         channels.iter().map(|c| ind_line(c, f, search / period)).sum()
     };
+    fundamental_mesh_by(&amp, z)
+}
+
+/// [`fundamental_mesh`] on any amplitude reading: `amp(order, search)` is the strongest line within
+/// +-`search` orders of `order`.
+fn fundamental_mesh_by(amp: &dyn Fn(f64, f64) -> f64, z: usize) -> usize {
     // a divisor of z must also be a line of its own: 4 times the median of orders c +- 1..3
     let clear_line = |c: usize| -> bool {
         let mut near: Vec<f64> = [-3.0, -2.0, -1.0, 1.0, 2.0, 3.0].iter().map(|d| amp(c as f64 + d, 0.2)).collect();
