@@ -174,6 +174,22 @@ fn wrong_teeth_are_warned_about() {
     let d = &diagnose(&[rec], &["--teeth", "14,39"])[0];
     assert!(!d["warnings"].to_string().contains("do not fit"), "{}", d["warnings"]);
     assert!(!d["warnings"].to_string().contains("equal teeth"), "{}", d["warnings"]);
+    // a healthy, true-running wheel has no sidebands of its own: its teeth are said to be unchecked
+    assert!(d["warnings"].to_string().contains("wheel's teeth (39) could not be checked"), "{}", d["warnings"]);
+    // a wrong wheel count leaves the pinion's TSA as it was; the eccentric wheel's +-1 sidebands (at
+    // 14/39 = 0.359 pinion orders, 0.009 orders from those of 38 or 40 teeth: 2 resolution bins of the
+    // 8 s record) say which count is right
+    let ecc = repo("data/recordings/gear-z14z39-fs10kHz-wheel-eccentricity.wav");
+    for (teeth, wrong) in [("14,38", true), ("14,40", true), ("14,39", false)] {
+        let d = &diagnose(std::slice::from_ref(&ecc), &["--teeth", teeth])[0];
+        let w = d["warnings"].to_string();
+        assert_eq!(
+            w.contains("wheel teeth") && w.contains("do not fit") && w.contains("a wheel of 39 teeth"),
+            wrong,
+            "{teeth}: {w}"
+        );
+        assert!(!w.contains("could not be checked"), "{teeth}: {w}");
+    }
 }
 
 #[test]

@@ -22,7 +22,7 @@ use beyond::{
 pub use compat::{
     Compatibility, MAX_SPEED_DIFFERENCE, OPERATING_POINT_SPEED_DIFFERENCE, WARN_SPEED_DIFFERENCE, compatibility,
 };
-use tracking::{mesh_family, nominal_speed, teeth_misfit, track};
+use tracking::{mesh_family, nominal_speed, teeth_misfit, track, wheel_teeth};
 
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};
@@ -703,6 +703,10 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
         for (c, _, t, blocks) in tsas.iter().filter(|t| t.1 == gi) {
             pending.push((*name, *c, z, t, blocks));
         }
+    }
+    // the given wheel teeth checked against its sidebands on the pinion's angle
+    if let (Some(&zp), Some((_, zw))) = (mesh_orders.first(), o.teeth) {
+        warnings.extend(wheel_teeth(&mut fft, &rec.channels[channels[0] - 1], &map, zp, zw));
     }
     let gear_results: Vec<GearIndicators> = pending
         .par_iter()

@@ -430,6 +430,101 @@ pub(super) fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, 
     })
 }
 
+/// Smallest ratio of a wheel sideband to the floor around its mesh harmonic to count as present (12 dB).
+const WHEEL_LINE_OVER_FLOOR: f64 = 4.0;
+
+/// Ratio by which another wheel's sidebands must exceed the given wheel's for the given teeth to be
+/// called wrong: a neighbouring count (38 for 39) falls a few bins from the true lines on a record of a few
+/// hundred revolutions, where the Hann window's skirt still reads a strong line at a third of its height.
+const WHEEL_MISFIT_RATIO: f64 = 3.0;
+
+/// The given wheel teeth checked against the sidebands of the first two mesh harmonics, read on the
+/// pinion's tracked angle over the whole record ([`angle::baseband_lines`]): a wheel of zw teeth puts its
+/// lines at k zp +- j zp / zw pinion orders. Every count from 8 to 200 is scored by its lines j = +-1
+/// (which run-out, eccentricity and local wheel faults all give) and +-2..3 that stand
+/// [`WHEEL_LINE_OVER_FLOOR`] over their local floor (lines within 12 resolution bins of a whole pinion
+/// order are the pinion's own and do not count); counts with most of their +-1 lines present compete. A
+/// warning when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger than the given
+/// count's, or when no count has its +-1 lines (then the teeth could not be checked). Without given
+/// teeth nothing is said: an estimate from the same lines proved unreliable (a pinion sideband's wheel
+/// line at 1 - zp/zw mimics another count), so the wheel's teeth are not guessed.
+pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, given: usize) -> Option<String> {
+    const PER_REV: usize = 16;
+    let period = map.mean_period_samples();
+    let revs = map.revolutions() as f64;
+    let harmonics: Vec<Vec<f64>> = (1..=2)
+        .filter(|k| ((k * zp) as f64 + 4.0) / period < 0.45)
+        .map(|k| angle::baseband_lines(fft, x, map, (k * zp) as f64, PER_REV))
+        .filter(|a| !a.is_empty())
+        .collect();
+    if harmonics.is_empty() || revs < 16.0 {
+        return None;
+    }
+    let m = harmonics[0].len();
+    let bin = |d: f64| ((d * m as f64 / PER_REV as f64).round() as isize).rem_euclid(m as isize) as usize;
+    // padded bins per resolution bin (1 / revs orders); a line's floor is the median of 3..12 resolution
+    // bins each side (outside the Hann main lobe of +-2), so the skirt of the mesh line is not a line
+    let per_bin = m as f64 / (PER_REV as f64 * revs);
+    let floor = |a: &[f64], centre: usize| -> f64 {
+        let (inner, outer) = ((3.0 * per_bin) as isize, (12.0 * per_bin) as isize);
+        let mut near: Vec<f64> = (inner..=outer)
+            .flat_map(|o| [centre as isize + o, centre as isize - o])
+            .map(|i| a[i.rem_euclid(m as isize) as usize])
+            .collect();
+        near.sort_by(f64::total_cmp);
+        near[near.len() / 2].max(f64::MIN_POSITIVE)
+    };
+    // (score, lines present, summed +-1 sideband amplitude) of a wheel of zw teeth
+    let lines = |zw: usize, js: &[i32]| -> (f64, usize, f64) {
+        let (mut score, mut present, mut first) = (0.0, 0, 0.0);
+        for a in &harmonics {
+            for &j in js {
+                let d = j as f64 * zp as f64 / zw as f64;
+                // a line within 12 resolution bins of a whole pinion order is read against the pinion's own
+                if (d - d.round()).abs() < 12.0 / revs {
+                    continue;
+                }
+                let k = bin(d);
+                let v = a[k];
+                if j.abs() == 1 {
+                    first += v;
+                }
+                let over = v / floor(a, k);
+                if over >= WHEEL_LINE_OVER_FLOOR {
+                    present += 1;
+                    score += over.ln();
+                }
+            }
+        }
+        (score, present, first)
+    };
+    // a wheel shows first at +-1 of its order around each mesh harmonic (run-out, eccentricity, a local
+    // fault): its count is scored on those lines, the +-2 and +-3 lines add to the score
+    let scored: Vec<(usize, (f64, usize, f64), f64)> =
+        (8..=200).filter(|&zw| zw != zp).map(|zw| (zw, lines(zw, &[-1, 1]), lines(zw, &[-3, -2, 2, 3]).0)).collect();
+    let needed = (3 * harmonics.len()).div_ceil(2);
+    let (best, (_, _, best_first), _) = scored
+        .iter()
+        .copied()
+        .filter(|s| s.1.1 >= needed)
+        .max_by(|a, b| (a.1.0 + a.2).total_cmp(&(b.1.0 + b.2)))
+        .unwrap_or((0, (0.0, 0, 0.0), 0.0));
+    let zw = given;
+    if best == 0 {
+        return Some(format!(
+            "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
+        ));
+    }
+    let (_, _, first) = lines(zw, &[-1, 1]);
+    (best != zw && best_first > WHEEL_MISFIT_RATIO * first).then(|| {
+        format!(
+            "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {best} teeth, {:.1} times those a wheel of {zw} would give; check --teeth",
+            zp as f64 / best as f64,
+            best_first / first.max(f64::MIN_POSITIVE)
+        )
+    })
+}
+
 /// Mesh order: the family z (z >= 8) whose first harmonics hold the most TSA energy per harmonic, summed
 /// over channels.
 pub(super) fn mesh_family<'a>(fft: &mut Fft, tsas: impl Iterator<Item = &'a [f64]>) -> usize {
