@@ -70,8 +70,8 @@ pub(super) fn nominal_speed(
                 return Err(bad(
                     path,
                     format!(
-                        "no plausible shaft speed: the signal follows a tooth mesh ({:.1} Hz at the mesh line's mean speed) but no longer period (a shaft) stands out on its angle; give --rpm (or --teeth) or a tachometer channel",
-                        fs.map_or(f64::NAN, |f| f / lag)
+                        "no plausible shaft speed: the signal follows a tooth mesh (a cycle every {}) but no longer period (a shaft) stands out on its angle; give --rpm (or --teeth) or a tachometer channel",
+                        fs.map_or(format!("{lag:.2} samples"), |f| format!("{lag:.2} samples, {:.1} Hz", f / lag))
                     ),
                 ));
             }
