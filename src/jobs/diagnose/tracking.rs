@@ -161,8 +161,8 @@ struct MeshShaft {
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
 /// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
 /// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
-/// shaft is the repetition of that angle-domain signal over a whole number q >= 8 of cycles, found as for
-/// a raw signal ([`speed::estimate_period`]). On the mesh angle a 1 % speed fluctuation no longer smears
+/// shaft is the repetition of that angle-domain signal over a whole number q >= 8 of cycles, the one whose
+/// autocorrelation stands above the comb of the mesh ([`speed::whole_cycle_period`]). On the mesh angle a 1 % speed fluctuation no longer smears
 /// the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
 /// smallest divisor of q whose line stands out ([`fundamental_mesh`]), read on the averaged revolution.
 /// With `pinion_teeth` the revolution is that many fundamental cycles (a longer repetition is a hunting
