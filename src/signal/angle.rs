@@ -207,15 +207,7 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
         // angle (revolutions) at sample i: b / per_rev + (i - e0) / (e1 - e0) / per_rev
         let slope = 1.0 / ((e[1] - e[0]) * per_rev as f64);
         let th0 = b as f64 / per_rev as f64 + (i0 as f64 - e[0]) * slope;
-        let (mut re, mut im) = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
-        let (cs, sn) = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
-        let (mut sr, mut si) = (0.0, 0.0);
-        for v in &x[i0..i1] {
-            let v = v.f();
-            sr += v * re;
-            si += v * im;
-            (re, im) = (re * cs - im * sn, re * sn + im * cs);
-        }
+        let (sr, si) = phasor_sum(&x[i0..i1], th0, slope, order);
         let w = 0.5 - 0.5 * (TAU * (b as f64 + 0.5) / nb as f64).cos();
         let k = (i1 - i0) as f64;
         // conjugated: the inverse transform of the conjugate is the conjugate of the forward transform
@@ -224,6 +216,22 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
     }
     fft.inverse_complex(&mut y);
     y.iter().map(|c| 2.0 * (c.0 * c.0 + c.1 * c.1).sqrt() / wsum).collect()
+}
+
+/// sum over the samples v_i of `x` of v_i exp(-i 2 pi order theta_i), with the angle theta_i = th0 + i slope
+/// (revolutions) linear over the block: a rotating phasor, one complex multiplication per sample.
+fn phasor_sum<T: Sample>(x: &[T], th0: f64, slope: f64, order: f64) -> (f64, f64) {
+    use std::f64::consts::TAU;
+    let (mut re, mut im) = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
+    let (cs, sn) = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
+    let (mut sr, mut si) = (0.0, 0.0);
+    for v in x {
+        let v = v.f();
+        sr += v * re;
+        si += v * im;
+        (re, im) = (re * cs - im * sn, re * sn + im * cs);
+    }
+    (sr, si)
 }
 
 /// Knots (sample index, angle in revolutions) of the ridge stage and the median line-to-band ratio.
@@ -349,16 +357,8 @@ fn demodulate<T: Sample>(x: &[T], theta: &[(f64, f64)], period: f64, order: f64)
         let th0 = at(i0 as f64, &mut seg);
         let th1 = at(i1 as f64, &mut seg);
         th_mid[b] = 0.5 * (th0 + th1 - (th1 - th0) / block as f64);
-        // phasor recurrence over the block (the angle is linear within it to the accuracy that matters)
-        let step = -TAU * order * (th1 - th0) / block as f64;
-        let (mut re, mut im) = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
-        let (cs, sn) = (step.cos(), step.sin());
-        for v in &x[i0..i1] {
-            let v = v.f();
-            s.0 += v * re;
-            s.1 += v * im;
-            (re, im) = (re * cs - im * sn, re * sn + im * cs);
-        }
+        // the angle is linear within the block to the accuracy that matters
+        *s = phasor_sum(&x[i0..i1], th0, (th1 - th0) / block as f64, order);
     }
     // odd, so the averages are centred on their block
     let width = ((2.0 * period / block as f64).round() as usize).max(1) | 1;

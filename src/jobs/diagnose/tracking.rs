@@ -162,8 +162,8 @@ struct MeshShaft {
 /// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
 /// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
 /// shaft is the repetition of that angle-domain signal over a whole number q >= 8 of cycles, the one whose
-/// autocorrelation stands above the comb of the mesh ([`speed::whole_cycle_period`]). On the mesh angle a 1 % speed fluctuation no longer smears
-/// the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
+/// autocorrelation stands above the comb of the mesh ([`speed::whole_cycle_period`]). On the mesh angle a
+/// 1 % speed fluctuation no longer smears the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
 /// smallest divisor of q whose line stands out ([`fundamental_mesh`]), read on the averaged revolution.
 /// With `pinion_teeth` the revolution is that many fundamental cycles (a longer repetition is a hunting
 /// period). Ok(None): the line was followed but no shaft period stands out (a mesh of identical teeth).
@@ -448,7 +448,7 @@ const WHEEL_MISFIT_RATIO: f64 = 3.0;
 /// count's, or when no count has its +-1 lines (then the teeth could not be checked). Without given
 /// teeth nothing is said: an estimate from the same lines proved unreliable (a pinion sideband's wheel
 /// line at 1 - zp/zw mimics another count), so the wheel's teeth are not guessed.
-pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, given: usize) -> Option<String> {
+pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<String> {
     const PER_REV: usize = 16;
     let period = map.mean_period_samples();
     let revs = map.revolutions() as f64;
@@ -509,7 +509,6 @@ pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, g
         .filter(|s| s.1.1 >= needed)
         .max_by(|a, b| (a.1.0 + a.2).total_cmp(&(b.1.0 + b.2)))
         .unwrap_or((0, (0.0, 0, 0.0), 0.0));
-    let zw = given;
     if best == 0 {
         return Some(format!(
             "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
