@@ -6,10 +6,13 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     // SIGINT, SIGTERM, SIGHUP: remove the temporary files of outputs not yet in place, then stop (130 as a
-    // shell reports an interrupt); if the handler cannot be installed the run goes on without it
-    let _ = ctrlc::set_handler(|| {
-        gearvib::io::remove_temporaries();
-        std::process::exit(130);
+    // shell reports an interrupt). Installed before the first temporary file only: the handler's thread
+    // costs about 0.3 ms of a 5 ms run that writes nothing. If it cannot be installed the run goes on.
+    gearvib::io::before_first_temporary(|| {
+        let _ = ctrlc::set_handler(|| {
+            gearvib::io::remove_temporaries();
+            std::process::exit(130);
+        });
     });
     let cli = gearvib::cli::parse_args();
     match gearvib::cli::run(cli) {

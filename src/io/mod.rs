@@ -97,8 +97,31 @@ pub fn check_output(dest: &Path) -> Result<(), DataError> {
 /// Temporary files of this process not yet renamed into place (removed on SIGINT, SIGTERM, SIGHUP).
 static TEMPS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
+/// What the binary runs once before this process creates its first temporary file (its signal handler):
+/// a run that writes no file (most `simulate` and `diagnose` calls) then starts no handler thread, and a
+/// host that embeds the library (the Python bindings) keeps its own handlers.
+static BEFORE_FIRST_TEMP: std::sync::OnceLock<fn()> = std::sync::OnceLock::new();
+static FIRST_TEMP: std::sync::Once = std::sync::Once::new();
+
+/// Sets the hook [`prepare_temporaries`] runs once (the binary installs its SIGINT/SIGTERM/SIGHUP handler
+/// there); a second call is ignored.
+pub fn before_first_temporary(hook: fn()) {
+    let _ = BEFORE_FIRST_TEMP.set(hook);
+}
+
+/// Runs the hook of [`before_first_temporary`] the first time it is called: call it before creating a
+/// temporary file, so that an interrupt from then on removes it.
+pub fn prepare_temporaries() {
+    FIRST_TEMP.call_once(|| {
+        if let Some(hook) = BEFORE_FIRST_TEMP.get() {
+            hook();
+        }
+    });
+}
+
 /// Records a temporary file that [`remove_temporaries`] must delete if the process is interrupted.
 pub fn register_temp(path: &Path) {
+    prepare_temporaries();
     TEMPS.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(path.to_path_buf());
 }
 
@@ -157,6 +180,7 @@ impl AtomicFile {
         let mut name = dest.file_name().map(|n| n.to_os_string()).unwrap_or_default();
         name.push(format!(".{}.tmp", std::process::id()));
         let tmp = dest.with_file_name(name);
+        prepare_temporaries();
         let file = std::fs::File::create(&tmp).map_err(|e| DataError::io(dest, format!("cannot write: {e}")))?;
         register_temp(&tmp);
         Ok((Self { tmp, dest: dest.to_path_buf(), done: false }, file))

@@ -290,12 +290,26 @@ fn samples_from(z: &[Complex<f64>], m: usize) -> Vec<f64> {
     Fft::new().inverse(&spec, m)
 }
 
-/// The extreme of the output near sample `i` (sign +1 for a maximum, -1 for a minimum): golden-section
-/// search between the neighbouring samples on the exact solution, so peak-to-peak is not read off a grid.
-fn refine_extreme(scene: &Scene, steady: &SteadyState, samples: &[f64], i: usize, sign: f64) -> f64 {
+/// z(t) = Re Z_0 + 2 Re sum_k Z_k e^{i k w t} at time t (s) from the coefficients of [`fourier_output`]
+/// (w in rad/s): one complex multiplication per harmonic.
+fn fourier_value(z: &[Complex<f64>], omega: f64, t: f64) -> f64 {
+    let step = Complex::from_polar(1.0, omega * t);
+    let mut e = Complex::new(1.0, 0.0);
+    let mut acc = z.first().map_or(0.0, |c| c.re);
+    for c in z.iter().skip(1) {
+        e *= step;
+        acc += 2.0 * (c * e).re;
+    }
+    acc
+}
+
+/// The extreme of the output `f` (a function of time in s) near sample `i` of `samples` (equally spaced
+/// over `period` s; sign +1 for a maximum, -1 for a minimum): golden-section search between the
+/// neighbouring samples on the exact solution, so peak-to-peak is not read off a grid.
+fn refine_extreme(f: &dyn Fn(f64) -> f64, period: f64, samples: &[f64], i: usize, sign: f64) -> f64 {
     let m = samples.len();
-    let dt = steady.period_s / m as f64;
-    let f = |t: f64| sign * output_at(scene, steady, &[t])[0];
+    let dt = period / m as f64;
+    let f = |t: f64| sign * f(t);
     let (mut a, mut b) = ((i as f64 - 1.0) * dt, (i as f64 + 1.0) * dt);
     let r = 0.5 * (5f64.sqrt() - 1.0);
     let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
@@ -380,7 +394,17 @@ pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
     let rms = (period_samples.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
     let argmax = (0..m).max_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
     let argmin = (0..m).min_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
-    let hi = refine_extreme(scene, &steady, &period_samples, argmax, 1.0);
-    let lo = refine_extreme(scene, &steady, &period_samples, argmin, -1.0);
+    // the output as a function of time: from the exact coefficients of harmonic balance (a sum per
+    // point), else the time-stepped state advanced from its nearest grid node
+    let value: Box<dyn Fn(f64) -> f64 + '_> = match &steady.trajectory {
+        Trajectory::Fourier(sol) => {
+            let z = fourier_output(&scene.output.quantity, sol, sol.harmonics);
+            Box::new(move |t| fourier_value(&z, sol.omega, t))
+        }
+        Trajectory::Grid { .. } => Box::new(|t| output_at(scene, &steady, &[t])[0]),
+    };
+    let hi = refine_extreme(&value, steady.period_s, &period_samples, argmax, 1.0);
+    let lo = refine_extreme(&value, steady.period_s, &period_samples, argmin, -1.0);
+    drop(value);
     Ok(Simulation { steady, period_samples, orders, rms, peak_to_peak: hi - lo })
 }

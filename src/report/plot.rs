@@ -221,6 +221,7 @@ pub fn render_png_grid(
     let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
     name.push(format!(".{}.tmp.png", std::process::id()));
     let tmp = path.with_file_name(name);
+    crate::io::prepare_temporaries();
     // a plain OS message for a missing directory or no permission (plotters would wrap it in debug text)
     std::fs::File::create(&tmp)
         .map_err(|e| ReportError::Write { path: path.display().to_string(), message: format!("cannot write: {e}") })?;

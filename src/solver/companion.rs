@@ -45,6 +45,11 @@ pub(super) struct Companion {
 
 /// `rate` is the largest |eigenvalue| of P(t) and `d` the state scales of `sys`
 /// ([`state_scales`](super::steady::state_scales)): the companion has the same P, so both carry over.
+///
+/// Phi_h is first computed to the plain tolerance divided by the state dimension: a damped Phi_h shrinks
+/// its own error in the powers (fig8a: 2e-13 for the full period from 3e-12 for the mesh cycle), so the
+/// a-priori division by k asked for one or two Romberg doublings too many. When the powers do amplify the
+/// error (light damping, unstable, non-normal), the same Romberg table is refined further, never restarted.
 pub(super) fn companion_monodromy(
     sys: &dyn PeriodicSystem,
     opts: &SolverOptions,
@@ -54,18 +59,17 @@ pub(super) fn companion_monodromy(
     let th = sys.homogeneous_period_s();
     let k = (sys.period_s() / th).round().max(1.0) as usize;
     let hom = Homogeneous { sys, period_s: sys.period_s() / k as f64 };
-    let mut tol = opts.tolerance / (k * d.len()) as f64;
-    let mut total = 0;
+    let mut tol = opts.tolerance / d.len() as f64;
+    let mut table = Romberg::new(&hom, rate, d)?;
     loop {
-        let (phi_h, est, steps) = romberg_monodromy(&hom, rate, d, tol, opts.max_steps)?;
-        total += steps;
+        let (phi_h, est) = table.refine_to(tol, opts.max_steps)?;
         let (phi, error) = power_with_error(&phi_h, est, k, d);
         // the powers of a growing (unstable or non-normal) Phi_h amplify its error beyond k-fold: tighten
-        // the companion's tolerance by what the powers cost and run again (rounding caps the tightening)
+        // the companion's tolerance by what the powers cost (rounding caps the tightening)
         if error <= opts.tolerance || tol < 1e-14 {
-            return Ok(Companion { monodromy: phi, error, steps: total });
+            return Ok(Companion { monodromy: phi, error, steps: table.total });
         }
-        tol *= 0.5 * opts.tolerance / error;
+        tol = est * 0.5 * opts.tolerance / error;
     }
 }
 
@@ -94,62 +98,93 @@ fn power_with_error(phi_h: &DMatrix<f64>, est: f64, k: usize, d: &[f64]) -> (DMa
 
 /// Monodromy by RK4 at m, 2m and 4m steps with two Richardson eliminations (the RK4 error expands in
 /// h^4, h^5, ...): R1 = (16 Phi_2m - Phi_m) / 15 is fifth order, R2 = (32 R1(2m) - R1(m)) / 31 sixth order,
-/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate meets `tol`. Differences are taken
-/// on the balanced monodromy D^-1 Phi D (unit-free) relative to max(|Phi|, 1), as for the step-based
+/// and |R2 - R1(2m)| estimates the error. m doubles until the estimate meets the tolerance. Differences are
+/// taken on the balanced monodromy D^-1 Phi D (unit-free) relative to max(|Phi|, 1), as for the step-based
 /// solvers: multipliers matter against the unit circle.
-fn romberg_monodromy(
-    sys: &dyn PeriodicSystem,
-    rate: f64,
-    d: &[f64],
-    tol: f64,
-    max_steps: usize,
-) -> Result<(DMatrix<f64>, f64, usize), SolverError> {
-    let period = sys.period_s();
-    let breaks = sys.breakpoints();
-    let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
-    let mut m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
-    // entry (i, j) of the balanced D^-1 Phi D is Phi_ij d_j / d_i
-    let n = d.len();
-    let scales = DMatrix::from_fn(n, n, |i, j| d[j] / d[i]);
-    let run = |steps: usize| -> Result<DMatrix<f64>, SolverError> {
-        let r = rk4::monodromy(sys, &rk4::Grid::new(period, &breaks, steps));
+struct Romberg<'a> {
+    sys: &'a dyn PeriodicSystem,
+    breaks: Vec<f64>,
+    /// d_j / d_i: entry (i, j) of the balanced D^-1 Phi D is Phi_ij d_j / d_i.
+    scales: DMatrix<f64>,
+    /// Steps of the coarsest of the three runs in the table.
+    m: usize,
+    /// Monodromy at m and 2m steps.
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    /// The table's R2 before the last doubling, and the best value with its error estimate.
+    previous: Option<DMatrix<f64>>,
+    best: Option<(DMatrix<f64>, f64)>,
+    /// RK4 steps taken in all.
+    total: usize,
+}
+
+impl<'a> Romberg<'a> {
+    fn new(sys: &'a dyn PeriodicSystem, rate: f64, d: &[f64]) -> Result<Self, SolverError> {
+        let limit = (sys.period_s() * rate / RK4_STABILITY_LIMIT).ceil() as usize;
+        let m = (2 * limit).max(sys.max_harmonic() * 2).max(16);
+        let n = d.len();
+        let mut r = Self {
+            sys,
+            breaks: sys.breakpoints(),
+            scales: DMatrix::from_fn(n, n, |i, j| d[j] / d[i]),
+            m,
+            a: DMatrix::zeros(n, n),
+            b: DMatrix::zeros(n, n),
+            previous: None,
+            best: None,
+            total: 3 * m,
+        };
+        (r.a, r.b) = (r.run(m)?, r.run(2 * m)?);
+        Ok(r)
+    }
+
+    fn run(&self, steps: usize) -> Result<DMatrix<f64>, SolverError> {
+        let r = rk4::monodromy(self.sys, &rk4::Grid::new(self.sys.period_s(), &self.breaks, steps));
         if r.monodromy.iter().any(|v| !v.is_finite()) {
             return Err(SolverError::NonFinite { what: format!("companion monodromy after {steps} steps") });
         }
         Ok(r.monodromy)
-    };
-    let (mut a, mut b) = (run(m)?, run(2 * m)?);
-    let mut previous: Option<DMatrix<f64>> = None;
-    let mut total = 3 * m;
-    loop {
-        let c = run(4 * m)?;
-        total += 4 * m;
-        let r1a = (&b * 16.0 - &a) / 15.0;
-        let r1b = (&c * 16.0 - &b) / 15.0;
-        let r2 = (&r1b * 32.0 - &r1a) / 31.0;
-        let balanced = |x: &DMatrix<f64>| x.component_mul(&scales);
-        let scale = balanced(&r2).amax().max(1.0);
-        // sixth order: the error of R2(m) is about |R2(m) - R2(m/2)| / (2^6 - 1), twice that for safety.
-        // Before a second R2 exists, |R2 - R1(2m)| is the error of the fifth-order R1(2m) (R2 is far more
-        // accurate), so R1(2m) is returned with it: an estimate of what is returned, not a loose bound on
-        // the better R2 (that bound was 60-80x the true multiplier error on the Mathieu problems)
-        let (est, best) = match &previous {
-            Some(p) => (2.0 * balanced(&(&r2 - p)).amax() / scale / 63.0, &r2),
-            None => (balanced(&(&r2 - &r1b)).amax() / scale, &r1b),
-        };
-        if est <= tol {
-            return Ok((best.clone(), est, total));
-        }
-        if 4 * m >= max_steps {
-            return Err(SolverError::ToleranceNotReached {
-                cond: f64::NAN,
-                tolerance: tol,
-                steps: 4 * m,
-                estimate: est,
+    }
+
+    /// Doubles m until the estimate meets `tol`; returns the best monodromy and its estimated error.
+    fn refine_to(&mut self, tol: f64, max_steps: usize) -> Result<(DMatrix<f64>, f64), SolverError> {
+        loop {
+            if let Some((best, est)) = &self.best {
+                if *est <= tol {
+                    return Ok((best.clone(), *est));
+                }
+                // the last run took 4 m / 2 = 2 m steps
+                if 2 * self.m >= max_steps {
+                    return Err(SolverError::ToleranceNotReached {
+                        cond: f64::NAN,
+                        tolerance: tol,
+                        steps: 2 * self.m,
+                        estimate: *est,
+                    });
+                }
+            }
+            let c = self.run(4 * self.m)?;
+            self.total += 4 * self.m;
+            let r1a = (&self.b * 16.0 - &self.a) / 15.0;
+            let r1b = (&c * 16.0 - &self.b) / 15.0;
+            let r2 = (&r1b * 32.0 - &r1a) / 31.0;
+            let balanced = |x: &DMatrix<f64>| x.component_mul(&self.scales);
+            let scale = balanced(&r2).amax().max(1.0);
+            // sixth order: the error of R2(m) is about |R2(m) - R2(m/2)| / (2^6 - 1), twice that for safety.
+            // Before a second R2 exists, |R2 - R1(2m)| is the error of the fifth-order R1(2m) (R2 is far
+            // more accurate), so R1(2m) is returned with it: an estimate of what is returned, not a loose
+            // bound on the better R2 (that bound was 60-80x the true multiplier error on the Mathieu problems)
+            self.best = Some(match &self.previous {
+                Some(p) => (r2.clone(), 2.0 * balanced(&(&r2 - p)).amax() / scale / 63.0),
+                None => {
+                    let est = balanced(&(&r2 - &r1b)).amax() / scale;
+                    (r1b, est)
+                }
             });
+            self.previous = Some(r2);
+            // the next doubling's runs at m and 2m are this table's 2m and 4m
+            self.a = std::mem::replace(&mut self.b, c);
+            self.m *= 2;
         }
-        m *= 2;
-        (a, b) = (b, c);
-        previous = Some(r2);
     }
 }

@@ -121,10 +121,6 @@ impl Band {
     fn get(&self, i: usize, j: usize) -> C64 {
         self.ab[self.idx(i, j)]
     }
-    fn set(&mut self, i: usize, j: usize, v: C64) {
-        let k = self.idx(i, j);
-        self.ab[k] = v;
-    }
     /// y += A x for the band as built (before [`Band::factor`]).
     fn mul_add(&self, x: &[C64], y: &mut [C64]) {
         for (j, xj) in x.iter().enumerate() {
@@ -138,59 +134,77 @@ impl Band {
 
     /// LU with partial pivoting in place (LAPACK gbtrf: the multipliers of L kept below the diagonal, U
     /// with fill-in up to kl + ku above it). Returns the pivot rows, or `None` when a pivot is exactly zero.
+    /// The updates run down columns (contiguous in the band storage) and skip the zero entries of U, most
+    /// of the fill-in band when no row was swapped.
     fn factor(&mut self) -> Option<Vec<usize>> {
-        let (n, kl) = (self.n, self.kl);
+        let (n, kl, ld) = (self.n, self.kl, self.ld());
         let kumax = self.kl + self.ku; // upper bandwidth after fill-in
         let mut pivots = Vec::with_capacity(n);
         for j in 0..n {
             let last = (j + kl).min(n - 1);
-            let p = (j..=last)
-                .max_by(|&a, &c| self.get(a, j).norm_sqr().total_cmp(&self.get(c, j).norm_sqr()))
-                .unwrap_or(j);
-            if self.get(p, j).norm_sqr() == 0.0 {
+            // column j, rows j..=last, lies at diag..=diag + last - j
+            let diag = self.idx(j, j);
+            let mut p = j;
+            for r in j + 1..=last {
+                if self.ab[diag + r - j].norm_sqr() > self.ab[diag + p - j].norm_sqr() {
+                    p = r;
+                }
+            }
+            if self.ab[diag + p - j].norm_sqr() == 0.0 {
                 return None;
             }
             pivots.push(p);
+            let cmax = (j + kumax).min(n - 1);
             if p != j {
-                for c in j..=(j + kumax).min(n - 1) {
-                    let (a, bb) = (self.get(j, c), self.get(p, c));
-                    self.set(j, c, bb);
-                    self.set(p, c, a);
+                for c in j..=cmax {
+                    let (a, b) = (self.idx(j, c), self.idx(p, c));
+                    self.ab.swap(a, b);
                 }
             }
-            let piv = self.get(j, j);
+            let piv = self.ab[diag];
             for r in j + 1..=last {
-                let f = self.get(r, j) / piv;
-                self.set(r, j, f);
-                if f.norm_sqr() == 0.0 {
+                self.ab[diag + r - j] /= piv;
+            }
+            // column c > j lies after column j: split there to read the multipliers while updating
+            let (left, right) = self.ab.split_at_mut((j + 1) * ld);
+            let l = &left[diag + 1..diag + 1 + last - j];
+            for c in j + 1..=cmax {
+                // row i of column c at i + c ld + kumax - c - (j + 1) ld in `right`
+                let base = c * ld + kumax - c - (j + 1) * ld;
+                let v = right[base + j];
+                if v.norm_sqr() == 0.0 {
                     continue;
                 }
-                for c in j + 1..=(j + kumax).min(n - 1) {
-                    let v = self.get(j, c);
-                    self.add(r, c, -f * v);
+                for (x, f) in right[base + j + 1..=base + last].iter_mut().zip(l) {
+                    *x -= f * v;
                 }
             }
         }
         Some(pivots)
     }
 
-    /// Solves A x = b in place with the factors of [`Band::factor`].
+    /// Solves A x = b in place with the factors of [`Band::factor`] (both sweeps down columns).
     fn solve_factored(&self, pivots: &[usize], b: &mut [C64]) {
         let (n, kl) = (self.n, self.kl);
         let kumax = self.kl + self.ku;
         for (j, &p) in pivots.iter().enumerate() {
             b.swap(j, p);
             let bj = b[j];
-            for (r, br) in b.iter_mut().enumerate().take((j + kl).min(n - 1) + 1).skip(j + 1) {
-                *br -= self.get(r, j) * bj;
+            let last = (j + kl).min(n - 1);
+            let diag = self.idx(j, j);
+            for (br, l) in b[j + 1..=last].iter_mut().zip(&self.ab[diag + 1..=diag + last - j]) {
+                *br -= l * bj;
             }
         }
         for j in (0..n).rev() {
-            let mut s = b[j];
-            for (c, bc) in b.iter().enumerate().take((j + kumax).min(n - 1) + 1).skip(j + 1) {
-                s -= self.get(j, c) * bc;
+            let diag = self.idx(j, j);
+            b[j] /= self.ab[diag];
+            let bj = b[j];
+            let first = j.saturating_sub(kumax);
+            // rows first..j of column j lie at diag - (j - first)..diag
+            for (br, u) in b[first..j].iter_mut().zip(&self.ab[diag - (j - first)..diag]) {
+                *br -= u * bj;
             }
-            b[j] = s / self.get(j, j);
         }
     }
 }
