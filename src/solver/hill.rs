@@ -251,6 +251,8 @@ struct Classes {
     stride: usize,
     band_blocks: usize,
     h: isize,
+    /// Per entry e = i N + l: whether M_e or C_e has a harmonic besides the mean.
+    varying: Vec<bool>,
 }
 
 impl Classes {
@@ -271,6 +273,12 @@ impl Classes {
             }
         }
         let stride = if g == 0 { 2 * h_trunc + 1 } else { g };
+        let varying = co
+            .mass
+            .iter()
+            .zip(&co.damping)
+            .map(|(m, c)| (0..=2 * hc).any(|k| k != hc && (m[k].norm_sqr() > 0.0 || c[k].norm_sqr() > 0.0)))
+            .collect();
         Self {
             nd: form.dof,
             w: 2.0 * std::f64::consts::PI / form.period_s,
@@ -278,6 +286,7 @@ impl Classes {
             stride,
             band_blocks: hc.checked_div(g).unwrap_or(0),
             h: h_trunc as isize,
+            varying,
         }
     }
 
@@ -295,25 +304,27 @@ impl Classes {
     }
 
     /// The band matrix of one class: row n, column m holds -(m w)^2 M_{n-m} + i m w C_{n-m} + K_{n-m}.
+    /// Built column by column (contiguous in the band storage); a mass or damping entry that is constant
+    /// (the gear pair's) only touches the diagonal blocks.
     fn matrix(&self, members: &[isize]) -> Band {
-        let (nd, m) = (self.nd, members.len());
+        let (nd, m, hc) = (self.nd, members.len(), self.co.h);
         let bw = (self.band_blocks + 1) * nd - 1;
         let mut a = Band::new(m * nd, bw, bw);
-        for (jr, &nr) in members.iter().enumerate() {
-            let lo = jr.saturating_sub(self.band_blocks);
-            let hi = (jr + self.band_blocks).min(m - 1);
-            for (jc, &nc) in members.iter().enumerate().take(hi + 1).skip(lo) {
-                let kk = (nr - nc + self.co.h as isize) as usize;
-                let wn = nc as f64 * self.w;
-                for i in 0..nd {
-                    for l in 0..nd {
+        let (co, varying) = (&self.co, &self.varying);
+        for (jc, &nc) in members.iter().enumerate() {
+            let wn = nc as f64 * self.w;
+            let lo = jc.saturating_sub(self.band_blocks);
+            let hi = (jc + self.band_blocks).min(m - 1);
+            for l in 0..nd {
+                for (jr, &nr) in members.iter().enumerate().take(hi + 1).skip(lo) {
+                    let kk = (nr - nc + hc as isize) as usize;
+                    for i in 0..nd {
                         let e = i * nd + l;
-                        let co = &self.co;
-                        let v =
-                            co.mass[e][kk] * (-wn * wn) + co.damping[e][kk] * C64::new(0.0, wn) + co.stiffness[e][kk];
-                        if v.norm_sqr() > 0.0 {
-                            a.add(jr * nd + i, jc * nd + l, v);
+                        let mut v = co.stiffness[e][kk];
+                        if kk == hc || varying[e] {
+                            v += co.mass[e][kk] * (-wn * wn) + co.damping[e][kk] * C64::new(0.0, wn);
                         }
+                        a.add(jr * nd + i, jc * nd + l, v);
                     }
                 }
             }
