@@ -70,7 +70,7 @@ fn wav_with_an_odd_sized_chunk_and_its_pad_byte_is_read() {
     assert_eq!(rec.channels.len(), 2);
     assert_eq!(rec.channels[0].len(), 8000);
     assert_eq!(rec.sample_rate_hz, Some(10000.0));
-    assert!(rec.channels.iter().flatten().all(|v| v.is_finite()));
+    assert!(rec.channels.iter().flat_map(|c| c.iter()).all(|v| v.is_finite()));
 }
 
 #[test]

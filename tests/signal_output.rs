@@ -85,7 +85,7 @@ fn wav_with_noise_and_tacho_and_sidecar() {
     assert_eq!(a.channels.len(), 3);
     assert_eq!(a.sample_rate_hz, Some(10_000.0));
     let n = a.channels[0].len() as f64;
-    let diff: Vec<f64> = a.channels[0].iter().zip(&b.channels[0]).map(|(x, y)| f64::from(y - x)).collect();
+    let diff: Vec<f64> = a.channels[0].iter().zip(b.channels[0].iter()).map(|(x, y)| f64::from(y - x)).collect();
     let mean = diff.iter().sum::<f64>() / n;
     let rms = (diff.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / n).sqrt();
     // 20000 samples: the RMS estimate of white noise has relative standard error 1/sqrt(2N) = 0.5 %; 3 %

@@ -5,10 +5,12 @@
 use gearvib::io::Recording;
 use gearvib::jobs::diagnose::{DiagnoseJob, Options, Prepared};
 use gearvib::scene::Scene;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::ndarray::Axis;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
+use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -120,10 +122,12 @@ fn diagnose(
     unit: Option<String>,
     baseline: Vec<String>,
 ) -> PyResult<Vec<String>> {
+    // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
+    // place, others are converted once
+    let held = arrays.iter().map(|a| held_array(a, fs)).collect::<PyResult<Vec<_>>>()?;
     let mut in_memory = Vec::new();
-    for (i, a) in arrays.iter().enumerate() {
-        let rec = recording_of(a, fs)?;
-        in_memory.push((PathBuf::from(format!("array {}", i + 1)), rec));
+    for (i, h) in held.iter().enumerate() {
+        in_memory.push((PathBuf::from(format!("array {}", i + 1)), recording_of(h, fs)?));
     }
     let kw = Kw { rpm, teeth, tacho, channel, unit };
     let job_options = options(&kw, fs).map_err(to_py)?;
@@ -170,48 +174,61 @@ fn prepared_for(job: &DiagnoseJob) -> Result<Arc<Prepared>, gearvib::Error> {
     Ok(p)
 }
 
-/// A numpy array (1-D: one channel; 2-D: channels x samples) as a recording at `fs` Hz.
-fn recording_of(a: &Bound<'_, PyAny>, fs: Option<f64>) -> PyResult<Recording> {
-    let fs = fs
-        .filter(|f| f.is_finite() && *f > 0.0)
-        .ok_or_else(|| PyValueError::new_err("fs: a positive sample rate in Hz is needed for an array"))?;
+/// A numpy array held read-only for the length of a call: float32 or float64, channels x samples.
+enum Held<'py> {
+    F32(PyReadonlyArray2<'py, f32>),
+    F64(PyReadonlyArray2<'py, f64>),
+}
+
+/// `a` (1-D: one channel; 2-D: channels x samples) borrowed read-only, after the checks that need no data.
+fn held_array<'py>(a: &Bound<'py, PyAny>, fs: Option<f64>) -> PyResult<Held<'py>> {
+    if !fs.is_some_and(|f| f.is_finite() && f > 0.0) {
+        return Err(PyValueError::new_err("fs: a positive sample rate in Hz is needed for an array"));
+    }
     let two_d =
         if a.getattr("ndim")?.extract::<usize>()? == 1 { a.call_method1("reshape", (1, -1))? } else { a.clone() };
-    let channels: Vec<Vec<f32>> = if let Ok(x) = two_d.extract::<PyReadonlyArray2<'_, f32>>() {
-        rows(&x)
-    } else if let Ok(x) = two_d.extract::<PyReadonlyArray2<'_, f64>>() {
-        rows(&x).into_iter().map(|r| r.into_iter().map(|v| v as f32).collect()).collect()
+    if let Ok(x) = two_d.extract::<PyReadonlyArray2<'py, f32>>() {
+        Ok(Held::F32(x))
+    } else if let Ok(x) = two_d.extract::<PyReadonlyArray2<'py, f64>>() {
+        Ok(Held::F64(x))
     } else {
-        return Err(PyValueError::new_err("samples: a 1-D or 2-D (channels x samples) float32 or float64 array"));
+        Err(PyValueError::new_err("samples: a 1-D or 2-D (channels x samples) float32 or float64 array"))
+    }
+}
+
+/// A held array as a recording at `fs` Hz: float32 rows contiguous in memory (C order, or a 1-D array) are
+/// lent without a copy; other layouts and float64 are converted to float32 once.
+fn recording_of<'a>(h: &'a Held<'_>, fs: Option<f64>) -> PyResult<Recording<'a>> {
+    let channels: Vec<Cow<'a, [f32]>> = match h {
+        Held::F32(x) => {
+            let view = x.as_array();
+            (0..view.nrows())
+                .map(|i| {
+                    let row = view.index_axis_move(Axis(0), i);
+                    match row.to_slice() {
+                        Some(s) => Cow::Borrowed(s),
+                        None => Cow::Owned(row.iter().copied().collect()),
+                    }
+                })
+                .collect()
+        }
+        Held::F64(x) => {
+            x.as_array().rows().into_iter().map(|row| Cow::Owned(row.iter().map(|&v| v as f32).collect())).collect()
+        }
     };
     if channels.is_empty() || channels[0].len() < 2 {
         return Err(PyValueError::new_err("samples: an empty array"));
     }
-    if channels.iter().flatten().any(|v| !v.is_finite()) {
+    if channels.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
         return Err(PyValueError::new_err("samples: NaN or infinite values"));
     }
     let n = channels.len();
     Ok(Recording {
         channels,
-        sample_rate_hz: Some(fs),
+        sample_rate_hz: fs,
         names: (1..=n).map(|c| format!("ch{c}")).collect(),
         units: vec![String::new(); n],
     })
-}
-
-/// Rows of a 2-D array in any layout (C, Fortran, strided): contiguous rows are copied at once.
-fn rows<T: numpy::Element + Copy>(x: &PyReadonlyArray2<'_, T>) -> Vec<Vec<T>> {
-    let view = x.as_array();
-    let (r, _) = (x.shape()[0], x.shape()[1]);
-    (0..r)
-        .map(|i| {
-            let row = view.row(i);
-            match row.as_slice() {
-                Some(s) => s.to_vec(),
-                None => row.iter().copied().collect(),
-            }
-        })
-        .collect()
 }
 
 /// A recording for Python: samples (float32, channels x samples), sample rate in Hz, names, units.
@@ -221,7 +238,7 @@ type PyRecording = (Py<PyArray2<f32>>, Option<f64>, Vec<String>, Vec<String>);
 #[pyfunction]
 fn read_recording(py: Python<'_>, path: &str) -> PyResult<PyRecording> {
     let rec = py.detach(|| gearvib::io::read_recording(std::path::Path::new(path))).map_err(|e| to_py(e.into()))?;
-    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
     let flat: Vec<f32> =
         rec.channels.iter().flat_map(|c| c.iter().copied().chain(std::iter::repeat_n(0.0, n - c.len()))).collect();
     let array = numpy::ndarray::Array2::from_shape_vec((rec.channels.len(), n), flat)

@@ -226,7 +226,7 @@ fn positive(flag: &str, v: f64) -> Result<f64, Error> {
 }
 
 /// The diagnose job the flags describe.
-fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob, Error> {
+fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>, Error> {
     if a.fs.is_some() && a.fs_unknown {
         return Err(CliError::flag("--fs", "conflicts with --fs-unknown: give the sample rate or say it is unknown"));
     }

@@ -23,7 +23,7 @@ fn is_time_name(name: &str) -> bool {
 /// # Errors
 /// Unreadable file, no data rows, a row with a different field count, a non-numeric or non-finite value
 /// (named with its line and column), or a non-uniform time column.
-pub fn read(path: &Path) -> Result<Recording, DataError> {
+pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     let file = std::fs::File::open(path).map_err(|e| DataError::io(path, format!("cannot read: {e}")))?;
     let reader = std::io::BufReader::with_capacity(1 << 16, file);
     let mut delim = None;
@@ -104,7 +104,12 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
         .unzip();
     // "accel [m/s^2]" names the unit in brackets (gearvib writes its CSV headers that way)
     let (names, units): (Vec<String>, Vec<String>) = names.iter().map(|n| split_unit(n)).unzip();
-    Ok(Recording { units, channels, sample_rate_hz, names })
+    Ok(Recording {
+        units,
+        channels: channels.into_iter().map(std::borrow::Cow::Owned).collect(),
+        sample_rate_hz,
+        names,
+    })
 }
 
 /// Splits a column name "name [unit]" into name and unit (empty when there are no brackets).

@@ -4,6 +4,7 @@ pub mod csv;
 pub mod sidecar;
 pub mod wav;
 
+use std::borrow::Cow;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -233,13 +234,14 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> Result<(), DataError> {
     guard.commit()
 }
 
-/// Multi-channel signal read from a file, one `Vec` per channel.
+/// Multi-channel signal: read from a file (each channel owned), or lent by a caller that holds the samples
+/// (the Python bindings' numpy arrays: no copy).
 #[derive(Clone, Debug)]
-pub struct Recording {
+pub struct Recording<'a> {
     /// Channels of samples (as stored: physical units for float/CSV, integer WAV scaled to [-1, 1); a channel
-    /// not asked for is empty), kept
-    /// as f32 so that a long multi-channel recording needs about the memory of its file.
-    pub channels: Vec<Vec<f32>>,
+    /// not asked for is empty), kept as f32 so that a long multi-channel recording needs about the memory of
+    /// its file. A lent channel is copied only where it must change (`--sensitivity`).
+    pub channels: Vec<Cow<'a, [f32]>>,
     /// Sample rate in Hz (`None` when a CSV has no time column and none was given).
     pub sample_rate_hz: Option<f64>,
     /// Channel names (CSV header or "ch1", ...).
@@ -248,11 +250,23 @@ pub struct Recording {
     pub units: Vec<String>,
 }
 
+impl Recording<'_> {
+    /// The same recording with every channel lent from this one (no sample copied).
+    pub fn lent(&self) -> Recording<'_> {
+        Recording {
+            channels: self.channels.iter().map(|c| Cow::Borrowed(&**c)).collect(),
+            sample_rate_hz: self.sample_rate_hz,
+            names: self.names.clone(),
+            units: self.units.clone(),
+        }
+    }
+}
+
 /// Reads a WAV or CSV file by its extension.
 ///
 /// # Errors
 /// [`DataError`] naming the file and what is wrong.
-pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
+pub fn read_recording(path: &Path) -> Result<Recording<'static>, DataError> {
     read_recording_channels(path, None)
 }
 
@@ -261,7 +275,7 @@ pub fn read_recording(path: &Path) -> Result<Recording, DataError> {
 ///
 /// # Errors
 /// As [`read_recording`].
-pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, DataError> {
+pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'static>, DataError> {
     register_input(path);
     register_input(&sidecar::path_of(path));
     match extension(path).as_deref() {
@@ -275,7 +289,7 @@ pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Re
             if let Some(k) = keep {
                 for (i, c) in rec.channels.iter_mut().enumerate() {
                     if !k.contains(&i) {
-                        *c = Vec::new();
+                        *c = Cow::Owned(Vec::new());
                     }
                 }
             }
@@ -293,11 +307,11 @@ pub fn extension(path: &Path) -> Option<String> {
 /// An integer WAV written by gearvib stores value / full_scale; its sidecar `FILE.json` states
 /// `full_scale`, which restores physical units, and names the channels. Files without a readable sidecar
 /// are left as read.
-fn apply_sidecar(path: &Path, rec: &mut Recording) {
+fn apply_sidecar(path: &Path, rec: &mut Recording<'_>) {
     let Some(side) = sidecar::read(path) else { return };
     if let Some(fs) = side.full_scale.filter(|f| f.is_finite() && *f > 0.0) {
         for c in &mut rec.channels {
-            c.iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
+            c.to_mut().iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
         }
     }
     for (name, c) in rec.names.iter_mut().zip(&side.channels) {

@@ -188,7 +188,7 @@ fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError>
 ///
 /// # Errors
 /// Not a RIFF/WAVE file, no fmt or data chunk, an unsupported encoding, no whole frame.
-pub fn read(path: &Path) -> Result<Recording, DataError> {
+pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     read_channels(path, None)
 }
 
@@ -197,7 +197,7 @@ pub fn read(path: &Path) -> Result<Recording, DataError> {
 ///
 /// # Errors
 /// As [`read`].
-pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, DataError> {
+pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'static>, DataError> {
     use std::io::{Read, Seek, SeekFrom};
     let file = std::fs::File::open(path).map_err(|e| DataError::io(path, e))?;
     let file_len = file.metadata().map_err(|e| DataError::io(path, e))?.len();
@@ -232,7 +232,7 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording, D
                 let channels = read_frames(path, &mut r, available, nch, enc, keep)?;
                 let names = (1..=nch).map(|i| format!("ch{i}")).collect();
                 return Ok(Recording {
-                    channels,
+                    channels: channels.into_iter().map(std::borrow::Cow::Owned).collect(),
                     sample_rate_hz: Some(f64::from(rate)),
                     units: vec![String::new(); nch],
                     names,

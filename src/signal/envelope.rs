@@ -10,7 +10,7 @@
 //! cepstrum        C(q) = IFFT(ln |X(f)|^2)             (real power cepstrum, segment-averaged power)
 //! ```
 
-use super::spectrum::{Fft, hann};
+use super::spectrum::Fft;
 use super::tsa::{AngleMap, Interpolator};
 use super::{Sample, SignalError};
 
@@ -276,17 +276,29 @@ pub fn squared_envelope_segments<T: Sample>(
 pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points: usize) -> (Vec<f64>, Vec<f64>) {
     let revs = map.revolutions();
     let n = revs * points;
+    // positions, then values in their place a block at a time, and the Hann window (periodic, as
+    // `spectrum::hann`) applied as it is computed: a 60 s record's order spectrum holds no array of its length
+    // besides the samples and their spectrum
     let mut y = vec![0.0; n];
     map.fill_positions(0.0, 1.0 / points as f64, &mut y);
-    let at = y.clone();
-    Interpolator::shared().fill(x, &at, &mut y);
+    let mut at = vec![0.0; n.min(1 << 16)];
+    for block in y.chunks_mut(1 << 16) {
+        let at = &mut at[..block.len()];
+        at.copy_from_slice(block);
+        Interpolator::shared().fill(x, at, block);
+    }
     drop(at);
     let mean = y.iter().sum::<f64>() / n.max(1) as f64;
-    let w = hann(n);
-    let gain = w.iter().sum::<f64>();
-    y.iter_mut().zip(&w).for_each(|(v, w)| *v = (*v - mean) * w);
+    let step = 2.0 * std::f64::consts::PI / n as f64;
+    let mut gain = 0.0;
+    for (i, v) in y.iter_mut().enumerate() {
+        let w = 0.5 * (1.0 - (step * i as f64).cos());
+        gain += w;
+        *v = (*v - mean) * w;
+    }
     let mut spec = Vec::new();
     fft.forward(&mut y, &mut spec);
+    drop(y);
     let orders = (0..spec.len()).map(|k| k as f64 / revs.max(1) as f64).collect();
     let amps = spec.iter().map(|c| 2.0 * c.0.hypot(c.1) / gain).collect();
     (orders, amps)

@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 /// One `diagnose` call: recordings in time order, the shared options, an optional healthy baseline, an
 /// optional comparison scene and an optional report directory.
 #[derive(Clone, Debug, Default)]
-pub struct DiagnoseJob {
+pub struct DiagnoseJob<'a> {
     /// Recordings (.wav or .csv), in time order (NA4 uses that order).
     pub recordings: Vec<PathBuf>,
     /// Analysis options shared by all recordings and the baseline.
@@ -61,8 +61,9 @@ pub struct DiagnoseJob {
     pub report: Option<PathBuf>,
     /// Recordings already in memory (from the Python bindings), each with the name it is reported under;
     /// diagnosed after the files, as if they were files (`--unit`, `--sensitivity` and the channel choice
-    /// apply alike).
-    pub in_memory: Vec<(PathBuf, Recording)>,
+    /// apply alike). Their samples may be lent (`Cow::Borrowed`): they are read in place, never copied
+    /// unless `--sensitivity` must scale them.
+    pub in_memory: Vec<(PathBuf, Recording<'a>)>,
 }
 
 /// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
@@ -207,7 +208,7 @@ pub fn run_streaming_prepared(
         }
     }
     for (name, rec) in &job.in_memory {
-        let d = diagnose_in_memory(name, rec.clone(), &p.opts, p.geometry.as_ref())?;
+        let d = diagnose_in_memory(name, rec.lent(), &p.opts, p.geometry.as_ref())?;
         emit(finish(d, p, &mut history, job.report.is_some())?)?;
     }
     Ok(p.reference.is_some())
@@ -395,14 +396,23 @@ pub struct Geometry {
 /// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
 pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
     // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
-    // needs the memory of those channels alone)
+    // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
+    // tachometer in use are not decoded either (they are never analysed as vibration)
+    let sidecar = io::sidecar::read(path);
     let sidecar_tacho = (o.tacho_channel.is_none() && o.shaft_hz.is_none())
-        .then(|| io::sidecar::read(path))
+        .then_some(sidecar.as_ref())
         .flatten()
         .and_then(|side| side.channels.iter().position(|c| c.name == PINION_TACHO).map(|i| i + 1));
     let tacho = o.tacho_channel.or(sidecar_tacho);
-    let keep: Option<Vec<usize>> =
-        o.channel.map(|c| std::iter::once(c).chain(tacho).map(|c| c.saturating_sub(1)).collect());
+    let keep: Option<Vec<usize>> = match (o.channel, &sidecar) {
+        (Some(c), _) => Some(std::iter::once(c).chain(tacho).map(|c| c.saturating_sub(1)).collect()),
+        (None, Some(side)) if side.channels.iter().any(|c| c.name.starts_with("tacho")) => Some(
+            (0..side.channels.len())
+                .filter(|&i| Some(i + 1) == tacho || !side.channels[i].name.starts_with("tacho"))
+                .collect(),
+        ),
+        (None, _) => None,
+    };
     let mut rec = io::read_recording_channels(path, keep.as_deref())?;
     apply_units(&mut rec, o, tacho);
     analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
@@ -432,7 +442,7 @@ fn apply_units(rec: &mut Recording, o: &Options, tacho: Option<usize>) {
         }
         if let Some(s) = o.sensitivity {
             let k = (1.0 / s) as f32;
-            x.iter_mut().for_each(|v| *v *= k);
+            x.to_mut().iter_mut().for_each(|v| *v *= k);
         }
         // a sensitivity turns the recorded unit (volts) into the physical one: --unit then names it
         if unit.is_empty() || o.sensitivity.is_some() {
@@ -539,7 +549,7 @@ fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<Option<f64>,
     }
 }
 
-fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+fn analyse(path: &Path, mut rec: Recording, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
     let nch = rec.channels.len();
     let check_index = |role: ChannelRole, c: usize| -> Result<usize, Error> {
         if c == 0 || c > nch {
@@ -584,7 +594,7 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             })
             .collect(),
     };
-    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
     if nch == 0 || n < 2 {
         return Err(bad(path, format!("{n} sample(s): far too short to analyse")));
     }
@@ -608,6 +618,10 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
     let nominal_mesh_from_lag = nominal.mesh_order.is_some();
     let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
     let (map, tracking, line_snr_db, tracked_z) = track(path, &rec, &channels, o, known_z, nominal.map, &mut warnings)?;
+    // the tachometer's pulses are in the angle map now and are never analysed: free them
+    if let Some(t) = tacho {
+        rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);
+    }
     let profile = angle::SpeedProfile::of(&map);
     if let (Some(hz), Some(fs), Tracking::MeshPhase) = (o.shaft_hz, fs, tracking) {
         let off = profile.mean * fs / hz - 1.0;
@@ -717,6 +731,9 @@ fn analyse(path: &Path, rec: Recording, o: &Options, geometry: Option<&Geometry>
             g
         })
         .collect();
+    // the averages and their blocks are in the indicators now: free them before the spectra
+    drop(pending);
+    drop(tsas);
     // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now). The envelope
     // band of that channel is chosen first, so that the amplitude spectrum's segments also give its envelope.
     let shaft_hz = fs.map(|fs| fs / period);

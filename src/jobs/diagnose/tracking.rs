@@ -27,7 +27,7 @@ pub(super) fn nominal_speed(
     fft: &mut Fft,
     warnings: &mut Vec<String>,
 ) -> Result<Nominal, Error> {
-    let n = rec.channels.iter().map(Vec::len).max().unwrap_or(0);
+    let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
     if let Some(t) = o.tacho_channel {
         let pulses = speed::tacho_pulses(&rec.channels[t - 1])
             .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
@@ -347,7 +347,7 @@ pub(super) fn track(
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(|e| bad(path, e))?;
             let z = mesh_family(&mut Fft::new(), tsas.iter().map(|t| t.samples.as_slice()));
-            let views: Vec<&[f32]> = channels.iter().map(|&c| rec.channels[c - 1].as_slice()).collect();
+            let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
             fundamental_mesh(&views, period, z)
         }
     };

@@ -170,10 +170,8 @@ fn track(job: &IdentifyJob, rec: &Recording, ch: &Channels, fs: f64, p: &GearPai
     let teeth = (p.pinion_teeth, p.wheel_teeth);
     let x = &rec.channels[ch.vibration];
     let angle = match ch.pinion_tacho {
-        Some(t) => {
-            measure::angle_from_tacho(&rec.channels[t], ch.wheel_tacho.map(|w| rec.channels[w].as_slice()), teeth)
-                .map_err(|e| bad(&job.recording, format!("tachometer channel {}: {e}", t + 1)))?
-        }
+        Some(t) => measure::angle_from_tacho(&rec.channels[t], ch.wheel_tacho.map(|w| &*rec.channels[w]), teeth)
+            .map_err(|e| bad(&job.recording, format!("tachometer channel {}: {e}", t + 1)))?,
         None => measure::angle_from_mesh(x, fs / scene_hz, p.pinion_teeth).map_err(|e| {
             bad(
                 &job.recording,
