@@ -157,9 +157,11 @@ def test_fleet_on_dask_equals_the_cli(tmp_path):
         shutil.copy(src, dst)
         shutil.copy(src + ".json", str(dst) + ".json")
     base = REC.format("healthy")
-    table = fleet_dask.fleet(str(fleet_dir), [base], (14, 39), workers=2)
     want = cli_json("diagnose", str(fleet_dir), "--teeth", "14,39", "--baseline", base)
-    assert len(table) == 40
+    # workers as threads of this process (the default) and as processes of their own
+    table = fleet_dask.fleet(str(fleet_dir), [base], (14, 39), workers=2)
+    in_processes = fleet_dask.fleet(str(fleet_dir), [base], (14, 39), workers=2, processes=True)
+    assert len(table) == 40 and table == in_processes
     # NA4 uses the ensemble of one call; each Dask task is its own call: everything else is identical
     for got, ref in zip(table, want):
         assert got["file"] == ref["file"]
