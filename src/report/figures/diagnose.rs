@@ -1,298 +1,7 @@
-//! The report images: which data, which axes, which labels. Drawing itself is in [`super::plot`].
+//! The images of `diagnose`: spectra with the baseline and the marked lines, mesh zooms, TSAs, envelope,
+//! kurtogram, cepstrum, order map, and the trend over recordings.
 
-use super::ReportError;
-use super::plot::{Band, Chart, Heatmap, Marker, Series, Style, render_png, render_png_grid};
-use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Simulation, SweepPoint};
-use crate::scene::{Model, Scene};
-use std::path::{Path, PathBuf};
-
-/// Kind of a spectral line of a gear pair, by its order of the pinion rotation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LineKind {
-    /// A mesh harmonic k z1.
-    Mesh,
-    /// k z1 +- j, j = 1..6 (pinion rotation).
-    Pinion,
-    /// k z1 +- j z1/z2, j = 1..6 (wheel rotation).
-    Wheel,
-    /// Anything else.
-    Other,
-}
-
-/// Classifies `order` (pinion orders) for a pair with `z1`, `z2` teeth.
-pub fn classify(order: f64, z1: usize, z2: usize) -> LineKind {
-    let z = z1 as f64;
-    let k = (order / z).round();
-    let d = order - k * z;
-    let near = |x: f64| (x - x.round()).abs() < 1e-6;
-    if d.abs() < 1e-6 && k >= 1.0 {
-        LineKind::Mesh
-    } else if near(d) && d.abs() <= 6.5 {
-        LineKind::Pinion
-    } else if near(d * z2 as f64 / z) && (d * z2 as f64 / z).abs() <= 6.5 {
-        LineKind::Wheel
-    } else {
-        LineKind::Other
-    }
-}
-
-fn gear_teeth(scene: &Scene) -> Option<(usize, usize)> {
-    match &scene.model {
-        Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
-        _ => None,
-    }
-}
-
-/// Spectral lines as coloured stems (mesh, pinion and wheel sidebands apart) in Hz, log amplitude.
-fn order_stems(lines: &[OrderLine], teeth: Option<(usize, usize)>, floor: f64) -> Vec<Series> {
-    let mut groups: Vec<(LineKind, &str, usize)> = vec![(LineKind::Other, "other lines", 4)];
-    if teeth.is_some() {
-        groups = vec![
-            (LineKind::Mesh, "mesh harmonics k fz", 0),
-            (LineKind::Pinion, "pinion sidebands k fz +- j f1", 1),
-            (LineKind::Wheel, "wheel sidebands k fz +- j f2", 2),
-            (LineKind::Other, "other lines", 4),
-        ];
-    }
-    groups
-        .into_iter()
-        .filter_map(|(kind, name, color)| {
-            let pts: Vec<(f64, f64)> = lines
-                .iter()
-                .filter(|l| l.order > 0.0 && l.amplitude > floor)
-                .filter(|l| teeth.map_or(LineKind::Other, |(z1, z2)| classify(l.order, z1, z2)) == kind)
-                .map(|l| (l.frequency_hz, l.amplitude))
-                .collect();
-            (!pts.is_empty()).then(|| Series { name: name.into(), points: pts, style: Style::Stems, color })
-        })
-        .collect()
-}
-
-fn mesh_markers(scene: &Scene, max_hz: f64) -> Vec<Marker> {
-    let Some((z1, _)) = gear_teeth(scene) else { return Vec::new() };
-    let fz = z1 as f64 * scene.output.base_hz;
-    (1..)
-        .map(|k| k as f64 * fz)
-        .take_while(|f| *f <= max_hz)
-        .enumerate()
-        .map(|(i, f)| Marker { x: f, label: format!("{}x mesh", i + 1), color: 0 })
-        .collect()
-}
-
-/// Writes the simulation images into `dir`; returns their paths.
-///
-/// # Errors
-/// Non-finite data or write failures.
-pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
-    let mut out = Vec::new();
-    let q = &scene.output.quantity;
-    let unit = if q.unit().is_empty() { String::new() } else { format!(" [{}]", q.unit()) };
-    let period = sim.steady.period_s;
-    // waveform over (up to) three base revolutions, or three periods when the period is shorter
-    let revs = (period * scene.output.base_hz).max(1e-12);
-    let copies = (3.0 / revs).ceil().clamp(1.0, 64.0) as usize;
-    let m = sim.period_samples.len();
-    let shown = (copies * m).min(20_000);
-    // seconds for slow machines (the press turns at 0.83 Hz), milliseconds for a gear mesh
-    let span = period * shown as f64 / m as f64;
-    let (to_unit, time_unit) = if span >= 1.0 { (1.0, "s") } else { (1e3, "ms") };
-    let pts: Vec<(f64, f64)> =
-        (0..shown).map(|i| (to_unit * period * i as f64 / m as f64, sim.period_samples[i % m])).collect();
-    let wave = Chart {
-        title: format!("{}: {} over {span:.3} s of steady state", scene.name, q.name()),
-        x_label: format!("time [{time_unit}]"),
-        y_label: format!("{}{unit}", q.name()),
-        series: vec![Series { name: q.name().into(), points: pts, style: Style::Line, color: 0 }],
-        ..Default::default()
-    };
-    let p = dir.join("waveform.png");
-    render_png(&p, 1400, 600, &[wave])?;
-    out.push(p);
-    // spectrum with mesh harmonics and sidebands
-    let peak = sim.orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
-    let floor = peak * 1e-5;
-    let teeth = gear_teeth(scene);
-    let max_hz = sim.orders.last().map_or(1.0, |l| l.frequency_hz);
-    // a gear pair reads in Hz (the mesh frequency is what an analyser shows); any other machine in orders
-    // of its base rotation, where its harmonics fall on integers
-    let spectrum = match teeth {
-        Some(_) => Chart {
-            title: format!("{}: amplitude spectrum of {} (steady state, one period)", scene.name, q.name()),
-            x_label: format!(
-                "frequency [Hz]   (orders of the {} = {:.2} Hz)",
-                scene.output.base_name, scene.output.base_hz
-            ),
-            y_label: format!("amplitude{unit}"),
-            y_log: true,
-            // room on the right for the legend, above the data for the labels
-            x_range: Some((0.0, max_hz * 1.22)),
-            y_range: Some((floor, peak * 10.0)),
-            series: order_stems(&sim.orders, teeth, floor),
-            markers: mesh_markers(scene, max_hz),
-            ..Default::default()
-        },
-        None => {
-            let by_order: Vec<OrderLine> =
-                sim.orders.iter().map(|l| OrderLine { frequency_hz: l.order, ..*l }).collect();
-            let max_order = sim.orders.last().map_or(1.0, |l| l.order);
-            Chart {
-                title: format!(
-                    "{}: amplitude spectrum of {} (steady state, one period; {} = {:.3} Hz)",
-                    scene.name,
-                    q.name(),
-                    scene.output.base_name,
-                    scene.output.base_hz
-                ),
-                x_label: format!("order of the {}", scene.output.base_name),
-                y_label: format!("amplitude{unit}"),
-                y_log: true,
-                x_range: Some((0.0, max_order + 1.0)),
-                y_range: Some((floor, peak * 10.0)),
-                series: order_stems(&by_order, None, floor),
-                ..Default::default()
-            }
-        }
-    };
-    let p = dir.join("spectrum.png");
-    render_png(&p, 1400, 700, &[spectrum])?;
-    out.push(p);
-    // zooms around the first three mesh harmonics (like the paper's Fig 13)
-    if let Some((z1, _)) = teeth {
-        let fz = z1 as f64 * scene.output.base_hz;
-        let mut charts = Vec::new();
-        for k in 1..=3 {
-            let centre = k as f64 * fz;
-            let (lo, hi) = (centre - 7.5 * scene.output.base_hz, centre + 7.5 * scene.output.base_hz);
-            let lines: Vec<OrderLine> =
-                sim.orders.iter().filter(|l| l.frequency_hz >= lo && l.frequency_hz <= hi).copied().collect();
-            if lines.iter().all(|l| l.amplitude <= floor) {
-                continue;
-            }
-            let markers = lines
-                .iter()
-                .filter(|l| l.amplitude > floor && (l.order - l.order.round()).abs() < 1e-9)
-                .map(|l| {
-                    let d = l.order.round() as i64 - (k * z1) as i64;
-                    Marker {
-                        x: l.frequency_hz,
-                        label: if d == 0 { format!("{k}fz") } else { format!("{d:+}") },
-                        color: if d == 0 { 0 } else { 1 },
-                    }
-                })
-                .collect();
-            charts.push(Chart {
-                title: format!("zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders"),
-                x_label: "frequency [Hz]".into(),
-                y_label: format!("amplitude{unit}"),
-                y_log: true,
-                x_range: Some((lo, hi + 5.0 * scene.output.base_hz)),
-                y_range: Some((floor, peak * 10.0)),
-                series: order_stems(&lines, teeth, floor),
-                markers,
-                ..Default::default()
-            });
-        }
-        if !charts.is_empty() {
-            let p = dir.join("zoom-mesh.png");
-            render_png(&p, 1400, 420 * charts.len() as u32, &charts)?;
-            out.push(p);
-        }
-    }
-    out.push(multipliers(scene, &sim.steady, dir)?);
-    if let Model::Press(..) = &scene.model {
-        out.push(press_figures(scene, sim, dir)?);
-    }
-    Ok(out)
-}
-
-/// Floquet multipliers in the complex plane with the unit circle.
-///
-/// # Errors
-/// Write failures.
-pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Path) -> Result<PathBuf, ReportError> {
-    let pts: Vec<(f64, f64)> = steady.floquet.multipliers.iter().map(|r| (r.re, r.im)).collect();
-    let r = steady.floquet.rho_max.max(1.0) * 1.15;
-    let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
-    let chart = Chart {
-        title: format!("{}: multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
-        x_label: "Re rho".into(),
-        y_label: "Im rho".into(),
-        x_range: Some((-r, r)),
-        y_range: Some((-r, r)),
-        unit_circle: true,
-        series: vec![Series { name: "multipliers".into(), points: pts.clone(), style: Style::Points, color: 1 }],
-        ..Default::default()
-    };
-    let p = dir.join("multipliers.png");
-    // multipliers far inside the circle sit on a dot at this scale: a second panel zoomed onto them
-    let rho = steady.floquet.rho_max;
-    if rho > 0.0 && rho < 0.3 {
-        let z = rho * 1.3;
-        let zoom = Chart {
-            title: format!("zoomed to |rho| <= {z:.2e} (the unit circle is off this panel)"),
-            x_label: "Re rho".into(),
-            y_label: "Im rho".into(),
-            x_range: Some((-z, z)),
-            y_range: Some((-z, z)),
-            series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
-            ..Default::default()
-        };
-        render_png_grid(&p, 1500, 760, 2, &[chart, zoom])?;
-    } else {
-        render_png(&p, 800, 800, &[chart])?;
-    }
-    Ok(p)
-}
-
-/// The press: q1 and q2 over one period with their spectra (the paper's Figs 3 and 4).
-fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<PathBuf, ReportError> {
-    let sys = scene.system();
-    let period = sim.steady.period_s;
-    let m = 720;
-    let times: Vec<f64> = (0..=m).map(|i| period * i as f64 / m as f64).collect();
-    let mut states = Vec::new();
-    sim.steady.states_at(sys, &times, &mut states);
-    let n = sys.dim();
-    let mut charts = Vec::new();
-    for (idx, name, unit, scale) in [(0usize, "q1", "rad", 1.0), (1, "q2", "mm", 1e3)] {
-        let pts: Vec<(f64, f64)> = times.iter().enumerate().map(|(i, t)| (*t, states[i * n + idx] * scale)).collect();
-        let samples: Vec<f64> = (0..1024).map(|i| i as f64 * period / 1024.0).collect();
-        let mut st = Vec::new();
-        sim.steady.states_at(sys, &samples, &mut st);
-        let x: Vec<f64> = (0..1024).map(|i| st[i * n + idx] * scale).collect();
-        let amps = crate::signal::spectrum::periodic_amplitudes(&x);
-        let lines: Vec<(f64, f64)> =
-            amps.iter().enumerate().skip(1).take(24).map(|(k, a)| (k as f64, a.max(1e-12))).collect();
-        let peak = lines.iter().map(|l| l.1).fold(0.0, f64::max);
-        charts.push(Chart {
-            title: format!(
-                "{}: {name} over one input revolution (Fig {})",
-                scene.name,
-                if idx == 0 { "3a" } else { "4a" }
-            ),
-            x_label: "time [s]".into(),
-            y_label: format!("{name} [{unit}]"),
-            series: vec![Series { name: name.into(), points: pts, style: Style::Line, color: idx }],
-            ..Default::default()
-        });
-        charts.push(Chart {
-            title: format!(
-                "spectrum of {name} by order of the input speed W (Fig {})",
-                if idx == 0 { "3b" } else { "4b" }
-            ),
-            x_label: "order of W".into(),
-            y_label: format!("amplitude [{unit}]"),
-            y_log: true,
-            x_range: Some((0.0, 25.0)),
-            y_range: Some((peak * 1e-6, peak * 3.0)),
-            series: vec![Series { name: name.into(), points: lines, style: Style::Stems, color: idx }],
-            ..Default::default()
-        });
-    }
-    let p = dir.join("press-q1-q2.png");
-    render_png(&p, 1400, 1600, &charts)?;
-    Ok(p)
-}
+use super::*;
 
 /// Writes the diagnosis images of one recording into `dir` (file names start with the recording's stem).
 ///
@@ -519,7 +228,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
 /// Zooms centred on each of the first mesh harmonics (+-4.5 reference-shaft orders), the baseline overlaid,
 /// sidebands of each shaft marked where detected (10 dB over the local floor), and sidebands that another
 /// shaft's line lies too close to be told apart marked as unresolved.
-fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
+pub(super) fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
     let (Some((_, amp)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
         return Vec::new();
     };
@@ -591,7 +300,7 @@ fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
 
 /// The kurtogram as one line per level: spectral kurtosis of each band at its centre frequency (level l has
 /// 2^l bands of width fs / 2^(l+1)), the chosen band shaded.
-fn kurtogram_chart(stem: &str, e: &crate::report::summary::Envelope, fs: f64) -> Chart {
+pub(super) fn kurtogram_chart(stem: &str, e: &crate::report::summary::Envelope, fs: f64) -> Chart {
     let series = e
         .kurtogram
         .iter()
@@ -622,7 +331,7 @@ fn kurtogram_chart(stem: &str, e: &crate::report::summary::Envelope, fs: f64) ->
 
 /// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, with the first orders of
 /// each shaft marked; a shaft order is drawn as detected only 10 dB above the envelope spectrum around it.
-fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelope) -> Chart {
+pub(super) fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelope) -> Chart {
     let top = 3.5;
     let pts: Vec<(f64, f64)> =
         e.orders.iter().zip(&e.amplitudes).filter(|(o, _)| **o > 0.05 && **o <= top).map(|(o, a)| (*o, *a)).collect();
@@ -673,7 +382,7 @@ fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelop
 
 /// The real cepstrum up to 1.2 periods of the slowest shaft, with the rahmonics of each shaft marked.
 /// `b` circularly shifted to the lag of largest correlation with `a` (same length; O(n^2), n <= 4096).
-fn aligned(b: &[f64], a: &[f64]) -> Vec<f64> {
+pub(super) fn aligned(b: &[f64], a: &[f64]) -> Vec<f64> {
     let n = a.len();
     let corr = |lag: usize| (0..n).map(|i| a[i] * b[(i + lag) % n]).sum::<f64>();
     let best = (0..n).max_by(|&x, &y| corr(x).total_cmp(&corr(y))).unwrap_or(0);
@@ -685,7 +394,7 @@ const ORDER_MAP_RANGE_DB: f64 = 60.0;
 
 /// The rpm-order map as coloured cells: order across, speed up, colour the amplitude in dB re the
 /// strongest cell; the mesh harmonics marked. A resonance shows as a curve order = f / speed.
-fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::order_map::OrderMap, fs: f64) -> Chart {
+pub(super) fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::order_map::OrderMap, fs: f64) -> Chart {
     let rpm: Vec<f64> = m.speeds.iter().map(|s| s * fs * 60.0).collect();
     let edges = |c: &[f64]| -> Vec<f64> {
         let mut e = Vec::with_capacity(c.len() + 1);
@@ -724,7 +433,7 @@ fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::order_map::Orde
     }
 }
 
-fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
+pub(super) fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
     let q_max = c.rahmonics.iter().map(|r| r.quefrency_s).fold(0.0, f64::max) * 1.1;
     let pts: Vec<(f64, f64)> = c
         .values
@@ -814,202 +523,4 @@ pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
     }
     let h = 450 * charts.len() as u32;
     render_png(png, 1400, h, &charts)
-}
-
-/// A sideband is drawn as detected only above this multiple of the local noise floor (about 10 dB).
-const DETECTION_OVER_FLOOR: f64 = 3.0;
-
-/// Median of the amplitude spectrum within 40 bins of `f_hz`, leaving out the 4 bins nearest to it: the
-/// local noise floor (lines are sparse, so the median sits on the floor between them).
-fn noise_floor(s: &crate::signal::Spectrum, f_hz: f64) -> f64 {
-    let df = s.freqs_hz.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
-    let k = (f_hz / df).round() as isize;
-    let mut v: Vec<f64> = (k - 40..=k + 40)
-        .filter(|i| (i - k).abs() > 4 && *i >= 0 && (*i as usize) < s.values.len())
-        .map(|i| s.values[i as usize])
-        .collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// The unit of a recording for axis labels: "unit of the file" when the file does not say.
-fn unit_or(unit: &str) -> &str {
-    if unit.is_empty() { "unit of the file" } else { unit }
-}
-
-/// Axis label of a swept scene field from its name's unit suffix: `gear_pair.speed_rpm` -> `speed [rpm]`.
-pub fn parameter_label(path: &str) -> String {
-    let last = path.rsplit('.').next().unwrap_or(path);
-    let suffixes = [
-        ("_rpm", "rpm"),
-        ("_n_per_m", "N/m"),
-        ("_kg_m2", "kg m^2"),
-        ("_m_per_rad", "m/rad"),
-        ("_n_m_per_rad", "N m/rad"),
-        ("_hz", "Hz"),
-        ("_kg", "kg"),
-        ("_rad", "rad"),
-        ("_n", "N"),
-        ("_m", "m"),
-        ("_s", "s"),
-        ("_ratio", "-"),
-    ];
-    for (suffix, unit) in suffixes {
-        if let Some(name) = last.strip_suffix(suffix) {
-            let name = if suffix == "_ratio" { last } else { name };
-            return format!("{} [{unit}]", name.replace('_', " "));
-        }
-    }
-    last.replace('_', " ")
-}
-
-/// Ranges of unstable points as bands reaching half a step to each side, so a single unstable point shows.
-fn unstable_bands(points: &[SweepPoint]) -> Vec<Band> {
-    let span = match (points.first(), points.last()) {
-        (Some(a), Some(b)) => (b.value - a.value).abs(),
-        _ => 0.0,
-    };
-    // at least 0.4 % of the axis wide, so that one unstable point among thousands is visible
-    let step = if points.len() > 1 { (points[1].value - points[0].value).abs() } else { 0.0 }.max(0.004 * span);
-    let mut bands: Vec<Band> = Vec::new();
-    for p in points.iter().filter(|p| p.stable == Some(false)) {
-        let (from, to) = (p.value - 0.5 * step, p.value + 0.5 * step);
-        match bands.last_mut() {
-            Some(b) if from <= b.to + 1e-9 * step.max(1e-300) => b.to = to,
-            _ => bands.push(Band { from, to }),
-        }
-    }
-    bands
-}
-
-/// Stability map of a sweep: the margin |1 - |rho|max| on a log axis (stable and unstable points in their
-/// own colours, untrusted points marked), unstable ranges shaded, and the steady-state line amplitudes.
-///
-/// # Errors
-/// Empty data or a failed write.
-pub fn stability_map(
-    path: &Path,
-    scene: &str,
-    param: &str,
-    amplitude_unit: &str,
-    points: &[SweepPoint],
-) -> Result<(), ReportError> {
-    let x_label = parameter_label(param);
-    let ok: Vec<&SweepPoint> = points.iter().filter(|p| p.rho_max.is_some()).collect();
-    let margin = |p: &&SweepPoint| (p.value, (1.0 - p.rho_max.unwrap_or(f64::NAN)).abs().max(1e-16));
-    let stable: Vec<(f64, f64)> = ok.iter().filter(|p| p.stable == Some(true)).map(margin).collect();
-    let unstable: Vec<(f64, f64)> = ok.iter().filter(|p| p.stable != Some(true)).map(margin).collect();
-    let untrusted: Vec<(f64, f64)> = ok.iter().filter(|p| !p.trusted).map(margin).collect();
-    let bands = unstable_bands(points);
-    let (lo, hi) = (points.first().map_or(0.0, |p| p.value), points.last().map_or(1.0, |p| p.value));
-    let mut series = vec![Series { name: "stable: 1 - |rho|max".into(), points: stable, style: Style::Line, color: 0 }];
-    if !unstable.is_empty() {
-        series.push(Series { name: "unstable: |rho|max - 1".into(), points: unstable, style: Style::Points, color: 1 });
-    }
-    if !untrusted.is_empty() {
-        series.push(Series {
-            name: "untrusted (error above the tolerance)".into(),
-            points: untrusted,
-            style: Style::Points,
-            color: 3,
-        });
-    }
-    let top = Chart {
-        title: format!("{scene}: Floquet stability margin over {x_label} (shaded: unstable)"),
-        x_label: x_label.clone(),
-        y_label: "|1 - |rho|max|".into(),
-        y_log: true,
-        x_range: Some((lo, hi)),
-        series,
-        bands: bands.clone(),
-        ..Default::default()
-    };
-    let names: Vec<String> = ok.first().map(|p| p.lines.iter().map(|l| l.0.clone()).collect()).unwrap_or_default();
-    let series: Vec<Series> = names
-        .iter()
-        .enumerate()
-        .map(|(i, n)| Series {
-            name: n.clone(),
-            points: ok
-                .iter()
-                .filter(|p| p.stable == Some(true))
-                .filter_map(|p| p.lines.get(i).map(|l| (p.value, l.1)))
-                .filter(|q| q.1 > 0.0)
-                .collect(),
-            style: Style::Line,
-            color: i + 4,
-        })
-        .filter(|s| !s.points.is_empty())
-        .collect();
-    let mut charts = vec![top];
-    if !series.is_empty() {
-        charts.push(Chart {
-            title: "steady-state line amplitudes (stable points only)".into(),
-            x_label,
-            y_label: if amplitude_unit.is_empty() {
-                "amplitude".into()
-            } else {
-                format!("amplitude [{amplitude_unit}]")
-            },
-            y_log: true,
-            x_range: Some((lo, hi)),
-            series,
-            bands,
-            ..Default::default()
-        });
-    }
-    render_png(path, 1400, 500 * charts.len() as u32, &charts)
-}
-
-/// Work-precision chart of one scene's results (log-log error against time).
-fn bench_chart(scene: &str, results: &[BenchResult]) -> Chart {
-    let mut series = Vec::new();
-    for (i, m) in ["rk4", "hill"].iter().enumerate() {
-        let pts: Vec<(f64, f64)> = results
-            .iter()
-            .filter(|r| r.scene == scene && r.method == *m)
-            .map(|r| (r.time_s, r.error.max(1e-16)))
-            .collect();
-        if !pts.is_empty() {
-            let label = if *m == "rk4" {
-                "rk4 product (paper), steps doubling"
-            } else {
-                "harmonic balance (Hill), harmonics x1.25"
-            };
-            series.push(Series { name: label.into(), points: pts, style: Style::LinePoints, color: i });
-        }
-    }
-    let auto: Vec<(f64, f64)> = results
-        .iter()
-        .filter(|r| r.scene == scene && r.method.starts_with("auto"))
-        .map(|r| (r.time_s, r.error.max(1e-16)))
-        .collect();
-    if !auto.is_empty() {
-        series.push(Series {
-            name: "auto at tolerance 1e-6, 1e-8, 1e-10 (full solve)".into(),
-            points: auto,
-            style: Style::Points,
-            color: 3,
-        });
-    }
-    Chart {
-        title: format!("Speed against error: {scene}"),
-        x_label: "wall time of one solve [s] (median)".into(),
-        y_label: "relative error of the periodic solution".into(),
-        x_log: true,
-        y_log: true,
-        series,
-        ..Default::default()
-    }
-}
-
-/// Draws the work-precision chart of `scene` from `results` into `png`.
-///
-/// # Errors
-/// Empty data or a failed write.
-pub fn bench(png: &Path, scene: &str, results: &[BenchResult]) -> Result<(), ReportError> {
-    render_png(png, 1200, 800, &[bench_chart(scene, results)])
 }

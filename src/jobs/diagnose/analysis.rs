@@ -1,0 +1,404 @@
+//! The analysis of one recording: speed and tracking, the TSA of each gear, condition indicators over the
+//! whole record and its blocks, spectra, mesh harmonics with their sidebands, envelope and cepstrum.
+
+use super::*;
+
+/// Diagnosis of a recording already read (channels checked here): the whole pipeline for one file.
+pub(super) fn analyse(
+    path: &Path,
+    mut rec: Recording,
+    o: &Options,
+    geometry: Option<&Geometry>,
+) -> Result<Diagnosis, Error> {
+    let mut warnings = Vec::new();
+    let Checked { tacho, channels, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
+    let mut fft = Fft::new();
+    let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
+    let (source, confidence) = (nominal.source, nominal.confidence);
+    let nominal_mesh_from_lag = nominal.mesh_order.is_some();
+    let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
+    let (map, tracking, line_snr_db, tracked_z) = track(path, &rec, &channels, o, known_z, nominal.map, &mut warnings)?;
+    // the tachometer's pulses are in the angle map now and are never analysed: free them
+    if let Some(t) = tacho {
+        rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);
+    }
+    let profile = angle::SpeedProfile::of(&map);
+    if let (Some(hz), Some(fs), Tracking::MeshPhase) = (o.shaft_hz, fs, tracking) {
+        let off = profile.mean * fs / hz - 1.0;
+        if off.abs() > 0.01 {
+            warnings.push(format!(
+                "the given speed {hz:.4} Hz differs by {:+.2} % from the speed tracked on the mesh line ({:.4} Hz): the tracked speed is used; check the given speed",
+                100.0 * off,
+                profile.mean * fs
+            ));
+        }
+    }
+    let speed_profile = SpeedProfile {
+        tracking,
+        mean_hz: fs.map(|f| f * profile.mean),
+        min_hz: fs.map(|f| f * profile.min),
+        max_hz: fs.map(|f| f * profile.max),
+        change_percent: 100.0 * profile.change,
+        line_snr_db,
+    };
+    let period = map.mean_period_samples();
+    let points = tsa_points(period);
+    // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown)
+    let gears: Vec<(Shaft, f64, Option<usize>)> = match o.teeth {
+        Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
+        None => vec![(Shaft::Estimated, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
+    };
+    // one TSA per channel and gear, in parallel
+    let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
+    let tsas = jobs
+        .par_iter()
+        .map(|&(c, gi)| {
+            tsa::tsa_with_blocks(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions, o.block_revs())
+                .map(|(t, blocks)| (c, gi, t, blocks))
+                .map_err(|e| bad(path, e))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    let mut teeth_source = match (o.teeth, geometry.and_then(|g| g.mesh_order)) {
+        (Some(_), _) => TeethSource::Given,
+        (None, Some(_)) => TeethSource::Baseline,
+        (None, None) => TeethSource::Estimated,
+    };
+    if teeth_source == TeethSource::Estimated && tracked_z.is_some() {
+        warnings.push(format!(
+            "mesh order {} estimated ({}); give the teeth when known",
+            tracked_z.unwrap_or(0),
+            if nominal_mesh_from_lag {
+                "repetition period over the mesh period"
+            } else {
+                "strongest harmonic family of the TSA spectrum"
+            }
+        ));
+    }
+    let mut pending = Vec::new();
+    let mut mesh_orders = Vec::new();
+    for (gi, (name, _, known)) in gears.iter().enumerate() {
+        let z = match known {
+            Some(z) => *z,
+            None => {
+                let z = mesh_family(&mut fft, tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()));
+                teeth_source = TeethSource::Estimated;
+                warnings.push(format!(
+                    "mesh order {z} estimated from the strongest harmonic family of the TSA spectrum; give the teeth when known"
+                ));
+                z
+            }
+        };
+        if z * 2 + 8 > points / 2 {
+            return Err(bad(
+                path,
+                format!(
+                    "mesh order {z} needs more than {points} samples per revolution of the {name}: the shaft speed ({}) is too high for the sample rate, or the teeth are wrong",
+                    match source {
+                        SpeedSource::Estimated => "estimated; give --rpm",
+                        SpeedSource::Given => "given",
+                        SpeedSource::Tachometer => "from the tachometer",
+                    }
+                ),
+            ));
+        }
+        if o.teeth.is_some() {
+            if let Some(w) = teeth_misfit(tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()), z, *name) {
+                warnings.push(w);
+            }
+        }
+        if let (Some((zp, zw)), Shaft::Wheel) = (o.teeth, *name) {
+            if zp == zw {
+                warnings.push(format!(
+                    "--teeth {zp},{zw}: with equal teeth the gears turn together, so their averages are the same signal and a fault cannot be told to be on the pinion or the wheel; check --teeth"
+                ));
+            }
+        }
+        mesh_orders.push(z);
+        for (c, _, t, blocks) in tsas.iter().filter(|t| t.1 == gi) {
+            pending.push((*name, *c, z, t, blocks));
+        }
+    }
+    // the given wheel teeth checked against its sidebands on the pinion's angle
+    if let (Some(&zp), Some((_, zw))) = (mesh_orders.first(), o.teeth) {
+        warnings.extend(wheel_teeth(&mut fft, &rec.channels[channels[0] - 1], &map, zp, zw));
+    }
+    let gear_results: Vec<GearIndicators> = pending
+        .par_iter()
+        .map(|&(name, c, z, t, blocks)| {
+            let mut fft = Fft::new();
+            let mut g = gear_indicators(&mut fft, name, c, z, t, o.shaft_orders);
+            g.blocks = block_indicators(&mut fft, blocks, z, o.shaft_orders);
+            g
+        })
+        .collect();
+    // the averages and their blocks are in the indicators now: free them before the spectra
+    drop(pending);
+    drop(tsas);
+    // ---- spectra and mesh harmonics (deciding channel chosen later: use the first for now). The envelope
+    // band of that channel is chosen first, so that the amplitude spectrum's segments also give its envelope.
+    let shaft_hz = fs.map(|fs| fs / period);
+    let ratios: Vec<(Shaft, f64)> = gears.iter().map(|g| (g.0, g.1)).collect();
+    let choice =
+        BandChoice { levels: o.kurtogram_levels, band: o.envelope_band.or(geometry.and_then(|g| g.envelope_band)) };
+    let first = channels[0];
+    let mut plan = match (fs, o.lifter) {
+        (Some(fs), None) => Some(envelope_plan(&mut fft, &rec.channels[first - 1], fs, &map, mesh_orders[0], choice)),
+        _ => None,
+    };
+    let ola = std::sync::Mutex::new(match &mut plan {
+        Some(Ok((_, ola))) => ola.take(),
+        _ => None,
+    });
+    let spectra = match fs {
+        Some(fs) => channels
+            .par_iter()
+            .map(|&c| {
+                let ola = if c == first { ola.lock().map(|mut o| o.take()).unwrap_or(None) } else { None };
+                channel_spectra(&mut Fft::new(), &rec.channels[c - 1], fs, ola)
+                    .map(|s| (c, s))
+                    .map_err(|e| bad(path, e))
+            })
+            .collect::<Result<Vec<_>, Error>>()?,
+        None => Vec::new(),
+    };
+    let raw = channels
+        .par_iter()
+        .map(|&c| {
+            let x = &rec.channels[c - 1];
+            BTreeMap::from([("rms".to_string(), ind::rms(x)), ("kurtosis".to_string(), ind::kurtosis(x))])
+        })
+        .collect();
+    let shafts = match o.teeth {
+        Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
+        None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
+    };
+    let mut deciding = None;
+    let spectra = spectra
+        .into_iter()
+        .map(|(c, s)| {
+            if c == first {
+                deciding = Some((s.power, s.segment, s.envelope));
+            }
+            (c, s.amplitude)
+        })
+        .collect();
+    let mut d = Diagnosis {
+        file: path.display().to_string(),
+        sample_rate_hz: fs,
+        samples: n,
+        channels: channels.clone(),
+        shaft_hz: shafts,
+        shaft_period_samples: period,
+        speed_source: source,
+        speed_confidence: confidence,
+        speed_profile,
+        mesh_hz: shaft_hz.map(|f| f * mesh_orders[0] as f64),
+        mesh_order: mesh_orders[0],
+        teeth_source,
+        mesh_harmonics: Vec::new(),
+        indicators: BTreeMap::new(),
+        gears: gear_results,
+        raw,
+        verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
+        comparison: None,
+        envelope: None,
+        cepstrum: None,
+        scores: Vec::new(),
+        unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
+        warnings,
+        spectra,
+        baseline_spectra: Vec::new(),
+        baseline_tsas: Vec::new(),
+        order_map: None,
+    };
+    d.mesh_harmonics = mesh_harmonics(&d, channels[0], &ratios);
+    if let Some(g) = d.gears.first() {
+        d.indicators = g.indicators.clone();
+    }
+    if let Some(fs) = fs {
+        let x = &rec.channels[first - 1];
+        let result = match (o.lifter, plan) {
+            (Some(shaft), _) => {
+                let ratio = ratios.iter().find(|r| r.0 == shaft).map(|r| r.1).ok_or_else(|| {
+                    bad(path, format!("cannot lifter the {shaft} family: give the teeth so that its speed is known"))
+                })?;
+                let y =
+                    crate::signal::envelope::lifter_comb(&mut fft, x, period / ratio, 1).map_err(|e| bad(path, e))?;
+                envelope_plan(&mut fft, &y, fs, &map, d.mesh_order, choice).and_then(|(band, ola)| {
+                    let (e, r) = envelope_of(&mut fft, &y, fs, &band, ola)?;
+                    Ok(envelope(&mut fft, band, &e, r, fs, &map, &ratios))
+                })
+            }
+            (None, Some(Ok((band, _)))) => match deciding.as_ref().and_then(|s| s.2.as_ref()) {
+                Some((e, r)) => Ok(envelope(&mut fft, band, e, *r, fs, &map, &ratios)),
+                None => envelope_of(&mut fft, x, fs, &band, None)
+                    .map(|(e, r)| envelope(&mut fft, band, &e, r, fs, &map, &ratios)),
+            },
+            (None, Some(Err(e))) => Err(e),
+            (None, None) => unreachable!("a sample rate without a lifter always plans the envelope"),
+        };
+        match result.map(|mut e| {
+            e.liftered = o.lifter;
+            e
+        }) {
+            Ok(e) => d.envelope = Some(e),
+            // a band or level the user asked for that does not fit is an error; the automatic choice
+            // failing on a short recording is a warning
+            Err(e) if o.envelope_band.is_some() || o.kurtogram_levels.is_some() => return Err(bad(path, e)),
+            Err(e) => d.warnings.push(format!("no envelope analysis: {e}")),
+        }
+        let power = deciding.as_ref().map(|s| (s.0.as_slice(), s.1));
+        d.cepstrum = cepstrum(&mut fft, x, power, fs, period, &ratios);
+    }
+    if (profile.max - profile.min) > ORDER_MAP_SPEED_CHANGE * profile.mean {
+        d.order_map = order_map(&mut fft, &rec.channels[channels[0] - 1], &map, d.mesh_order);
+    }
+    Ok(d)
+}
+
+/// Points per revolution of a TSA: the revolution's samples rounded up to a power of two (64 ..= 65536).
+pub(super) fn tsa_points(period: f64) -> usize {
+    (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16)
+}
+
+pub(super) fn gear_indicators(
+    fft: &mut Fft,
+    gear: Shaft,
+    channel: usize,
+    z: usize,
+    t: &tsa::Tsa,
+    shaft_orders: usize,
+) -> GearIndicators {
+    let (indicators, d) = tsa_indicators(fft, &t.samples, z, shaft_orders);
+    GearIndicators {
+        gear,
+        channel,
+        mesh_order: z,
+        revolutions: t.revolutions,
+        indicators,
+        residual: d.residual,
+        difference: d.difference,
+        tsa_amplitudes: d.amplitudes,
+        tsa: t.samples.clone(),
+        blocks: Vec::new(),
+    }
+}
+
+/// The condition indicators of one TSA of a gear with mesh order `z`, and its decomposition.
+pub(super) fn tsa_indicators(
+    fft: &mut Fft,
+    x: &[f64],
+    z: usize,
+    shaft_orders: usize,
+) -> (BTreeMap<String, f64>, Decomposition) {
+    let d = tsa::decompose(fft, x, z, shaft_orders);
+    let Decomposition { amplitudes, regular, residual, difference } = &d;
+    let mesh_amps: Vec<f64> =
+        (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let side = amplitudes[z - 1] + amplitudes[z + 1];
+    let mut m = BTreeMap::new();
+    m.insert("rms".into(), ind::rms(&centred));
+    m.insert("kurtosis".into(), ind::kurtosis(x));
+    m.insert("crest_factor".into(), ind::crest_factor(&centred));
+    m.insert("fm0".into(), ind::fm0(x, &mesh_amps));
+    m.insert("fm4".into(), ind::normalized_moment(difference, 4));
+    m.insert("m6a".into(), ind::normalized_moment(difference, 6));
+    m.insert("m8a".into(), ind::normalized_moment(difference, 8));
+    m.insert("na4".into(), ind::kurtosis(residual));
+    m.insert("er".into(), ind::energy_ratio(difference, regular));
+    m.insert("si".into(), side / 2.0);
+    m.insert("slf".into(), side / ind::rms(&centred));
+    m.insert("ser".into(), ind::sideband_energy_ratio(amplitudes, z, 1));
+    (m, d)
+}
+
+/// Indicators of the block averages of a gear (consecutive blocks of whole revolutions; the statistical
+/// baseline's samples; a recording under test is scored by the median of its own blocks, so both sides
+/// average the same number of revolutions).
+pub(super) fn block_indicators(
+    fft: &mut Fft,
+    blocks: &[Vec<f64>],
+    z: usize,
+    shaft_orders: usize,
+) -> Vec<crate::report::summary::Block> {
+    blocks
+        .iter()
+        .map(|t| {
+            let (mut indicators, d) = tsa_indicators(fft, t, z, shaft_orders);
+            let n = d.residual.len() as f64;
+            let mean = d.residual.iter().sum::<f64>() / n;
+            indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
+            indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
+            crate::report::summary::Block { indicators, amplitudes: d.amplitudes }
+        })
+        .collect()
+}
+
+/// Mesh harmonics and sidebands (3 per shaft on each side) from the raw amplitude spectrum when the
+/// sample rate is known, else from the reference TSA's order spectrum.
+pub(super) fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(Shaft, f64)]) -> Vec<MeshHarmonic> {
+    let z = d.mesh_order as f64;
+    let spectrum = d.spectra.iter().find(|s| s.0 == channel).map(|s| &s.1);
+    let tsa_amps = d.gears.iter().find(|g| g.channel == channel).map(|g| &g.tsa_amplitudes);
+    let shaft_hz = d.shaft_hz.reference();
+    let mut out = Vec::new();
+    for k in 1..=3usize {
+        let order = k as f64 * z;
+        let read = |o: f64| -> Option<(Option<f64>, f64)> {
+            match (spectrum, shaft_hz) {
+                (Some(s), Some(f1)) => {
+                    let f = o * f1;
+                    // within 1.5 bins only: a line of the other shaft can sit a few Hz away (3 f2 = 32.3 Hz
+                    // against f1 = 30 Hz for 14/39 teeth) and must not be taken for this one
+                    let df = s.freqs_hz.get(1).copied().unwrap_or(1.0);
+                    let (ff, a) = s.hann_line_near(f, 1.5 * df)?;
+                    Some((Some(ff), a))
+                }
+                _ => {
+                    let a = tsa_amps?;
+                    let i = o.round() as usize;
+                    ((o - o.round()).abs() < 1e-9 && i < a.len()).then(|| (None, a[i]))
+                }
+            }
+        };
+        let Some((f, a)) = read(order) else { break };
+        let mut sidebands = Vec::new();
+        for &(name, ratio) in shafts {
+            for i in 1..=3i32 {
+                for sign in [-1, 1] {
+                    let o = order + f64::from(sign * i) * ratio;
+                    if let Some((ff, aa)) = read(o) {
+                        sidebands.push(Sideband {
+                            offset: sign * i,
+                            shaft: name,
+                            frequency_hz: ff,
+                            order: o,
+                            amplitude: aa,
+                            resolved: true,
+                        });
+                    }
+                }
+            }
+        }
+        // lines of different shafts closer than the resolution (3 bins, in orders) cannot be told apart
+        let resolution = match (spectrum, shaft_hz) {
+            (Some(s), Some(f1)) => 3.0 * s.freqs_hz.get(1).copied().unwrap_or(1.0) / f1,
+            _ => 0.0,
+        };
+        // (shaft, order); `None` marks the mesh line itself
+        let nominal: Vec<(Option<Shaft>, f64)> = shafts
+            .iter()
+            .flat_map(|&(name, ratio)| {
+                (1..=3).flat_map(move |i| [-1.0, 1.0].map(|sg| (Some(name), order + sg * f64::from(i) * ratio)))
+            })
+            .chain(std::iter::once((None, order)))
+            .collect();
+        for sb in &mut sidebands {
+            sb.resolved = !nominal.iter().any(|(name, o)| *name != Some(sb.shaft) && (o - sb.order).abs() < resolution);
+        }
+        out.push(MeshHarmonic { k, frequency_hz: f, order, amplitude: a, sidebands });
+    }
+    out
+}

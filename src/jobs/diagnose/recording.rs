@@ -1,0 +1,248 @@
+//! Reading one recording for the diagnosis: the channels to decode, units, and the checks on the data,
+//! the sample rate and a given speed, before anything is sized from them.
+
+use super::*;
+
+/// Diagnoses one recording.
+///
+/// # Errors
+/// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
+pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+    // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
+    // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
+    // tachometer in use are not decoded either (they are never analysed as vibration)
+    let sidecar = io::sidecar::read(path);
+    let sidecar_tacho = (o.tacho_channel.is_none() && o.shaft_hz.is_none())
+        .then_some(sidecar.as_ref())
+        .flatten()
+        .and_then(|side| side.channels.iter().position(|c| c.name == PINION_TACHO).map(|i| i + 1));
+    let tacho = o.tacho_channel.or(sidecar_tacho);
+    let keep: Option<Vec<usize>> = match (o.channel, &sidecar) {
+        (Some(c), _) => Some(std::iter::once(c).chain(tacho).map(|c| c.saturating_sub(1)).collect()),
+        (None, Some(side)) if side.channels.iter().any(|c| c.name.starts_with("tacho")) => Some(
+            (0..side.channels.len())
+                .filter(|&i| Some(i + 1) == tacho || !side.channels[i].name.starts_with("tacho"))
+                .collect(),
+        ),
+        (None, _) => None,
+    };
+    let mut rec = io::read_recording_channels(path, keep.as_deref())?;
+    apply_units(&mut rec, o, tacho);
+    analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+}
+
+/// Diagnoses a recording held in memory under `name` (no sidecar: a tachometer channel must be named by
+/// `tacho_channel`).
+///
+/// # Errors
+/// As [`diagnose`], without the reading.
+pub fn diagnose_in_memory(
+    name: &Path,
+    mut rec: Recording,
+    o: &Options,
+    geometry: Option<&Geometry>,
+) -> Result<Diagnosis, Error> {
+    apply_units(&mut rec, o, o.tacho_channel);
+    analyse(name, rec, o, geometry)
+}
+
+/// `--sensitivity` (samples divided by it) and `--unit` (for channels whose file names no unit, or for all
+/// with a sensitivity) applied to every channel but the tachometer.
+pub(super) fn apply_units(rec: &mut Recording, o: &Options, tacho: Option<usize>) {
+    for (i, (x, unit)) in rec.channels.iter_mut().zip(rec.units.iter_mut()).enumerate() {
+        if Some(i + 1) == tacho || unit == "pulse" {
+            continue;
+        }
+        if let Some(s) = o.sensitivity {
+            let k = (1.0 / s) as f32;
+            x.to_mut().iter_mut().for_each(|v| *v *= k);
+        }
+        // a sensitivity turns the recorded unit (volts) into the physical one: --unit then names it
+        if unit.is_empty() || o.sensitivity.is_some() {
+            if let Some(u) = &o.unit {
+                unit.clone_from(u);
+            }
+        }
+    }
+}
+
+/// Name of the pinion's tachometer channel in gearvib's sidecar: used for the speed when no speed and no
+/// tachometer channel are given.
+pub const PINION_TACHO: &str = "tacho pinion";
+
+/// True when a channel holds at most two distinct levels over its first 200 000 samples: a tachometer
+/// pulse train, never a vibration signal.
+pub(super) fn looks_like_pulses(x: &[f32]) -> bool {
+    let mut levels: Vec<u32> = Vec::with_capacity(3);
+    for v in x.iter().take(200_000) {
+        let b = v.to_bits();
+        if !levels.contains(&b) {
+            levels.push(b);
+            if levels.len() > 2 {
+                return false;
+            }
+        }
+    }
+    levels.len() == 2
+}
+
+pub(super) fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>) -> Result<(), Error> {
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(bad(path, format!("channel {idx} has a non-finite sample at index {i}")));
+    }
+    let (lo, hi) = x.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if lo == hi {
+        return Err(bad(path, format!("channel {idx} is constant ({lo}): nothing to analyse")));
+    }
+    // clipping: runs of 3+ samples stuck at the extreme value
+    let level = lo.abs().max(hi.abs()) * 0.9999;
+    let peak = lo.abs().max(hi.abs());
+    let (mut run, mut stuck) = (0usize, 0usize);
+    for v in x {
+        run = if v.abs() >= level { run + 1 } else { 0 };
+        stuck += usize::from(run >= 3);
+    }
+    if stuck as f64 > 1e-4 * x.len() as f64 {
+        warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
+    }
+    Ok(())
+}
+
+/// Fewest samples per shaft revolution a TSA can use (the resampling keeps at least 64 points).
+pub const MIN_SAMPLES_PER_REV: f64 = 64.0;
+
+/// A given shaft speed must fit the recording: enough samples per revolution, enough revolutions. Checked
+/// before anything is sized from it.
+pub(super) fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_revs: usize) -> Result<(), Error> {
+    let per_rev = fs / hz;
+    if per_rev.is_nan() || per_rev < MIN_SAMPLES_PER_REV {
+        return Err(JobError::Value {
+            what: "shaft speed".into(),
+            message: format!(
+                "{hz:.6e} Hz gives {per_rev:.3e} samples per revolution at the {fs} Hz sample rate of {}; at least {MIN_SAMPLES_PER_REV} are needed: the speed is far too high for this recording (rpm given as Hz?)",
+                path.display()
+            ),
+        }
+        .into());
+    }
+    let revs = n as f64 / per_rev;
+    if revs < min_revs as f64 {
+        return Err(JobError::Value {
+            what: "shaft speed".into(),
+            message: format!(
+                "{hz:.6} Hz gives only {revs:.2} revolutions in the {n} samples of {}; the time-synchronous average needs at least {min_revs}: is the speed too low, or the recording too short?",
+                path.display()
+            ),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// Accepted sample rates, Hz: from sub-hertz loggers to the fastest vibration front ends.
+pub const SAMPLE_RATE_RANGE_HZ: (f64, f64) = (0.1, 100e6);
+
+pub(super) fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<Option<f64>, Error> {
+    if let Some(fs) = o.fs_hz {
+        let (lo, hi) = SAMPLE_RATE_RANGE_HZ;
+        if !(fs.is_finite() && (lo..=hi).contains(&fs)) {
+            return Err(JobError::Value {
+                what: "sample rate".into(),
+                message: format!("must be between {lo} Hz and {hi:e} Hz, got {fs:e} Hz"),
+            }
+            .into());
+        }
+        return Ok(Some(fs));
+    }
+    match rec.sample_rate_hz {
+        Some(fs) if fs > 0.0 => Ok(Some(fs)),
+        Some(fs) => Err(bad(path, format!("sample rate {fs} Hz is not positive; give the sample rate"))),
+        None if o.fs_unknown => Ok(None),
+        None => Err(JobError::NoSampleRate { file: path.display().to_string(), for_speed: false }.into()),
+    }
+}
+
+/// What [`check_recording`] established: the tachometer channel, the vibration channels (1-based), the
+/// longest channel's samples and the sample rate in Hz (`None` when unknown).
+pub(super) struct Checked {
+    pub tacho: Option<usize>,
+    pub channels: Vec<usize>,
+    pub samples: usize,
+    pub fs: Option<f64>,
+}
+
+/// The channel roles and the checks before any analysis: the given tachometer and vibration channels exist
+/// and differ, pulse trains and the sidecar's tachometers are never vibration, the data is long enough,
+/// finite and not constant, and the sample rate is plausible. Warnings go to `warnings`.
+///
+/// # Errors
+/// A channel that does not exist or is the tachometer, no vibration channel left, bad data, a bad rate.
+pub(super) fn check_recording(
+    path: &Path,
+    rec: &Recording,
+    o: &Options,
+    warnings: &mut Vec<String>,
+) -> Result<Checked, Error> {
+    let nch = rec.channels.len();
+    let check_index = |role: ChannelRole, c: usize| -> Result<usize, Error> {
+        if c == 0 || c > nch {
+            Err(JobError::Channel { file: path.display().to_string(), role, index: c, count: nch }.into())
+        } else {
+            Ok(c)
+        }
+    };
+    let tacho = o.tacho_channel.map(|c| check_index(ChannelRole::Tachometer, c)).transpose()?;
+    let channels: Vec<usize> = match o.channel {
+        Some(c) => {
+            let c = check_index(ChannelRole::Vibration, c)?;
+            if Some(c) == tacho {
+                return Err(bad(
+                    path,
+                    format!(
+                        "channel {c} is the tachometer channel: it gives the speed and cannot also be analysed as vibration"
+                    ),
+                ));
+            }
+            if looks_like_pulses(&rec.channels[c - 1]) {
+                return Err(bad(
+                    path,
+                    format!(
+                        "channel {c} holds two levels only, a tachometer pulse train: it is not analysed as vibration"
+                    ),
+                ));
+            }
+            vec![c]
+        }
+        // channels named as tachometers (gearvib's sidecar) or holding two levels are never vibration
+        None => (1..=nch)
+            .filter(|c| Some(*c) != tacho && !rec.names[c - 1].starts_with("tacho"))
+            .filter(|&c| {
+                let pulses = looks_like_pulses(&rec.channels[c - 1]);
+                if pulses {
+                    warnings
+                        .push(format!("channel {c} holds two levels only (a pulse train): not analysed as vibration"));
+                }
+                !pulses
+            })
+            .collect(),
+    };
+    let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
+    if nch == 0 || n < 2 {
+        return Err(bad(path, format!("{n} sample(s): far too short to analyse")));
+    }
+    let fs = sample_rate(path, rec, o)?;
+    if channels.is_empty() {
+        return Err(bad(path, "no channel left to analyse besides the tachometer"));
+    }
+    let checks: Vec<Result<Vec<String>, Error>> = channels
+        .par_iter()
+        .map(|&c| {
+            let mut w = Vec::new();
+            check_channel(path, c, &rec.channels[c - 1], &mut w).map(|_| w)
+        })
+        .collect();
+    for c in checks {
+        warnings.extend(c?);
+    }
+    Ok(Checked { tacho, channels, samples: n, fs })
+}
