@@ -86,13 +86,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
     if let Some((_, amp)) = d.spectra().iter().find(|s| s.0 == ch) {
         let fm = d.mesh_hz.unwrap_or(0.0);
         let max_f = (3.6 * fm).min(*amp.freqs_hz.last().unwrap_or(&1.0));
-        let pts: Vec<(f64, f64)> = amp
-            .freqs_hz
-            .iter()
-            .zip(&amp.values)
-            .filter(|(f, _)| **f > 0.0 && **f <= max_f)
-            .map(|(f, v)| (*f, *v))
-            .collect();
+        let pts = in_band(amp, max_f);
         let peak = pts.iter().map(|p| p.1).fold(0.0, f64::max);
         let mut series = vec![Series {
             name: "amplitude spectrum (Hann, averaged)".into(),
@@ -102,13 +96,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         }];
         // the healthy baseline on top, in black: where this recording's lines grew they stand out above it
         if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
-            let base: Vec<(f64, f64)> = b
-                .freqs_hz
-                .iter()
-                .zip(&b.values)
-                .filter(|(f, _)| **f > 0.0 && **f <= max_f)
-                .map(|(f, v)| (*f, *v))
-                .collect();
+            let base = in_band(b, max_f);
             series.push(Series { name: "baseline (healthy)".into(), points: base, style: Style::Line, color: 8 });
         }
         // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured, and
@@ -523,4 +511,9 @@ pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
     }
     let h = 450 * charts.len() as u32;
     render_png(png, 1400, h, &charts)
+}
+
+/// The (frequency in Hz, value) points of `s` above 0 Hz and up to `max_f` Hz.
+fn in_band(s: &crate::signal::Spectrum, max_f: f64) -> Vec<(f64, f64)> {
+    s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f > 0.0 && **f <= max_f).map(|(f, v)| (*f, *v)).collect()
 }
