@@ -16,7 +16,16 @@ import numpy as np
 from . import _gearvib
 from ._gearvib import GearvibError
 
-__all__ = ["GearvibError", "simulate", "stability", "diagnose", "identify", "read_recording"]
+__all__ = [
+    "GearvibError",
+    "simulate",
+    "stability",
+    "sweep",
+    "diagnose",
+    "identify",
+    "read_recording",
+    "write_recording",
+]
 
 SceneLike = Union[dict, str, "os.PathLike[str]"]
 
@@ -56,6 +65,23 @@ def stability(scene: SceneLike) -> dict:
     """Floquet multipliers of a scene: the ``stability --json`` dictionary."""
     text, name = _scene_text(scene)
     return json.loads(_gearvib.stability(text, name))
+
+
+def sweep(scene: SceneLike, param: str, values: Iterable[float]) -> dict:
+    """Floquet analysis and line amplitudes of a scene at each of ``values`` of one parameter.
+
+    ``param``: ``speed`` (rev/min), ``damping`` (ratio), ``load`` (static deflection in m for the gear pair,
+    N for the press), or a dotted path of a numeric scene field such as ``gear_pair.damping_ratio``.
+    Returns the ``sweep --json`` dictionary (``points``: value, rho_max, stable, trusted, lines, error) plus
+    numpy arrays ``value``, ``rho_max`` (NaN where a point failed) and ``stable`` (bool).
+    """
+    text, name = _scene_text(scene)
+    out = json.loads(_gearvib.sweep(text, name, param, [float(v) for v in values]))
+    points = out["points"]
+    out["value"] = np.array([p["value"] for p in points])
+    out["rho_max"] = np.array([np.nan if p["rho_max"] is None else p["rho_max"] for p in points])
+    out["stable"] = np.array([bool(p["stable"]) for p in points])
+    return out
 
 
 def diagnose(
@@ -139,3 +165,23 @@ def read_recording(path: Union[str, "os.PathLike[str]"]) -> dict:
     it has a sidecar or is float/CSV), ``fs`` (Hz or None), ``names`` and ``units`` per channel."""
     samples, fs, names, units = _gearvib.read_recording(os.fspath(path))
     return {"samples": samples, "fs": fs, "names": names, "units": units}
+
+
+def write_recording(
+    path: Union[str, "os.PathLike[str]"],
+    samples: np.ndarray,
+    fs: float,
+    *,
+    names: Optional[Sequence[str]] = None,
+    units: Optional[Sequence[str]] = None,
+) -> None:
+    """Write ``samples`` (1-D, or channels x samples; float32 or float64) at ``fs`` Hz to a WAV (float32, a
+    whole number of Hz, with a sidecar ``path.json`` holding the channel ``names`` and ``units``) or a CSV
+    (a ``time_s`` column and "name [unit]" headers), atomically. ``read_recording`` gives them back."""
+    _gearvib.write_recording(
+        os.fspath(path),
+        np.asarray(samples),
+        float(fs),
+        None if names is None else list(names),
+        None if units is None else list(units),
+    )

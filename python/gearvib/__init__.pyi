@@ -16,6 +16,10 @@ def simulate(scene: SceneLike) -> dict[str, Any]:
 def stability(scene: SceneLike) -> dict[str, Any]:
     """Floquet multipliers: the `stability --json` keys."""
 
+def sweep(scene: SceneLike, param: str, values: Iterable[float]) -> dict[str, Any]:
+    """The `sweep --json` keys plus `value` [parameter unit], `rho_max` [-] (NaN where a point failed)
+    and `stable` arrays."""
+
 def diagnose(
     samples: Union[np.ndarray, PathLike, Sequence[Any]],
     fs: Optional[float] = ...,
@@ -46,3 +50,13 @@ def identify(
 
 def read_recording(path: PathLike) -> dict[str, Any]:
     """`samples` (float32, channels x samples), `fs` [Hz] or None, `names`, `units`."""
+
+def write_recording(
+    path: PathLike,
+    samples: np.ndarray,
+    fs: float,
+    *,
+    names: Optional[Sequence[str]] = ...,
+    units: Optional[Sequence[str]] = ...,
+) -> None:
+    """Writes channels x samples at `fs` [Hz] to a WAV (float32, with a sidecar of names and units) or CSV."""

@@ -64,6 +64,48 @@ fn stability(py: Python<'_>, scene_json: &str, name: &str) -> PyResult<String> {
     .map_err(to_py)
 }
 
+/// sweep(scene_json, name, param, values) -> summary_json (`sweep --json`): Floquet analysis and line
+/// amplitudes at each value of the parameter (an alias such as `speed`, or a dotted path of the scene).
+#[pyfunction]
+fn sweep(py: Python<'_>, scene_json: &str, name: &str, param: &str, values: Vec<f64>) -> PyResult<String> {
+    py.detach(|| {
+        use gearvib::jobs::sweep as sw;
+        let scene = scene_from(scene_json, name)?;
+        let field = sw::resolve(&scene, param)?;
+        let quiet = sw::Progress { estimate: &|_| {}, tick: &|| {} };
+        let points = sw::sweep_values(&scene, &field, &values, None, &quiet)?;
+        let summary = sw::summarize(&scene, &field, points)?;
+        Ok(serde_json::to_string(&summary).unwrap_or_default())
+    })
+    .map_err(to_py)
+}
+
+/// write_recording(path, samples, fs, names, units): writes a WAV (float32, whole Hz, with a sidecar
+/// naming the channels and units) or a CSV (time column, "name [unit]" headers), atomically.
+#[pyfunction]
+#[pyo3(signature = (path, samples, fs, names=None, units=None))]
+fn write_recording(
+    py: Python<'_>,
+    path: &str,
+    samples: Bound<'_, PyAny>,
+    fs: f64,
+    names: Option<Vec<String>>,
+    units: Option<Vec<String>>,
+) -> PyResult<()> {
+    let held = held_array(&samples, Some(fs))?;
+    let mut rec = recording_of(&held, Some(fs))?;
+    let n = rec.channels.len();
+    for (what, given, slot) in [("names", names, &mut rec.names), ("units", units, &mut rec.units)] {
+        if let Some(v) = given {
+            if v.len() != n {
+                return Err(PyValueError::new_err(format!("{what}: {} given for {n} channels", v.len())));
+            }
+            *slot = v;
+        }
+    }
+    py.detach(|| gearvib::io::write_recording(std::path::Path::new(path), &rec)).map_err(|e| to_py(e.into()))
+}
+
 /// Diagnosis options from the keyword arguments the Python wrapper passes on.
 #[derive(Default)]
 struct Kw {
@@ -298,6 +340,8 @@ fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stability, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(write_recording, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(identify, m)?)?;
     Ok(())
 }

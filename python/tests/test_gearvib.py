@@ -120,6 +120,46 @@ def test_bad_input_raises_value_error_with_the_cli_message():
         gearvib.simulate("{not json")
 
 
+def test_sweep_equals_the_cli():
+    scene = SCENE.format("hard-gear-light-damping")
+    values = np.linspace(1000.0, 3000.0, 9)
+    got = gearvib.sweep(scene, "speed", values)
+    want = cli_json("sweep", scene, "--param", "speed", "--from", "1000", "--to", "3000", "--steps", "9")[0]
+    assert got["param"] == want["param"] == "gear_pair.speed_rpm"
+    assert [p["value"] for p in got["points"]] == [p["value"] for p in want["points"]]
+    # the same solver on the same values: identical points
+    assert got["points"] == want["points"]
+    assert np.array_equal(got["rho_max"], [p["rho_max"] for p in want["points"]])
+    assert got["stable"].dtype == bool and len(got["value"]) == 9
+    with pytest.raises(ValueError, match="no_such"):
+        gearvib.sweep(scene, "gear_pair.no_such", [1.0])
+    with pytest.raises(ValueError, match="finite"):
+        gearvib.sweep(scene, "speed", [1000.0, float("nan")])
+    with pytest.raises(ValueError, match="finite"):
+        gearvib.sweep(scene, "speed", [])
+
+
+def test_write_recording_reads_back_and_diagnoses_alike(tmp_path):
+    rec = gearvib.read_recording(REC.format("cracked-pinion-tooth3"))
+    for name in ("r.wav", "r.csv"):
+        path = tmp_path / name
+        gearvib.write_recording(path, rec["samples"], rec["fs"], names=rec["names"], units=rec["units"])
+        back = gearvib.read_recording(path)
+        assert back["names"] == rec["names"] and back["units"] == rec["units"]
+        assert abs(back["fs"] - rec["fs"]) < 1e-6
+        assert np.array_equal(back["samples"], rec["samples"])
+    # a float64 Fortran-order copy writes the same samples
+    gearvib.write_recording(tmp_path / "f.wav", np.asfortranarray(rec["samples"].astype(np.float64)), rec["fs"])
+    assert np.array_equal(gearvib.read_recording(tmp_path / "f.wav")["samples"], rec["samples"])
+    with pytest.raises(ValueError, match="names"):
+        gearvib.write_recording(tmp_path / "n.wav", rec["samples"], rec["fs"], names=["one"])
+    with pytest.raises(ValueError, match="whole number"):
+        gearvib.write_recording(tmp_path / "h.wav", rec["samples"], 1000.5)
+    with pytest.raises(ValueError, match="NaN"):
+        gearvib.write_recording(tmp_path / "x.csv", np.full(100, np.nan), 1000.0)
+    assert not (tmp_path / "h.wav").exists()
+
+
 def test_an_untrusted_result_raises_gearvib_error():
     scene = json.load(open(SCENE.format("paper-gear-fig8a"), encoding="utf-8"))
     # 100 fixed rk4 steps cannot meet 1e-10

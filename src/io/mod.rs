@@ -321,6 +321,90 @@ fn apply_sidecar(path: &Path, rec: &mut Recording<'_>) {
     rec.units.resize(rec.names.len(), String::new());
 }
 
+/// Writes `rec` to `path` by its extension, atomically: a float WAV (f32, the sample rate must be a whole
+/// number of Hz) with a sidecar `path.json` naming each channel and its unit, or a CSV with a `time_s`
+/// column and headers "name [unit]". [`read_recording`] gives the same samples, names and units back.
+///
+/// # Errors
+/// No channel, channels of different lengths or empty, no or a bad sample rate, a WAV rate that is not a
+/// whole number, an unknown extension, an output that is an input of this run, or the write failing.
+pub fn write_recording(path: &Path, rec: &Recording<'_>) -> Result<(), DataError> {
+    let frames = rec.channels.first().map_or(0, |c| c.len());
+    if frames == 0 || rec.channels.iter().any(|c| c.len() != frames) {
+        return Err(DataError::format(path, "a recording to write needs channels of one length, at least one sample"));
+    }
+    let fs = rec
+        .sample_rate_hz
+        .filter(|f| f.is_finite() && *f > 0.0)
+        .ok_or_else(|| DataError::format(path, "a recording to write needs a positive sample rate in Hz"))?;
+    let nch = rec.channels.len();
+    let name = |c: usize| rec.names.get(c).cloned().unwrap_or_else(|| format!("ch{}", c + 1));
+    let unit = |c: usize| rec.units.get(c).cloned().unwrap_or_default();
+    // frames interleaved a block at a time: the memory of one block, not of the recording
+    let blocks = |write: &mut dyn FnMut(&[f64]) -> Result<(), DataError>| -> Result<(), DataError> {
+        let mut buf = Vec::with_capacity(nch * 65536);
+        for start in (0..frames).step_by(65536) {
+            buf.clear();
+            for i in start..(start + 65536).min(frames) {
+                buf.extend(rec.channels.iter().map(|c| f64::from(c[i])));
+            }
+            write(&buf)?;
+        }
+        Ok(())
+    };
+    match extension(path).as_deref() {
+        Some("wav") => {
+            let rate =
+                u32::try_from(fs.round() as u64).ok().filter(|r| (f64::from(*r) - fs).abs() <= 1e-9 * fs).ok_or_else(
+                    || DataError::format(path, format!("a WAV stores a whole number of Hz, not {fs}: write a .csv")),
+                )?;
+            let channels = u16::try_from(nch).map_err(|_| DataError::format(path, "more than 65535 channels"))?;
+            let mut out = wav::WavOut::create(path, channels, rate, wav::WavSampleFormat::Float32)?;
+            blocks(&mut |b| out.write(b))?;
+            let (guard, _) = out.finish()?;
+            let info = sidecar::Sidecar {
+                file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+                scene: String::new(),
+                scene_file: String::new(),
+                sample_rate_hz: fs,
+                frames: frames as u64,
+                duration_s: frames as f64 / fs,
+                channels: (0..nch)
+                    .map(|c| sidecar::ChannelInfo { name: name(c), unit: unit(c), description: String::new() })
+                    .collect(),
+                format: "f32".into(),
+                full_scale: None,
+                clipped_samples: 0,
+                noise_rms: 0.0,
+                seed: 0,
+                speed_change: None,
+                base_hz: 0.0,
+                period_s: 0.0,
+                evaluation: "samples as given (write_recording)".into(),
+                warnings: Vec::new(),
+            };
+            let side = sidecar::write(path, &info)?;
+            guard.commit()?;
+            side.commit()
+        }
+        Some("csv") => {
+            if let Some(c) = (0..nch).find(|&c| (name(c) + &unit(c)).contains([',', '\n', '\r', '"'])) {
+                return Err(DataError::format(
+                    path,
+                    format!("channel {} name or unit holds a comma, quote or line break", c + 1),
+                ));
+            }
+            let names: Vec<String> = (0..nch)
+                .map(|c| if unit(c).is_empty() { name(c) } else { format!("{} [{}]", name(c), unit(c)) })
+                .collect();
+            let mut out = csv::CsvOut::create(path, &names, fs)?;
+            blocks(&mut |b| out.write(b))?;
+            out.finish()?.commit()
+        }
+        _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
+    }
+}
+
 /// Creates a directory (and its parents) for outputs.
 ///
 /// # Errors

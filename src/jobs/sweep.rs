@@ -55,19 +55,7 @@ pub fn run(job: &SweepJob, progress: &Progress<'_>) -> Result<SweepOutcome, Erro
     if let Some(p) = &partial {
         let _ = std::fs::remove_file(p); // complete: sweep.json replaces the partial record
     }
-    let failed: Vec<&SweepPoint> = points.iter().filter(|p| p.error.is_some()).collect();
-    if failed.len() == points.len() {
-        return Err(JobError::Input {
-            file: scene.file.clone(),
-            message: format!(
-                "every one of the {} sweep points failed; the first: {}",
-                points.len(),
-                failed[0].error.clone().unwrap_or_default()
-            ),
-        }
-        .into());
-    }
-    let summary = SweepSummary { param: field.clone(), points, scene: scene.name.clone() };
+    let summary = summarize(&scene, &field, points)?;
     let mut images = job.images.clone();
     if let Some(dir) = &job.report {
         crate::io::write_atomic(&dir.join("sweep.json"), crate::report::summary::to_json_line(&summary).as_bytes())?;
@@ -82,6 +70,23 @@ pub fn run(job: &SweepJob, progress: &Progress<'_>) -> Result<SweepOutcome, Erro
         images.push(crate::report::html::write(dir, &format!("gearvib sweep: {}", scene.name), &[section])?);
     }
     Ok(SweepOutcome { summary, images })
+}
+
+/// The `sweep --json` summary of `points` of the parameter at dotted path `field`.
+///
+/// # Errors
+/// Every point failed (the first failure is quoted).
+pub fn summarize(scene: &Scene, field: &str, points: Vec<SweepPoint>) -> Result<SweepSummary, Error> {
+    if let Some(first) =
+        points.iter().find_map(|p| p.error.clone()).filter(|_| points.iter().all(|p| p.error.is_some()))
+    {
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: format!("every one of the {} sweep points failed; the first: {first}", points.len()),
+        }
+        .into());
+    }
+    Ok(SweepSummary { param: field.to_string(), points, scene: scene.name.clone() })
 }
 
 /// Dotted JSON path of a parameter: an alias (`speed`, `damping`, `load`) or any numeric field of the scene
@@ -162,11 +167,38 @@ pub fn sweep(
         }
         .into());
     }
+    let values: Vec<f64> = (0..steps).map(|i| from + (to - from) * i as f64 / (steps - 1) as f64).collect();
+    sweep_values(scene, path, &values, partial, progress)
+}
+
+/// [`sweep`] over the given parameter `values` (in the parameter's unit, any order; 1 to 1 000 000 finite
+/// values), one point per value in the same order.
+///
+/// # Errors
+/// No value, too many, a value that is not finite; the partial file cannot be written.
+pub fn sweep_values(
+    scene: &Scene,
+    path: &str,
+    values: &[f64],
+    partial: Option<&std::path::Path>,
+    progress: &Progress<'_>,
+) -> Result<Vec<SweepPoint>, Error> {
+    if values.is_empty() || values.len() > 1_000_000 || values.iter().any(|v| !v.is_finite()) {
+        return Err(JobError::Value {
+            what: "sweep values".into(),
+            message: format!(
+                "needs 1..=1000000 finite values, got {} ({} not finite)",
+                values.len(),
+                values.iter().filter(|v| !v.is_finite()).count()
+            ),
+        }
+        .into());
+    }
     let z1 = match &scene.model {
         Model::GearPair(g) => Some(g.params().pinion_teeth),
         _ => None,
     };
-    let values: Vec<f64> = (0..steps).map(|i| from + (to - from) * i as f64 / (steps - 1) as f64).collect();
+    let steps = values.len();
     let log = match partial {
         Some(p) => Some(std::sync::Mutex::new(std::io::BufWriter::new(
             std::fs::File::create(p).map_err(|e| crate::io::DataError::io(p, format!("cannot write: {e}")))?,
