@@ -30,7 +30,8 @@ def diagnose_one(path: str, baseline: Sequence[str], teeth: Optional[Tuple[int, 
     """One task: the diagnosis of one recording against the baseline (runs on a worker)."""
     import gearvib
 
-    return gearvib.diagnose(path, teeth=teeth, baseline=list(baseline))
+    # a fleet's table holds the verdicts and indicators, not each recording's curves
+    return gearvib.diagnose(path, teeth=teeth, baseline=list(baseline), arrays=False)
 
 
 def fleet(

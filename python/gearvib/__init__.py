@@ -94,6 +94,7 @@ def diagnose(
     channel: Optional[int] = None,
     unit: Optional[str] = None,
     baseline: Union[None, str, "os.PathLike[str]", Iterable[Union[str, "os.PathLike[str]"]]] = None,
+    arrays: bool = True,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
     ``fs`` Hz, a WAV/CSV path, or a list of them (then a list of results, in order).
@@ -101,27 +102,42 @@ def diagnose(
     ``rpm``: pinion speed in rev/min (estimated when absent); ``teeth``: (pinion, wheel); ``tacho``: the
     1-based tachometer channel; ``channel``: analyse only this 1-based channel; ``unit``: the samples'
     physical unit; ``baseline``: healthy recordings of the same machine (paths or directories).
-    Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...).
+    Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...) with, unless
+    ``arrays`` is False, numpy arrays: ``spectra`` (per channel: ``frequency_hz`` [Hz], ``amplitude`` [unit]),
+    in each entry of ``gears`` the ``tsa``, ``residual`` and ``difference`` signals over one revolution
+    [unit] and the TSA's ``order_amplitude`` [unit] by order of that shaft, in ``envelope`` its spectrum
+    (``order``, ``amplitude`` [unit^2]) and in ``cepstrum`` its ``quefrency_s`` [s] and ``value``.
     """
     many = isinstance(samples, (list, tuple))
     items = list(samples) if many else [samples]
     paths = [os.fspath(x) for x in items if isinstance(x, (str, os.PathLike))]
-    arrays = [x for x in items if not isinstance(x, (str, os.PathLike))]
-    arrays = [x if isinstance(x, np.ndarray) else np.asarray(x, dtype=np.float64) for x in arrays]
+    data = [x for x in items if not isinstance(x, (str, os.PathLike))]
+    data = [x if isinstance(x, np.ndarray) else np.asarray(x, dtype=np.float64) for x in data]
     if baseline is None:
         base = []
     elif isinstance(baseline, (str, os.PathLike)):
         base = [os.fspath(baseline)]
     else:
         base = [os.fspath(b) for b in baseline]
-    raw = _gearvib.diagnose(paths, arrays, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base)
+    raw = _gearvib.diagnose(paths, data, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base)
     # files come back first, then arrays: restore the order given
     by_kind = {"path": iter(raw[: len(paths)]), "array": iter(raw[len(paths):])}
-    out = [
-        json.loads(next(by_kind["path" if isinstance(x, (str, os.PathLike)) else "array"]))
-        for x in items
-    ]
+    out = [_with_arrays(*next(by_kind["path" if isinstance(x, (str, os.PathLike)) else "array"]), arrays) for x in items]
     return out if many else out[0]
+
+
+def _with_arrays(text: str, curves: dict, arrays: bool) -> dict:
+    """The diagnosis dictionary of ``text`` with the numpy curves put where they belong."""
+    d = json.loads(text)
+    if not arrays:
+        return d
+    d["spectra"] = curves["spectra"]
+    for gear, c in zip(d["gears"], curves["gears"]):
+        gear.update(c)
+    for key in ("envelope", "cepstrum"):
+        if d.get(key) is not None and curves[key] is not None:
+            d[key].update(curves[key])
+    return d
 
 
 def identify(

@@ -30,8 +30,11 @@ def diagnose(
     channel: Optional[int] = ...,
     unit: Optional[str] = ...,
     baseline: Union[None, PathLike, Iterable[PathLike]] = ...,
+    arrays: bool = ...,
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
-    """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys."""
+    """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys plus
+    numpy arrays (unless `arrays` is False): `spectra` [Hz, unit], per gear `tsa`, `residual`,
+    `difference` [unit] and `order_amplitude` [unit], `envelope` `order`/`amplitude`, `cepstrum`."""
 
 def identify(
     recording: PathLike,

@@ -10,6 +10,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
 use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -146,9 +147,9 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     })
 }
 
-/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline) -> list of `diagnose --json`
-/// objects as JSON strings: files first, then the in-memory recordings (channels x samples, float32 or
-/// float64, any layout) named "array 1", "array 2", ...
+/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline) -> list of (`diagnose --json`
+/// object as a JSON string, its curves as numpy arrays (see `Curves::into_py`)): files first, then the
+/// in-memory recordings (channels x samples, float32 or float64, any layout) named "array 1", "array 2", ...
 #[pyfunction]
 #[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
@@ -163,7 +164,7 @@ fn diagnose(
     channel: Option<usize>,
     unit: Option<String>,
     baseline: Vec<String>,
-) -> PyResult<Vec<String>> {
+) -> PyResult<Vec<(String, Py<PyDict>)>> {
     // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
     // place, others are converted once
     let held = arrays.iter().map(|a| held_array(a, fs)).collect::<PyResult<Vec<_>>>()?;
@@ -184,12 +185,78 @@ fn diagnose(
         let prepared = prepared_for(&job)?;
         let mut out = Vec::new();
         gearvib::jobs::diagnose::run_streaming_prepared(&job, &prepared, &mut |d| {
-            out.push(serde_json::to_string(&d).unwrap_or_default());
+            out.push((serde_json::to_string(&d).unwrap_or_default(), Curves::of(d)));
             Ok(())
         })?;
         Ok(out)
     })
     .map_err(to_py)
+    .and_then(|all| all.into_iter().map(|(text, curves)| Ok((text, curves.into_py(py)?))).collect())
+}
+
+/// The curves of a diagnosis that `--json` leaves out, for numpy: amplitude spectra per channel, each
+/// gear's TSA with its residual, difference signal and order amplitudes, the envelope spectrum, the cepstrum.
+struct Curves {
+    spectra: Vec<(usize, Vec<f64>, Vec<f64>)>,
+    gears: Vec<[Vec<f64>; 4]>,
+    envelope: Option<(Vec<f64>, Vec<f64>)>,
+    cepstrum: Option<(f64, Vec<f64>)>,
+}
+
+impl Curves {
+    fn of(d: gearvib::report::summary::Diagnosis) -> Self {
+        let spectra = d.spectra().iter().map(|(c, s)| (*c, s.freqs_hz.clone(), s.values.clone())).collect();
+        let gears = d.gears.into_iter().map(|g| [g.tsa, g.residual, g.difference, g.tsa_amplitudes]).collect();
+        let envelope = d.envelope.map(|e| (e.orders, e.amplitudes));
+        let cepstrum = d.cepstrum.map(|c| (c.dq_s, c.values));
+        Self { spectra, gears, envelope, cepstrum }
+    }
+
+    /// {"spectra": [{channel, frequency_hz, amplitude}], "gears": [{tsa, residual, difference,
+    /// order_amplitude}] (in the order of the JSON's "gears"), "envelope": {order, amplitude} or None,
+    /// "cepstrum": {quefrency_s, value} or None}.
+    fn into_py(self, py: Python<'_>) -> PyResult<Py<PyDict>> {
+        let out = PyDict::new(py);
+        let spectra = PyList::empty(py);
+        for (c, f, a) in self.spectra {
+            let s = PyDict::new(py);
+            s.set_item("channel", c)?;
+            s.set_item("frequency_hz", f.into_pyarray(py))?;
+            s.set_item("amplitude", a.into_pyarray(py))?;
+            spectra.append(s)?;
+        }
+        out.set_item("spectra", spectra)?;
+        let gears = PyList::empty(py);
+        for [tsa, residual, difference, amplitudes] in self.gears {
+            let g = PyDict::new(py);
+            g.set_item("tsa", tsa.into_pyarray(py))?;
+            g.set_item("residual", residual.into_pyarray(py))?;
+            g.set_item("difference", difference.into_pyarray(py))?;
+            g.set_item("order_amplitude", amplitudes.into_pyarray(py))?;
+            gears.append(g)?;
+        }
+        out.set_item("gears", gears)?;
+        match self.envelope {
+            Some((o, a)) => {
+                let e = PyDict::new(py);
+                e.set_item("order", o.into_pyarray(py))?;
+                e.set_item("amplitude", a.into_pyarray(py))?;
+                out.set_item("envelope", e)?;
+            }
+            None => out.set_item("envelope", py.None())?,
+        }
+        match self.cepstrum {
+            Some((dq, v)) => {
+                let c = PyDict::new(py);
+                let q: Vec<f64> = (0..v.len()).map(|i| i as f64 * dq).collect();
+                c.set_item("quefrency_s", q.into_pyarray(py))?;
+                c.set_item("value", v.into_pyarray(py))?;
+                out.set_item("cepstrum", c)?;
+            }
+            None => out.set_item("cepstrum", py.None())?,
+        }
+        Ok(out.unbind())
+    }
 }
 
 /// The baseline side of the last call, kept per process: a worker that diagnoses one recording per call
