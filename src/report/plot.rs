@@ -412,10 +412,29 @@ where
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(180, 180, 180))
             .label_font(("sans-serif", 16))
-            .position(SeriesLabelPosition::UpperRight)
+            .position(legend_corner(chart, area.dim_in_pixel().0))
             .draw()?;
     }
     Ok(())
+}
+
+/// The upper corner for the legend: the right one unless more marker labels (drawn along the top) fall
+/// under it than under the left one. The legend's width is estimated from its longest label (16 px text:
+/// about 8.5 px a character, plus the line sample and padding) against the chart's `width` in pixels.
+fn legend_corner(chart: &Chart, width: u32) -> SeriesLabelPosition {
+    let longest = chart.series.iter().map(|s| s.name.chars().count()).max().unwrap_or(0);
+    let share = (longest as f64 * 8.5 + 60.0) / f64::from(width.max(1));
+    let (lo, hi) = match data_range(chart) {
+        Ok(((lo, hi), _)) if hi > lo => (lo, hi),
+        _ => return SeriesLabelPosition::UpperRight,
+    };
+    let at = |x: f64| if chart.x_log { (x / lo).ln() / (hi / lo).ln() } else { (x - lo) / (hi - lo) };
+    let under = |from: f64, to: f64| chart.markers.iter().map(|m| at(m.x)).filter(|f| (from..=to).contains(f)).count();
+    if under(1.0 - share, 1.0) > under(0.0, share) {
+        SeriesLabelPosition::UpperLeft
+    } else {
+        SeriesLabelPosition::UpperRight
+    }
 }
 
 /// Tick labels: plain for moderate magnitudes, scientific otherwise.
