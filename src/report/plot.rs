@@ -408,32 +408,47 @@ where
         }
     }
     if chart.series.len() > 1 || chart.unit_circle {
+        let position = legend_position(chart, c.plotting_area().dim_in_pixel());
         c.configure_series_labels()
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(180, 180, 180))
             .label_font(("sans-serif", 16))
-            .position(legend_corner(chart, area.dim_in_pixel().0))
+            .position(position)
             .draw()?;
     }
     Ok(())
 }
 
-/// The upper corner for the legend: the right one unless more marker labels (drawn along the top) fall
-/// under it than under the left one. The legend's width is estimated from its longest label (16 px text:
-/// about 8.5 px a character, plus the line sample and padding) against the chart's `width` in pixels.
-fn legend_corner(chart: &Chart, width: u32) -> SeriesLabelPosition {
-    let longest = chart.series.iter().map(|s| s.name.chars().count()).max().unwrap_or(0);
-    let share = (longest as f64 * 8.5 + 60.0) / f64::from(width.max(1));
-    let (lo, hi) = match data_range(chart) {
-        Ok(((lo, hi), _)) if hi > lo => (lo, hi),
-        _ => return SeriesLabelPosition::UpperRight,
-    };
+/// Where the legend goes, in pixels of the plotting area (`size`): below the marker labels (three staggered
+/// rows along the top) when there are markers, in the upper corner over less data (the right one unless
+/// the data under it reaches higher than under the left one). Its size is estimated from its entries (16 px
+/// text: at most about 7 px a character, plus the line sample and padding).
+fn legend_position(chart: &Chart, size: (u32, u32)) -> SeriesLabelPosition {
+    let longest = chart.series.iter().map(|s| s.name.chars().count()).max().unwrap_or(0).max(22);
+    let width = (longest as f64 * 7.0 + 55.0).min(f64::from(size.0));
+    let top = if chart.markers.is_empty() { 10 } else { 60 };
+    let right = i32::try_from(size.0).unwrap_or(0) - width as i32 - 10;
+    let Ok(((lo, hi), (ylo, yhi))) = data_range(chart) else { return SeriesLabelPosition::Coordinate(right, top) };
+    if hi <= lo || yhi <= ylo {
+        return SeriesLabelPosition::Coordinate(right, top);
+    }
+    let share = width / f64::from(size.0.max(1));
     let at = |x: f64| if chart.x_log { (x / lo).ln() / (hi / lo).ln() } else { (x - lo) / (hi - lo) };
-    let under = |from: f64, to: f64| chart.markers.iter().map(|m| at(m.x)).filter(|f| (from..=to).contains(f)).count();
-    if under(1.0 - share, 1.0) > under(0.0, share) {
-        SeriesLabelPosition::UpperLeft
+    // the highest point under each corner, as a share of the height from the bottom
+    let height = |y: f64| if chart.y_log { (y / ylo).ln() / (yhi / ylo).ln() } else { (y - ylo) / (yhi - ylo) };
+    let highest = |from: f64, to: f64| {
+        chart
+            .series
+            .iter()
+            .flat_map(|s| &s.points)
+            .filter(|p| p.0.is_finite() && p.1.is_finite() && (from..=to).contains(&at(p.0)))
+            .map(|p| height(p.1))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    if highest(1.0 - share, 1.0) > highest(0.0, share) {
+        SeriesLabelPosition::Coordinate(10, top)
     } else {
-        SeriesLabelPosition::UpperRight
+        SeriesLabelPosition::Coordinate(right, top)
     }
 }
 

@@ -48,7 +48,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
             y_label: format!("amplitude{unit}"),
             y_log: true,
             // room on the right for the legend, above the data for the labels
-            x_range: Some((0.0, max_hz * 1.22)),
+            x_range: Some((0.0, max_hz * 1.02)),
             y_range: Some((floor, peak * 10.0)),
             series: order_stems(&sim.orders, teeth, floor),
             markers: mesh_markers(scene, max_hz),
