@@ -321,6 +321,82 @@ fn apply_sidecar(path: &Path, rec: &mut Recording<'_>) {
     rec.units.resize(rec.names.len(), String::new());
 }
 
+/// A signal file being written under a temporary name, by its extension: a WAV (`.wav`) or a CSV with a
+/// time column (`.csv`).
+pub enum SignalOut {
+    /// A WAV file (float or integer samples).
+    Wav(wav::WavOut),
+    /// A CSV file with headers "name [unit]".
+    Csv(csv::CsvOut),
+}
+
+impl SignalOut {
+    /// Creates `path` for `channels` at `fs` Hz: a WAV in `format` (its rate is `fs` in whole Hz) or a CSV
+    /// whose headers name each channel with its unit in brackets.
+    ///
+    /// # Errors
+    /// An extension other than .wav or .csv, more than 65535 WAV channels, the file cannot be created.
+    pub fn create(
+        path: &Path,
+        channels: &[sidecar::ChannelInfo],
+        fs: f64,
+        format: wav::WavSampleFormat,
+    ) -> Result<Self, DataError> {
+        match extension(path).as_deref() {
+            Some("wav") => {
+                let nch =
+                    u16::try_from(channels.len()).map_err(|_| DataError::format(path, "more than 65535 channels"))?;
+                Ok(Self::Wav(wav::WavOut::create(path, nch, fs as u32, format)?))
+            }
+            Some("csv") => {
+                let names: Vec<String> = channels
+                    .iter()
+                    .map(|c| if c.unit.is_empty() { c.name.clone() } else { format!("{} [{}]", c.name, c.unit) })
+                    .collect();
+                Ok(Self::Csv(csv::CsvOut::create(path, &names, fs)?))
+            }
+            _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
+        }
+    }
+
+    /// Appends interleaved frames.
+    ///
+    /// # Errors
+    /// Writing fails.
+    pub fn write(&mut self, interleaved: &[f64]) -> Result<(), DataError> {
+        match self {
+            Self::Wav(w) => w.write(interleaved),
+            Self::Csv(c) => c.write(interleaved),
+        }
+    }
+
+    /// Finishes the file, still under its temporary name: the guard that puts it in place and the samples
+    /// clipped at integer full scale (0 for float WAV and CSV).
+    ///
+    /// # Errors
+    /// Flushing fails.
+    pub fn finish(self) -> Result<(AtomicFile, u64), DataError> {
+        match self {
+            Self::Wav(w) => w.finish(),
+            Self::Csv(c) => Ok((c.finish()?, 0)),
+        }
+    }
+}
+
+/// Puts a finished signal and its sidecar `info` in place as a pair: both temporaries written, then the
+/// signal renamed and the sidecar last; a sidecar that cannot be put in place takes the signal with it (an
+/// integer WAV without its full scale would read wrong).
+///
+/// # Errors
+/// Either file cannot be written or renamed.
+pub fn commit_with_sidecar(path: &Path, signal: AtomicFile, info: &sidecar::Sidecar) -> Result<(), DataError> {
+    let side = sidecar::write(path, info)?;
+    signal.commit()?;
+    side.commit().inspect_err(|_| {
+        let _ = std::fs::remove_file(path);
+    })
+}
+
 /// Writes `rec` to `path` by its extension, atomically: a float WAV (f32, the sample rate must be a whole
 /// number of Hz) with a sidecar `path.json` naming each channel and its unit, or a CSV with a `time_s`
 /// column and headers "name [unit]". [`read_recording`] gives the same samples, names and units back.
@@ -337,72 +413,62 @@ pub fn write_recording(path: &Path, rec: &Recording<'_>) -> Result<(), DataError
         .sample_rate_hz
         .filter(|f| f.is_finite() && *f > 0.0)
         .ok_or_else(|| DataError::format(path, "a recording to write needs a positive sample rate in Hz"))?;
-    let nch = rec.channels.len();
-    let name = |c: usize| rec.names.get(c).cloned().unwrap_or_else(|| format!("ch{}", c + 1));
-    let unit = |c: usize| rec.units.get(c).cloned().unwrap_or_default();
-    // frames interleaved a block at a time: the memory of one block, not of the recording
-    let blocks = |write: &mut dyn FnMut(&[f64]) -> Result<(), DataError>| -> Result<(), DataError> {
-        let mut buf = Vec::with_capacity(nch * 65536);
-        for start in (0..frames).step_by(65536) {
-            buf.clear();
-            for i in start..(start + 65536).min(frames) {
-                buf.extend(rec.channels.iter().map(|c| f64::from(c[i])));
-            }
-            write(&buf)?;
+    let channels: Vec<sidecar::ChannelInfo> = (0..rec.channels.len())
+        .map(|c| sidecar::ChannelInfo {
+            name: rec.names.get(c).cloned().unwrap_or_else(|| format!("ch{}", c + 1)),
+            unit: rec.units.get(c).cloned().unwrap_or_default(),
+            description: String::new(),
+        })
+        .collect();
+    let is_wav = extension(path).as_deref() == Some("wav");
+    let rate = if is_wav {
+        if (fs.round() - fs).abs() > 1e-9 * fs || fs.round() > f64::from(u32::MAX) {
+            return Err(DataError::format(path, format!("a WAV stores a whole number of Hz, not {fs}: write a .csv")));
         }
-        Ok(())
+        fs.round()
+    } else {
+        if let Some(c) = channels.iter().position(|c| (c.name.clone() + &c.unit).contains([',', '\n', '\r', '"'])) {
+            return Err(DataError::format(
+                path,
+                format!("channel {} name or unit holds a comma, quote or line break", c + 1),
+            ));
+        }
+        fs
     };
-    match extension(path).as_deref() {
-        Some("wav") => {
-            let rate =
-                u32::try_from(fs.round() as u64).ok().filter(|r| (f64::from(*r) - fs).abs() <= 1e-9 * fs).ok_or_else(
-                    || DataError::format(path, format!("a WAV stores a whole number of Hz, not {fs}: write a .csv")),
-                )?;
-            let channels = u16::try_from(nch).map_err(|_| DataError::format(path, "more than 65535 channels"))?;
-            let mut out = wav::WavOut::create(path, channels, rate, wav::WavSampleFormat::Float32)?;
-            blocks(&mut |b| out.write(b))?;
-            let (guard, _) = out.finish()?;
-            let info = sidecar::Sidecar {
-                file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
-                scene: String::new(),
-                scene_file: String::new(),
-                sample_rate_hz: fs,
-                frames: frames as u64,
-                duration_s: frames as f64 / fs,
-                channels: (0..nch)
-                    .map(|c| sidecar::ChannelInfo { name: name(c), unit: unit(c), description: String::new() })
-                    .collect(),
-                format: "f32".into(),
-                full_scale: None,
-                clipped_samples: 0,
-                noise_rms: 0.0,
-                seed: 0,
-                speed_change: None,
-                base_hz: 0.0,
-                period_s: 0.0,
-                evaluation: "samples as given (write_recording)".into(),
-                warnings: Vec::new(),
-            };
-            let side = sidecar::write(path, &info)?;
-            guard.commit()?;
-            side.commit()
+    let mut out = SignalOut::create(path, &channels, rate, wav::WavSampleFormat::Float32)?;
+    // frames interleaved a block at a time: the memory of one block, not of the recording
+    let mut buf = Vec::with_capacity(channels.len() * 65536);
+    for start in (0..frames).step_by(65536) {
+        buf.clear();
+        for i in start..(start + 65536).min(frames) {
+            buf.extend(rec.channels.iter().map(|c| f64::from(c[i])));
         }
-        Some("csv") => {
-            if let Some(c) = (0..nch).find(|&c| (name(c) + &unit(c)).contains([',', '\n', '\r', '"'])) {
-                return Err(DataError::format(
-                    path,
-                    format!("channel {} name or unit holds a comma, quote or line break", c + 1),
-                ));
-            }
-            let names: Vec<String> = (0..nch)
-                .map(|c| if unit(c).is_empty() { name(c) } else { format!("{} [{}]", name(c), unit(c)) })
-                .collect();
-            let mut out = csv::CsvOut::create(path, &names, fs)?;
-            blocks(&mut |b| out.write(b))?;
-            out.finish()?.commit()
-        }
-        _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
+        out.write(&buf)?;
     }
+    let (guard, _) = out.finish()?;
+    if !is_wav {
+        return guard.commit();
+    }
+    let info = sidecar::Sidecar {
+        file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        scene: String::new(),
+        scene_file: String::new(),
+        sample_rate_hz: fs,
+        frames: frames as u64,
+        duration_s: frames as f64 / fs,
+        channels,
+        format: "f32".into(),
+        full_scale: None,
+        clipped_samples: 0,
+        noise_rms: 0.0,
+        seed: 0,
+        speed_change: None,
+        base_hz: 0.0,
+        period_s: 0.0,
+        evaluation: "samples as given (write_recording)".into(),
+        warnings: Vec::new(),
+    };
+    commit_with_sidecar(path, guard, &info)
 }
 
 /// Creates a directory (and its parents) for outputs.

@@ -14,7 +14,7 @@
 use super::JobError;
 use crate::Error;
 use crate::io::sidecar::{ChannelInfo, Sidecar};
-use crate::io::{csv::CsvOut, wav::WavOut, wav::WavSampleFormat};
+use crate::io::{SignalOut, wav::WavSampleFormat};
 use crate::model::OutputQuantity;
 use crate::report::summary::Simulation;
 use crate::scene::{Model, Scene, WavFormat};
@@ -289,11 +289,6 @@ pub fn check_request(scene: &Scene, out: &Path, allow_aliasing: bool, warnings: 
     Ok(())
 }
 
-enum Sink {
-    Wav(WavOut),
-    Csv(CsvOut),
-}
-
 /// Writes the scene's output signal to `out` (.wav or .csv) and a sidecar `out.json`; returns what was written.
 ///
 /// # Errors
@@ -343,19 +338,11 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         });
     }
     let nch = channels.len();
-    let mut sink = if is_wav {
-        let fmt = match full_scale {
-            None => WavSampleFormat::Float32,
-            Some(fsc) => WavSampleFormat::Int { bits: if format == "i16" { 16 } else { 24 }, full_scale: fsc },
-        };
-        Sink::Wav(WavOut::create(out, nch as u16, fs as u32, fmt)?)
-    } else {
-        let names: Vec<String> = channels
-            .iter()
-            .map(|c| if c.unit.is_empty() { c.name.clone() } else { format!("{} [{}]", c.name, c.unit) })
-            .collect();
-        Sink::Csv(CsvOut::create(out, &names, fs)?)
+    let fmt = match full_scale {
+        None => WavSampleFormat::Float32,
+        Some(fsc) => WavSampleFormat::Int { bits: if format == "i16" { 16 } else { 24 }, full_scale: fsc },
     };
+    let mut sink = SignalOut::create(out, &channels, fs, fmt)?;
     let period = sim.steady.period_s;
     let mut noise = Noise::new(o.seed);
     const CHUNK: usize = 8192;
@@ -404,16 +391,10 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
                 buf.push(if wrap(rev, 1.0) < 0.05 { pulse } else { 0.0 });
             }
         }
-        match &mut sink {
-            Sink::Wav(w) => w.write(&buf)?,
-            Sink::Csv(c) => c.write(&buf)?,
-        }
+        sink.write(&buf)?;
         start += len as u64;
     }
-    let (signal_guard, clipped) = match sink {
-        Sink::Wav(w) => w.finish()?,
-        Sink::Csv(c) => (c.finish()?, 0),
-    };
+    let (signal_guard, clipped) = sink.finish()?;
     if clipped > 0 {
         warnings.push(format!(
             "{clipped} samples clipped at integer full scale {}; raise output.full_scale",
@@ -448,15 +429,7 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         },
         warnings,
     };
-    // the pair as a unit: both temporaries written, then the signal renamed and the sidecar last; a
-    // sidecar that cannot be put in place takes the signal with it (an integer WAV without its full scale
-    // would read wrong)
-    let sidecar_guard = crate::io::sidecar::write(out, &info)?;
-    signal_guard.commit()?;
-    if let Err(e) = sidecar_guard.commit() {
-        let _ = std::fs::remove_file(out);
-        return Err(e.into());
-    }
+    crate::io::commit_with_sidecar(out, signal_guard, &info)?;
     Ok(info)
 }
 

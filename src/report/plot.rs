@@ -320,14 +320,14 @@ where
             vec![(m.x, yr.start), (m.x, yr.end)],
             col.mix(0.35).stroke_width(1),
         )))?;
-        // stagger labels on three rows so that neighbours do not collide
-        let row = (i % 3) as i32;
+        // stagger labels on rows so that neighbours do not collide
+        let row = (i % MARKER_LABEL_ROWS) as i32;
         let font = ("sans-serif", 14).into_font().color(&col).pos(plotters::style::text_anchor::Pos::new(
             plotters::style::text_anchor::HPos::Center,
             plotters::style::text_anchor::VPos::Top,
         ));
         c.draw_series(std::iter::once(
-            EmptyElement::at((m.x, yr.end)) + Text::new(m.label.clone(), (0, 4 + 16 * row), font),
+            EmptyElement::at((m.x, yr.end)) + Text::new(m.label.clone(), (0, 4 + MARKER_ROW_PX * row), font),
         ))?;
     }
     let (ylo, yhi) = (yr.start.min(yr.end), yr.start.max(yr.end));
@@ -408,7 +408,7 @@ where
         }
     }
     if chart.series.len() > 1 || chart.unit_circle {
-        let position = legend_position(chart, c.plotting_area().dim_in_pixel());
+        let position = legend_position(chart, c.plotting_area().dim_in_pixel(), (xlo, xhi), (ylo, yhi));
         c.configure_series_labels()
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(180, 180, 180))
@@ -419,16 +419,20 @@ where
     Ok(())
 }
 
-/// Where the legend goes, in pixels of the plotting area (`size`): below the marker labels (three staggered
-/// rows along the top) when there are markers, in the upper corner over less data (the right one unless
-/// the data under it reaches higher than under the left one). Its size is estimated from its entries (16 px
-/// text: at most about 7 px a character, plus the line sample and padding).
-fn legend_position(chart: &Chart, size: (u32, u32)) -> SeriesLabelPosition {
+/// Marker labels are staggered on this many rows along the top, each this many pixels high.
+const MARKER_LABEL_ROWS: usize = 3;
+const MARKER_ROW_PX: i32 = 16;
+
+/// Where the legend goes, in pixels of the plotting area (`size`; data ranges `x` and `y` as drawn): below
+/// the rows of marker labels when there are markers, in the upper corner over less data (the right one
+/// unless the data under it reaches higher than under the left one). Its width is estimated from its
+/// longest entry (16 px text: at most about 7 px a character, plus the line sample and padding).
+fn legend_position(chart: &Chart, size: (u32, u32), x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
     let longest = chart.series.iter().map(|s| s.name.chars().count()).max().unwrap_or(0).max(22);
     let width = (longest as f64 * 7.0 + 55.0).min(f64::from(size.0));
-    let top = if chart.markers.is_empty() { 10 } else { 60 };
+    let top = if chart.markers.is_empty() { 10 } else { 4 + MARKER_ROW_PX * MARKER_LABEL_ROWS as i32 + 8 };
     let right = i32::try_from(size.0).unwrap_or(0) - width as i32 - 10;
-    let Ok(((lo, hi), (ylo, yhi))) = data_range(chart) else { return SeriesLabelPosition::Coordinate(right, top) };
+    let ((lo, hi), (ylo, yhi)) = (x, y);
     if hi <= lo || yhi <= ylo {
         return SeriesLabelPosition::Coordinate(right, top);
     }

@@ -11,7 +11,7 @@
 //! ```
 
 use super::spectrum::Fft;
-use super::tsa::{AngleMap, Interpolator};
+use super::tsa::AngleMap;
 use super::{Sample, SignalError};
 
 /// Complex envelope of the band [`lo`, `hi`) bins of a one-sided spectrum of an N-point real signal: the
@@ -276,18 +276,10 @@ pub fn squared_envelope_segments<T: Sample>(
 pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points: usize) -> (Vec<f64>, Vec<f64>) {
     let revs = map.revolutions();
     let n = revs * points;
-    // positions, then values in their place a block at a time, and the Hann window (periodic, as
-    // `spectrum::hann`) applied as it is computed: a 60 s record's order spectrum holds no array of its length
-    // besides the samples and their spectrum
+    // the Hann window (periodic, as `spectrum::hann`) applied as it is computed: a 60 s record's order
+    // spectrum holds no array of its length besides the samples and their spectrum
     let mut y = vec![0.0; n];
-    map.fill_positions(0.0, 1.0 / points as f64, &mut y);
-    let mut at = vec![0.0; n.min(1 << 16)];
-    for block in y.chunks_mut(1 << 16) {
-        let at = &mut at[..block.len()];
-        at.copy_from_slice(block);
-        Interpolator::shared().fill(x, at, block);
-    }
-    drop(at);
+    map.resample(x, 0.0, 1.0 / points as f64, &mut y);
     let mean = y.iter().sum::<f64>() / n.max(1) as f64;
     let step = 2.0 * std::f64::consts::PI / n as f64;
     let mut gain = 0.0;

@@ -76,6 +76,20 @@ impl AngleMap {
         }
     }
 
+    /// `out[i]` = `x` at the angle `rev0 + i step` revolutions ([`Interpolator`]): the positions are filled
+    /// into `out` and replaced by the values a block at a time, so a record-long resampling holds no second
+    /// array of its length.
+    pub fn resample<T: Sample>(&self, x: &[T], rev0: f64, step: f64, out: &mut [f64]) {
+        const BLOCK: usize = 1 << 16;
+        self.fill_positions(rev0, step, out);
+        let mut at = vec![0.0; out.len().min(BLOCK)];
+        for block in out.chunks_mut(BLOCK) {
+            let at = &mut at[..block.len()];
+            at.copy_from_slice(block);
+            Interpolator::shared().fill(x, at, block);
+        }
+    }
+
     /// The revolution whose cubic covers angle `rev` (the first or last outside the covered range).
     #[inline]
     fn segment(&self, rev: f64) -> usize {

@@ -10,6 +10,7 @@
 //! method the error of the finer result is about |x_m - x_2m| / 15), starting above the explicit
 //! stability limit h |lambda(P)|max < 2.78 of RK4.
 
+mod band;
 pub mod companion;
 pub mod eigen;
 pub mod error;

@@ -199,11 +199,7 @@ fn shaft_through_mesh(
     let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
     let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
     let mut y = vec![0.0; points];
-    {
-        let mut positions = vec![0.0; points];
-        tracked.map.fill_positions(0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut positions);
-        tsa::Interpolator::shared().fill(x, &positions, &mut y);
-    }
+    tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
     let cycles_max = (points / p / min_revs.max(2)).min(1 << 14);
     let r = crate::signal::spectrum::autocorrelation(fft, &y, cycles_max * p);
     let c: Vec<f64> = r.iter().step_by(p).copied().collect();
