@@ -108,7 +108,8 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
                 x_label: "frequency [Hz]".into(),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
-                x_range: Some((lo, hi + 5.0 * scene.output.base_hz)),
+                // centred on the mesh line; the legend sits below the labels, over the lower side's lines
+                x_range: Some((lo, hi)),
                 y_range: Some((floor, peak * 10.0)),
                 series: order_stems(&lines, teeth, floor),
                 markers,
