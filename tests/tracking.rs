@@ -160,6 +160,39 @@ fn speed_and_mesh_are_found_without_rpm_or_teeth() {
     assert_one_line_error(&gearvib(&["diagnose", &wav]), &["no plausible shaft speed", "--rpm"]);
 }
 
+/// Without `--rpm` or a tachometer, under a 1 % fluctuation, a baseline's estimated speed is no help to the
+/// raw repetition search near its period (the autocorrelation of a revolution smears over a hundred of
+/// them): the recording is followed on its mesh line, as its baseline was. This once failed with "no
+/// repetition period found between 323 and 345 samples" (healthy) or a speed 50 % off the baseline's
+/// (cracked), with and without `--teeth`.
+#[test]
+fn a_baseline_without_rpm_holds_under_a_one_percent_fluctuation() {
+    let dir = temp_dir("tracking-baseline-estimated");
+    let base = recording(&dir, "healthy", "base", 920, drift());
+    let healthy = recording(&dir, "healthy", "healthy", 921, drift());
+    let cracked = recording(&dir, "cracked-pinion-tooth3", "cracked", 922, drift());
+    let ecc = recording(&dir, "wheel-eccentricity", "ecc", 923, drift());
+    for teeth in [&["--teeth", "14,39"][..], &[]] {
+        let mut args = vec!["--baseline", base.as_str()];
+        args.extend_from_slice(teeth);
+        let all = diagnose(&[healthy.clone(), cracked.clone(), ecc.clone()], &args);
+        for d in &all {
+            // the speed is estimated (30 Hz moved by at most 1 % by the fluctuation) and the mesh is the
+            // baseline's order 14, for all three including the wheel's (a 39-cycle repetition)
+            let f = d["speed_profile"]["mean_hz"].as_f64().unwrap();
+            assert!((f / 30.0 - 1.0).abs() < 0.012, "{teeth:?} {}: {f} Hz", d["file"]);
+            assert_eq!(d["mesh_order"], 14, "{teeth:?} {}", d["file"]);
+            assert_eq!(d["speed_source"], "estimated", "{teeth:?} {}", d["file"]);
+        }
+        assert_ne!(all[0]["verdict"]["state"], "faulty", "{teeth:?}: {}", all[0]["verdict"]);
+        assert_eq!(all[1]["verdict"]["state"], "faulty", "{teeth:?}: {}", all[1]["verdict"]);
+        if !teeth.is_empty() {
+            assert_eq!(all[1]["verdict"]["gear"], "pinion", "{}", all[1]["verdict"]);
+            assert_eq!(all[2]["verdict"]["gear"], "wheel", "{}", all[2]["verdict"]);
+        }
+    }
+}
+
 #[test]
 fn wrong_teeth_are_warned_about() {
     let rec = repo("data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav");

@@ -18,6 +18,7 @@ use crate::io::{SignalOut, wav::WavSampleFormat};
 use crate::model::OutputQuantity;
 use crate::report::summary::Simulation;
 use crate::scene::{Model, Scene, WavFormat};
+use crate::solver::Trajectory;
 use crate::system::Side;
 use std::path::Path;
 
@@ -114,6 +115,10 @@ fn evaluator<'a>(scene: &'a Scene, sim: &'a Simulation) -> Evaluator<'a> {
     let kmax = sys.max_harmonic().max((scene.output.max_order * period * scene.output.base_hz) as usize).max(1);
     let per_harmonic = 2.0 * std::f64::consts::PI * (384.0 * scene.solver.tolerance).powf(-0.25);
     let m = ((kmax as f64 * per_harmonic).ceil() as usize).max(1024).next_power_of_two().min(1 << 22);
+    if let Trajectory::Fourier(sol) = &sim.steady.trajectory {
+        let (values, slopes) = super::simulate::fourier_table(&scene.output.quantity, sol, m);
+        return Evaluator::Table(Table { period_s: period, values, slopes });
+    }
     let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
     let n = sys.dim();
     let mut states = Vec::new();

@@ -26,7 +26,9 @@ pub struct Compatibility {
 /// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
 /// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
 /// [`WARN_SPEED_DIFFERENCE`], operating point taken as different beyond
-/// [`OPERATING_POINT_SPEED_DIFFERENCE`]), sample rate and overall level (warned).
+/// [`OPERATING_POINT_SPEED_DIFFERENCE`] or, when larger, beyond the half-range of the speed within either
+/// recording: a speed that wanders by +-1 % moves the mean of a few seconds by tenths of a percent),
+/// sample rate and overall level (warned).
 ///
 /// # Errors
 /// An incompatible baseline, naming both files and what differs.
@@ -63,12 +65,16 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
             100.0 * ratio
         ));
     }
-    let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE).then(|| {
+    // a machine whose speed wanders within each recording covers a range of speeds in both: means that
+    // differ by less than that wander are one operating point
+    let wander = 0.01 * d.speed_profile.fluctuation_percent.max(b.speed_profile.fluctuation_percent);
+    let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE.max(wander)).then(|| {
         format!(
-            "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
+            "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
             100.0 * ratio.abs(),
             if ratio > 0.0 { "faster" } else { "slower" },
-            (OPERATING_POINT_SPEED_DIFFERENCE * 1e6 / 20.0) as u32
+            (OPERATING_POINT_SPEED_DIFFERENCE * 1e6 / 20.0) as u32,
+            100.0 * wander
         )
     });
     if let (Some(fd), Some(fb)) = (d.sample_rate_hz, b.sample_rate_hz) {

@@ -46,8 +46,25 @@ pub(super) fn nominal_speed(
         });
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
+    let full: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 21)]).collect();
+    let pinion_teeth = o.teeth.map(|t| t.0);
     let est = match geometry.and_then(|g| g.period_samples) {
-        Some(p) => speed::refine_near(fft, &views, p, 0.03),
+        Some(p) => {
+            // the baseline's period: a mesh-dominated recording is followed on its mesh line as the
+            // baseline was (a 1 % speed fluctuation smears the raw repetition of a whole revolution), and
+            // the shaft found there is kept when it is the baseline's within the accepted speed change
+            let mesh_order = geometry.and_then(|g| g.mesh_order).or(pinion_teeth);
+            if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
+                warnings.push(found.note);
+                return Ok(Nominal {
+                    map: AngleMap::constant(found.period_samples, 0.0, n),
+                    source: SpeedSource::Estimated,
+                    confidence: found.confidence,
+                    mesh_order: found.mesh_order,
+                });
+            }
+            speed::refine_near(fft, &views, p, 0.03)
+        }
         None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
     }
     .map_err(|e| bad(path, e))?;
@@ -55,8 +72,7 @@ pub(super) fn nominal_speed(
     // mesh line's own angle, which holds under speed fluctuation where the raw autocorrelation smears
     let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
     if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
-        let full: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 21)]).collect();
-        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, o.teeth.map(|t| t.0)) {
+        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth) {
             Ok(Some(found)) => {
                 warnings.push(found.note);
                 return Ok(Nominal {
@@ -158,6 +174,30 @@ struct MeshShaft {
     note: String,
 }
 
+/// The shaft near a baseline's period `period` (samples) of mesh order `mesh_order`, found on the mesh
+/// line's angle ([`shaft_through_mesh`]) from the mesh lag refined within +-10 % of period / mesh order:
+/// the revolution is `mesh_order` cycles of the fundamental mesh, as in the baseline (the signal may
+/// repeat over the wheel's or a hunting period). None when the line cannot be followed or the shaft found
+/// is further than [`MAX_SPEED_DIFFERENCE`] from the baseline's (the raw repetition near the baseline's
+/// period decides then).
+fn shaft_near(
+    fft: &mut Fft,
+    views: &[&[f32]],
+    full: &[&[f32]],
+    period: f64,
+    mesh_order: usize,
+    min_revs: usize,
+) -> Option<MeshShaft> {
+    let near = period / mesh_order as f64;
+    let est = speed::refine_near(fft, views, near, 0.1).ok()?;
+    let lag = est.mesh_lag.unwrap_or(est.period_samples);
+    if (lag / near - 1.0).abs() > MAX_SPEED_DIFFERENCE {
+        return None;
+    }
+    let found = shaft_through_mesh(fft, full, lag, min_revs, Some(mesh_order)).ok()??;
+    ((found.period_samples / period - 1.0).abs() <= MAX_SPEED_DIFFERENCE).then_some(found)
+}
+
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
 /// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
 /// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
@@ -211,10 +251,11 @@ fn shaft_through_mesh(
         )));
     }
     let Some(q) = speed::whole_cycle_period(&c, 8) else {
+        // the revolution rests on the teeth: its confidence is how well the signal repeats over them
         return Ok(pinion_teeth.map(|zp| MeshShaft {
             period_samples: zp as f64 * cycle,
             mesh_order: None,
-            confidence: 0.0,
+            confidence: c.get(zp).map_or(0.0, |&r| r.clamp(0.0, 1.0)),
             note: format!(
                 "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
             ),
