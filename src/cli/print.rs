@@ -68,6 +68,13 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
         Some(f) => writeln!(w, "mesh             {f:.3} Hz = order {} ({})", d.mesh_order, d.teeth_source)?,
         None => writeln!(w, "mesh             order {} ({})", d.mesh_order, d.teeth_source)?,
     }
+    if let Some(g) = &d.other_gear {
+        writeln!(
+            w,
+            "meshing gear     {} teeth (estimated from its sidebands, confidence {:.2})",
+            g.teeth, g.confidence
+        )?;
+    }
     writeln!(w, "VERDICT          {} (gear: {})", d.verdict.state.name().to_uppercase(), d.verdict.gear.name())?;
     for r in &d.verdict.reasons {
         writeln!(w, "  - {r}")?;

@@ -204,6 +204,12 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         p.change_percent
     ));
     facts.push(format!("Mesh: order {} ({}).", d.mesh_order, d.teeth_source));
+    if let Some(g) = &d.other_gear {
+        facts.push(format!(
+            "Meshing gear: {} teeth (estimated from its sidebands, confidence {:.2}).",
+            g.teeth, g.confidence
+        ));
+    }
     facts.extend(d.warnings.iter().map(|w| format!("Warning: {w}")));
     let mut tables = Vec::new();
     if d.scores.is_empty() {

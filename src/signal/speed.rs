@@ -146,7 +146,10 @@ fn comb_outlier(sum: &[f64], m: usize, lag_max: usize) -> Option<usize> {
 /// between whole and half mesh cycles does not count), the period q is the smallest j >= `min` whose
 /// excess reaches 40 % of the best (the best may be a multiple of the shaft); it stands out when the best
 /// excess is over 0.01 and over twice the largest excess at any j that is not a multiple of q (the
-/// ripple of the comb, or another shaft). None when nothing stands out.
+/// ripple of the comb), or when those lags hold the other shaft of the pair: a second period q2 found the
+/// same way among them (reduced to its smallest divisor whose excess is over 0.01), the best excess among
+/// them over 0.01, and the excesses at q and q2 themselves over twice anything at a multiple of neither.
+/// None when nothing stands out.
 pub fn whole_cycle_period(c: &[f64], min: usize) -> Option<usize> {
     let len = c.len();
     let min = min.max(4);
@@ -162,7 +165,22 @@ pub fn whole_cycle_period(c: &[f64], min: usize) -> Option<usize> {
     let best = excess.iter().map(|e| e.1).fold(f64::MIN, f64::max);
     let q = excess.iter().find(|e| e.1 >= 0.4 * best)?.0;
     let other = excess.iter().filter(|e| e.0 % q != 0).map(|e| e.1).fold(0.0, f64::max);
-    (best > 0.01 && best > 2.0 * other).then_some(q)
+    if best <= 0.01 {
+        return None;
+    }
+    if best > 2.0 * other {
+        return Some(q);
+    }
+    // both shafts of the pair repeat (a pinion error and an eccentric wheel): the other stands out the same
+    // way among the lags that are not multiples of q, and nothing else does
+    let rest: Vec<(usize, f64)> = excess.iter().copied().filter(|e| e.0 % q != 0).collect();
+    let found = rest.iter().find(|e| e.1 >= 0.4 * other)?.0;
+    // its fundamental: the smallest divisor that stands out at all (a neighbouring multiple of q can
+    // hide most of its excess, as 42 does for 39)
+    let at = |j: usize| excess.get(j.wrapping_sub(min)).map_or(0.0, |e| e.1);
+    let q2 = (min..=found).find(|&d| found % d == 0 && d % q != 0 && at(d) > 0.01).unwrap_or(found);
+    let beyond = rest.iter().filter(|e| e.0 % q2 != 0).map(|e| e.1).fold(0.0, f64::max);
+    (other > 0.01 && [at(q), at(q2)].iter().all(|&e| e > 2.0 * beyond)).then_some(q)
 }
 
 /// Refines a period from the autocorrelation peaks near its multiples 2, 4, 8, ... (parabolic vertex).
@@ -233,6 +251,16 @@ mod tests {
         assert_eq!(whole_cycle_period(&alternating, 8), Some(28));
         let comb: Vec<f64> = (0..400).map(|j| 0.9 + ripple(j)).collect();
         assert_eq!(whole_cycle_period(&comb, 8), None);
+        // a pinion of 14 and a wheel of 39 teeth both repeating, the wheel more strongly: the pinion
+        let pair: Vec<f64> = (0..400)
+            .map(|j| 0.8 + ripple(j) + if j % 14 == 0 { 0.05 } else { 0.0 } + if j % 39 == 0 { 0.08 } else { 0.0 })
+            .collect();
+        assert_eq!(whole_cycle_period(&pair, 8), Some(14));
+        // three unrelated repetitions are not a gear pair
+        let three: Vec<f64> = (0..400)
+            .map(|j| 0.8 + ripple(j) + [14, 39, 23].iter().map(|q| if j % q == 0 { 0.05 } else { 0.0 }).sum::<f64>())
+            .collect();
+        assert_eq!(whole_cycle_period(&three, 8), None);
     }
 
     #[test]

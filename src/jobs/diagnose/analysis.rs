@@ -128,7 +128,7 @@ pub(super) fn analyse(
     let choice =
         BandChoice { levels: o.kurtogram_levels, band: o.envelope_band.or(geometry.and_then(|g| g.envelope_band)) };
     let first = channels[0];
-    let (gear_results, wheel_warning) = rayon::join(
+    let (gear_results, (wheel_warning, other_gear)) = rayon::join(
         || {
             pending
                 .par_iter()
@@ -141,8 +141,12 @@ pub(super) fn analyse(
                 .collect::<Vec<GearIndicators>>()
         },
         || match (mesh_orders.first(), o.teeth) {
-            (Some(&zp), Some((_, zw))) => wheel_teeth(&mut Fft::new(), &rec.channels[first - 1], &map, zp, zw),
-            _ => None,
+            (Some(&zp), Some((_, zw))) => (wheel_teeth(&mut Fft::new(), &rec.channels[first - 1], &map, zp, zw), None),
+            (Some(&z), None) => {
+                let other = other_gear_teeth(&mut Fft::new(), &rec.channels[first - 1], &map, z);
+                (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
+            }
+            _ => (None, None),
         },
     );
     warnings.extend(wheel_warning);
@@ -205,6 +209,7 @@ pub(super) fn analyse(
         mesh_hz: shaft_hz.map(|f| f * mesh_orders[0] as f64),
         mesh_order: mesh_orders[0],
         teeth_source,
+        other_gear,
         mesh_harmonics: Vec::new(),
         indicators: BTreeMap::new(),
         gears: gear_results,
@@ -411,4 +416,24 @@ pub(super) fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(Shaft, f6
         out.push(MeshHarmonic { k, frequency_hz: f, order, amplitude: a, sidebands });
     }
     out
+}
+
+/// What the teeth scan said when the teeth were not given (z: the tracked shaft's mesh order).
+fn other_gear_note(z: usize, other: Option<&OtherGear>) -> String {
+    match other {
+        Some(g) if g.confidence >= MIN_OTHER_GEAR_CONFIDENCE => format!(
+            "teeth of the meshing gear estimated: {} (its +-1 sidebands at +-{:.4} orders of the tracked shaft stand {:.0} dB over their floor; confidence {:.2}): the tracked shaft carries the {} gear; give --teeth {z},{} to analyse both gears",
+            g.teeth,
+            g.sideband_orders,
+            g.line_over_floor_db,
+            g.confidence,
+            if g.teeth > z { "smaller" } else { "larger" },
+            g.teeth
+        ),
+        Some(g) => format!(
+            "the meshing gear's teeth were not estimated: the best count, {}, rests on weak or ambiguous sidebands ({:.0} dB over their floor, confidence {:.2} under {MIN_OTHER_GEAR_CONFIDENCE})",
+            g.teeth, g.line_over_floor_db, g.confidence
+        ),
+        None => "the meshing gear's teeth were not estimated: no sidebands of another gear stand 12 dB over their floor (a true-running healthy gear shows none); give --teeth when known".into(),
+    }
 }

@@ -27,7 +27,9 @@ pub use compat::{
 };
 use recording::*;
 pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, diagnose, diagnose_in_memory};
-use tracking::{mesh_family, nominal_speed, teeth_misfit, track, wheel_teeth};
+use tracking::{
+    MIN_OTHER_GEAR_CONFIDENCE, mesh_family, nominal_speed, other_gear_teeth, teeth_misfit, track, wheel_teeth,
+};
 
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};
@@ -37,8 +39,8 @@ use crate::Error;
 use crate::io::{self, Recording};
 use crate::model::Quantity;
 use crate::report::summary::{
-    Diagnosis, GearIndicators, MeshHarmonic, Shaft, ShaftHz, Sideband, SpeedProfile, SpeedSource, TeethSource,
-    Tracking, Verdict, VerdictGear, VerdictState,
+    Diagnosis, GearIndicators, MeshHarmonic, OtherGear, Shaft, ShaftHz, Sideband, SpeedProfile, SpeedSource,
+    TeethSource, Tracking, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use crate::signal::order_map::OrderMap;

@@ -135,6 +135,19 @@ pub struct SpeedProfile {
     pub line_snr_db: Option<f64>,
 }
 
+/// The gear meshing with the tracked shaft, estimated from its sidebands when the teeth are not given.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OtherGear {
+    /// Its teeth.
+    pub teeth: usize,
+    /// Confidence of the estimate, 0..1 (reported as an estimate from 0.5).
+    pub confidence: f64,
+    /// Where its +-1 sidebands stand around the mesh harmonics, orders of the tracked shaft (z / teeth).
+    pub sideband_orders: f64,
+    /// Mean height of those sidebands over their local floor, dB.
+    pub line_over_floor_db: f64,
+}
+
 /// Where the teeth (mesh order) came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -467,6 +480,9 @@ pub struct Diagnosis {
     pub mesh_order: usize,
     /// Where the teeth came from.
     pub teeth_source: TeethSource,
+    /// Without given teeth: the teeth of the gear meshing with the tracked shaft, estimated from its
+    /// sidebands (`null` when none stand out).
+    pub other_gear: Option<OtherGear>,
     /// Mesh harmonics with sidebands on the deciding channel.
     pub mesh_harmonics: Vec<MeshHarmonic>,
     /// Indicators of the deciding gear and channel.
