@@ -55,13 +55,7 @@ pub(super) fn nominal_speed(
             // the shaft found there is kept when it is the baseline's within the accepted speed change
             let mesh_order = geometry.and_then(|g| g.mesh_order).or(pinion_teeth);
             if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
-                warnings.push(found.note);
-                return Ok(Nominal {
-                    map: AngleMap::constant(found.period_samples, 0.0, n),
-                    source: SpeedSource::Estimated,
-                    confidence: found.confidence,
-                    mesh_order: found.mesh_order,
-                });
+                return Ok(found.nominal(n, warnings));
             }
             speed::refine_near(fft, &views, p, 0.03)
         }
@@ -73,15 +67,7 @@ pub(super) fn nominal_speed(
     let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
     if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
         match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth) {
-            Ok(Some(found)) => {
-                warnings.push(found.note);
-                return Ok(Nominal {
-                    map: AngleMap::constant(found.period_samples, 0.0, n),
-                    source: SpeedSource::Estimated,
-                    confidence: found.confidence,
-                    mesh_order: found.mesh_order,
-                });
-            }
+            Ok(Some(found)) => return Ok(found.nominal(n, warnings)),
             Ok(None) => {
                 return Err(bad(
                     path,
@@ -172,6 +158,19 @@ struct MeshShaft {
     confidence: f64,
     /// What was done, for the warnings.
     note: String,
+}
+
+impl MeshShaft {
+    /// The constant nominal speed over `n` samples, its note added to `warnings`.
+    fn nominal(self, n: usize, warnings: &mut Vec<String>) -> Nominal {
+        warnings.push(self.note);
+        Nominal {
+            map: AngleMap::constant(self.period_samples, 0.0, n),
+            source: SpeedSource::Estimated,
+            confidence: self.confidence,
+            mesh_order: self.mesh_order,
+        }
+    }
 }
 
 /// The shaft near a baseline's period `period` (samples) of mesh order `mesh_order`, found on the mesh
@@ -603,8 +602,10 @@ pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, z
 }
 
 /// Smallest confidence of an estimate of the other gear's teeth that is reported as an estimate (below,
-/// the best count is named as unconfirmed): the bundled eccentric wheel reaches 0.74, the spurious lines of
-/// the bundled rectangular-stiffness recording (no wheel error at all) 0.11.
+/// the best count is named as unconfirmed): the bundled eccentric wheel reaches 0.68 and eccentric wheels
+/// of other pairs 0.6-0.9; the spurious lines of the bundled rectangular-stiffness recording (no wheel
+/// error at all) 0.05, and the real SpectraQuest recordings at 90 % load 0.30-0.33 (a count of 40 on
+/// lines 18-19 dB over their floor, not confirmed).
 pub(super) const MIN_OTHER_GEAR_CONFIDENCE: f64 = 0.5;
 
 /// The other gear's teeth estimated from its sidebands on the tracked shaft's angle (mesh order z): the
