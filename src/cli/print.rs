@@ -59,8 +59,10 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
     writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?;
     let p = &d.speed_profile;
     let range = match (p.min_hz, p.max_hz) {
-        (Some(lo), Some(hi)) => format!("revolutions from {lo:.4} to {hi:.4} Hz (+-{:.3} %), ", p.fluctuation_percent),
-        _ => format!("revolutions within +-{:.3} %, ", p.fluctuation_percent),
+        (Some(lo), Some(hi)) => {
+            format!("revolutions from {lo:.4} to {hi:.4} Hz (10-90 % within +-{:.3} %), ", p.fluctuation_percent)
+        }
+        _ => format!("revolutions 10-90 % within +-{:.3} %, ", p.fluctuation_percent),
     };
     let snr = p.line_snr_db.map_or(String::new(), |s| format!(", tracked line {s:.0} dB above its band"));
     writeln!(w, "tracking         {}: {range}change {:+.3} % over the recording{snr}", p.tracking, p.change_percent)?;

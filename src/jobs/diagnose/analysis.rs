@@ -39,7 +39,7 @@ pub(super) fn analyse(
         min_hz: fs.map(|f| f * profile.min),
         max_hz: fs.map(|f| f * profile.max),
         change_percent: 100.0 * profile.change,
-        fluctuation_percent: 50.0 * (profile.max - profile.min) / profile.mean,
+        fluctuation_percent: 100.0 * profile.wander,
         line_snr_db,
     };
     let period = map.mean_period_samples();

@@ -26,7 +26,7 @@ pub struct Compatibility {
 /// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
 /// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
 /// [`WARN_SPEED_DIFFERENCE`], operating point taken as different beyond
-/// [`OPERATING_POINT_SPEED_DIFFERENCE`] or, when larger, beyond the half-range of the speed within either
+/// [`OPERATING_POINT_SPEED_DIFFERENCE`] or, when larger, beyond the wander of the speed within either
 /// recording: a speed that wanders by +-1 % moves the mean of a few seconds by tenths of a percent),
 /// sample rate and overall level (warned).
 ///

@@ -128,8 +128,8 @@ pub struct SpeedProfile {
     pub max_hz: Option<f64>,
     /// Change from the first tenth of the recording to the last tenth, percent of the mean.
     pub change_percent: f64,
-    /// Half the range of the revolutions' speeds (fastest minus slowest over 2), percent of the mean: how
-    /// far the speed wanders within the recording.
+    /// How far the speed wanders within the recording: half the range between the 10th and 90th
+    /// percentiles of the revolutions' speeds, percent of the mean.
     pub fluctuation_percent: f64,
     /// With mesh-phase tracking: how far the tracked line stands above its band, dB.
     pub line_snr_db: Option<f64>,
