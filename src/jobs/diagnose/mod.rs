@@ -14,6 +14,7 @@ mod beyond;
 mod compare;
 mod compat;
 mod recording;
+mod teeth;
 mod tracking;
 pub mod trend;
 mod verdict;
@@ -27,9 +28,8 @@ pub use compat::{
 };
 use recording::*;
 pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, diagnose, diagnose_in_memory};
-use tracking::{
-    MIN_OTHER_GEAR_CONFIDENCE, mesh_family, nominal_speed, other_gear_teeth, teeth_misfit, track, wheel_teeth,
-};
+use teeth::{MIN_OTHER_GEAR_CONFIDENCE, mesh_family, other_gear_teeth, teeth_misfit, wheel_teeth};
+use tracking::{nominal_speed, track};
 
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};
