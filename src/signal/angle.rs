@@ -19,6 +19,7 @@
 use super::spectrum::{Fft, hann};
 use super::tsa::AngleMap;
 use super::{Sample, SignalError};
+use rayon::prelude::*;
 
 /// Speed of the reference shaft over a recording, from its revolution starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,14 +168,43 @@ fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> [f64; 3] {
 /// # Errors
 /// Recording shorter than 3 nominal frames, no line near the nominal order, or an angle that goes backwards
 /// (the speed varies faster than the tracking can follow).
-pub fn track_mesh<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<Tracked, SignalError> {
-    let n = x.len();
+pub fn track_mesh<T: Sample>(x: &[T], period: f64, order: f64) -> Result<Tracked, SignalError> {
+    follow_ridge(x, mesh_ridge(x, period, order)?)
+}
+
+/// The first stage of [`track_mesh`]: the mesh line's ridge in short-time spectra, its height over its
+/// band, and the knots of the angle it gives. Cheaper than the demodulation that follows, and its
+/// `line_snr_db` is the tracked line's: a caller choosing among channels follows only the best ridge.
+pub struct MeshRidge {
+    knots: Vec<(f64, f64)>,
+    period: f64,
+    order: f64,
+    /// Median height of the line over its band along the record, dB.
+    pub line_snr_db: f64,
+}
+
+/// The ridge of the mesh harmonic at `order` of `x` around a nominal revolution of `period` samples.
+///
+/// # Errors
+/// As [`track_mesh`]: too short a recording, no line near the nominal order.
+pub fn mesh_ridge<T: Sample>(x: &[T], period: f64, order: f64) -> Result<MeshRidge, SignalError> {
     if !(period.is_finite() && period >= 4.0 && order >= 1.0) || order / period >= 0.5 {
         return Err(SignalError::Invalid(format!(
             "cannot track order {order} at {period:.1} samples per revolution (above the Nyquist frequency)"
         )));
     }
-    let (knots, snr) = ridge(fft, x, period, order)?;
+    let (knots, snr) = ridge(x, period, order)?;
+    Ok(MeshRidge { knots, period, order, line_snr_db: 20.0 * snr.log10() })
+}
+
+/// The second stage of [`track_mesh`]: two demodulation passes of `x` around the ridge's angle, and the
+/// revolution starts where the angle crosses whole revolutions.
+///
+/// # Errors
+/// An angle that goes backwards (the speed varies faster than the tracking can follow), fewer than two
+/// revolutions.
+pub fn follow_ridge<T: Sample>(x: &[T], r: MeshRidge) -> Result<Tracked, SignalError> {
+    let MeshRidge { knots, period, order, line_snr_db } = r;
     let mut theta = knots;
     // two demodulation passes; each returns knots at block centres
     for _ in 0..2 {
@@ -192,10 +222,10 @@ pub fn track_mesh<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) ->
         return Err(SignalError::TooShort {
             what: "mesh-phase tracking (2 revolutions)".into(),
             needed: (3.0 * period) as usize,
-            got: n,
+            got: x.len(),
         });
     }
-    Ok(Tracked { map: AngleMap::from_pulses(&starts, 1), line_snr_db: 20.0 * snr.log10() })
+    Ok(Tracked { map: AngleMap::from_pulses(&starts, 1), line_snr_db })
 }
 
 /// Amplitudes of the lines of `x` near shaft order `order`, over the whole tracked record: the angle-domain
@@ -235,23 +265,42 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
 }
 
 /// sum over the samples v_i of `x` of v_i exp(-i 2 pi order theta_i), with the angle theta_i = th0 + i slope
-/// (revolutions) linear over the block: a rotating phasor, one complex multiplication per sample.
+/// (revolutions) linear over the block: a rotating phasor, one complex multiplication per sample, in four
+/// interleaved lanes (each rotating by four steps) so that the products do not wait on each other.
 fn phasor_sum<T: Sample>(x: &[T], th0: f64, slope: f64, order: f64) -> (f64, f64) {
     use std::f64::consts::TAU;
-    let (mut re, mut im) = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
-    let (cs, sn) = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
-    let (mut sr, mut si) = (0.0, 0.0);
-    for v in x {
-        let v = v.f();
-        sr += v * re;
-        si += v * im;
-        (re, im) = (re * cs - im * sn, re * sn + im * cs);
+    const LANES: usize = 4;
+    let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
+    let step = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
+    let step2 = mul(step, step);
+    let step4 = mul(step2, step2);
+    let first = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
+    let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+    let mut p = first;
+    for l in 0..LANES {
+        (re[l], im[l]) = p;
+        p = mul(p, step);
     }
-    (sr, si)
+    let (mut sr, mut si) = ([0.0; LANES], [0.0; LANES]);
+    let chunks = x.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for l in 0..LANES {
+            let v = c[l].f();
+            sr[l] += v * re[l];
+            si[l] += v * im[l];
+            (re[l], im[l]) = (re[l] * step4.0 - im[l] * step4.1, re[l] * step4.1 + im[l] * step4.0);
+        }
+    }
+    for (l, v) in rest.iter().enumerate() {
+        sr[l] += v.f() * re[l];
+        si[l] += v.f() * im[l];
+    }
+    (sr.iter().sum(), si.iter().sum())
 }
 
 /// Knots (sample index, angle in revolutions) of the ridge stage and the median line-to-band ratio.
-fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(Vec<(f64, f64)>, f64), SignalError> {
+fn ridge<T: Sample>(x: &[T], period: f64, order: f64) -> Result<(Vec<(f64, f64)>, f64), SignalError> {
     let n = x.len();
     let mut nw = ((8.0 * period).ceil() as usize).next_power_of_two();
     while nw > n && nw as f64 >= 6.0 * period {
@@ -270,8 +319,6 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
         starts.push(n - nw);
     }
     let win = hann(nw);
-    let mut buf = vec![0.0; nw];
-    let mut spec = Vec::new();
     let bins_per_order = nw as f64 / period;
     let centre = order * bins_per_order;
     // only the bins within +-30 % of the nominal line and 2.5 orders more are kept (a run-up of +-20 % stays
@@ -280,15 +327,19 @@ fn ridge<T: Sample>(fft: &mut Fft, x: &[T], period: f64, order: f64) -> Result<(
         ((0.7 * centre - 2.5 * bins_per_order).floor().max(0.0) as usize).min(nw / 2),
         ((1.3 * centre + 2.5 * bins_per_order).ceil() as usize).min(nw / 2),
     );
+    // the frames are independent: transformed in parallel, each thread with its own buffers
     let mags: Vec<Vec<f64>> = starts
-        .iter()
-        .map(|&s| {
-            for (b, (v, w)) in buf.iter_mut().zip(x[s..s + nw].iter().zip(&win)) {
-                *b = v.f() * w;
-            }
-            fft.forward(&mut buf, &mut spec);
-            spec[keep.0..=keep.1].iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
-        })
+        .par_iter()
+        .map_init(
+            || (Fft::new(), vec![0.0; nw], Vec::new()),
+            |(fft, buf, spec), &s| {
+                for (b, (v, w)) in buf.iter_mut().zip(x[s..s + nw].iter().zip(&win)) {
+                    *b = v.f() * w;
+                }
+                fft.forward(buf, spec);
+                spec[keep.0..=keep.1].iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
+            },
+        )
         .collect();
     // bins searched: inside the kept range with a neighbour each side (entry i of a frame is bin keep.0 + i)
     let (bottom, top) = (keep.0 + 1, keep.1.saturating_sub(1));
@@ -358,24 +409,26 @@ fn demodulate<T: Sample>(x: &[T], theta: &[(f64, f64)], period: f64, order: f64)
     let n = x.len();
     let block = ((period / 16.0) as usize).max(1);
     let nb = n / block;
-    let mut sums = vec![(0.0f64, 0.0f64); nb];
-    let mut th_mid = vec![0.0; nb];
-    let mut seg = 0;
-    for (b, s) in sums.iter_mut().enumerate() {
-        let (i0, i1) = (b * block, (b + 1) * block);
-        let at = |i: f64, seg: &mut usize| -> f64 {
-            while *seg + 2 < theta.len() && theta[*seg + 1].0 <= i {
-                *seg += 1;
-            }
-            let (a, c) = (theta[*seg], theta[*seg + 1]);
-            a.1 + (c.1 - a.1) * (i - a.0) / (c.0 - a.0)
-        };
-        let th0 = at(i0 as f64, &mut seg);
-        let th1 = at(i1 as f64, &mut seg);
-        th_mid[b] = 0.5 * (th0 + th1 - (th1 - th0) / block as f64);
-        // the angle is linear within the block to the accuracy that matters
-        *s = phasor_sum(&x[i0..i1], th0, (th1 - th0) / block as f64, order);
-    }
+    // the angle at sample i, linear between the knots (the last segment extended beyond the last knot)
+    let at = |i: f64| -> f64 {
+        let seg = theta.partition_point(|k| k.0 <= i).saturating_sub(1).min(theta.len().saturating_sub(2));
+        let (a, c) = (theta[seg], theta[seg + 1]);
+        a.1 + (c.1 - a.1) * (i - a.0) / (c.0 - a.0)
+    };
+    // the blocks are independent: summed in parallel
+    let (sums, th_mid): (Vec<(f64, f64)>, Vec<f64>) = (0..nb)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|b| {
+            let (i0, i1) = (b * block, (b + 1) * block);
+            let (th0, th1) = (at(i0 as f64), at(i1 as f64));
+            // the angle is linear within the block to the accuracy that matters
+            (
+                phasor_sum(&x[i0..i1], th0, (th1 - th0) / block as f64, order),
+                0.5 * (th0 + th1 - (th1 - th0) / block as f64),
+            )
+        })
+        .unzip();
     // odd, so the averages are centred on their block
     let width = ((2.0 * period / block as f64).round() as usize).max(1) | 1;
     let smooth = moving_average(&moving_average(&sums, width), width);
@@ -514,7 +567,7 @@ mod tests {
         let n = 27_000;
         let rate = |i: f64| 0.01 * (1.0 + 0.25 * i / n as f64);
         let (x, angle) = mesh_signal(n, rate);
-        let t = track_mesh(&mut Fft::new(), &x, 90.0, 14.0).unwrap();
+        let t = track_mesh(&x, 90.0, 14.0).unwrap();
         // noise-free: measured 2.6e-4 rev, from sideband leakage through the moving averages whose zeros
         // miss the changing shaft frequency. 5e-4 rev is 0.044 rad of mesh phase at order 14: a TSA loses
         // 0.1 % of the mesh amplitude to it (a mesh period is 0.07 rev)
@@ -530,7 +583,7 @@ mod tests {
         let n = 60_000;
         let rate = |i: f64| 0.01 * (1.0 + 0.006 * (i / 7000.0).sin() + 0.004 * (i / 2300.0 + 1.0).cos());
         let (x, angle) = mesh_signal(n, rate);
-        let t = track_mesh(&mut Fft::new(), &x, 100.0, 14.0).unwrap();
+        let t = track_mesh(&x, 100.0, 14.0).unwrap();
         // as above
         let e = start_error(&t.map, &angle);
         assert!(e < 5e-4, "start error {e} rev");

@@ -10,7 +10,7 @@
 //! cepstrum        C(q) = IFFT(ln |X(f)|^2)             (real power cepstrum, segment-averaged power)
 //! ```
 
-use super::spectrum::Fft;
+use super::spectrum::{Fft, magnitude};
 use super::tsa::AngleMap;
 use super::{Sample, SignalError};
 
@@ -283,16 +283,23 @@ pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points:
     let mean = y.iter().sum::<f64>() / n.max(1) as f64;
     let step = 2.0 * std::f64::consts::PI / n as f64;
     let mut gain = 0.0;
-    for (i, v) in y.iter_mut().enumerate() {
-        let w = 0.5 * (1.0 - (step * i as f64).cos());
-        gain += w;
-        *v = (*v - mean) * w;
+    // cos(step i) by a rotating phasor, started exactly every 4096 samples (drift below 1e-12)
+    let rotation = (step.cos(), step.sin());
+    for (c, chunk) in y.chunks_mut(4096).enumerate() {
+        let a = step * (c * 4096) as f64;
+        let (mut cr, mut ci) = (a.cos(), a.sin());
+        for v in chunk {
+            let w = 0.5 * (1.0 - cr);
+            gain += w;
+            *v = (*v - mean) * w;
+            (cr, ci) = (cr * rotation.0 - ci * rotation.1, cr * rotation.1 + ci * rotation.0);
+        }
     }
     let mut spec = Vec::new();
     fft.forward(&mut y, &mut spec);
     drop(y);
     let orders = (0..spec.len()).map(|k| k as f64 / revs.max(1) as f64).collect();
-    let amps = spec.iter().map(|c| 2.0 * c.0.hypot(c.1) / gain).collect();
+    let amps = spec.iter().map(|c| 2.0 * magnitude(*c) / gain).collect();
     (orders, amps)
 }
 
@@ -345,8 +352,8 @@ pub fn lifter_comb<T: Sample>(
     let mut buf: Vec<f64> = x[..n].iter().map(|v| v.f()).collect();
     let mut spec = Vec::new();
     fft.forward(&mut buf, &mut spec);
-    let floor = spec.iter().map(|c| c.0.hypot(c.1)).fold(0.0, f64::max) * 1e-12 + f64::MIN_POSITIVE;
-    let log: Vec<(f64, f64)> = spec.iter().map(|c| (c.0.hypot(c.1).max(floor).ln(), 0.0)).collect();
+    let floor = spec.iter().map(|c| magnitude(*c)).fold(0.0, f64::max) * 1e-12 + f64::MIN_POSITIVE;
+    let log: Vec<(f64, f64)> = spec.iter().map(|c| (magnitude(*c).max(floor).ln(), 0.0)).collect();
     let mut cep = fft.inverse(&log, n);
     let mut k = 1.0;
     while k * period_samples < n as f64 / 2.0 {
@@ -366,7 +373,7 @@ pub fn lifter_comb<T: Sample>(
         .iter()
         .zip(&relog)
         .map(|(c, l)| {
-            let a = c.0.hypot(c.1);
+            let a = magnitude(*c);
             let m = l.0.exp();
             if a > 0.0 { (c.0 / a * m, c.1 / a * m) } else { (0.0, 0.0) }
         })
@@ -404,7 +411,7 @@ mod tests {
             let mut b = s.to_vec();
             let mut sp = Vec::new();
             fft.forward(&mut b, &mut sp);
-            sp.iter().map(|c| 2.0 * c.0.hypot(c.1) / n as f64).collect::<Vec<f64>>()
+            sp.iter().map(|c| 2.0 * magnitude(*c) / n as f64).collect::<Vec<f64>>()
         };
         let (a, b) = (amp(&x, &mut fft), amp(&y, &mut fft));
         let family = |s: &[f64]| (1..20).map(|k| s[64 * k].powi(2)).sum::<f64>().sqrt();

@@ -58,7 +58,7 @@ pub fn order_map<T: Sample>(
         let mean = y.iter().sum::<f64>() / n as f64;
         y.iter_mut().zip(&window).for_each(|(v, w)| *v = (*v - mean) * w);
         fft.forward(&mut y, &mut spec);
-        let amps: Vec<f64> = spec[..=columns].iter().map(|c| 2.0 * c.0.hypot(c.1) / gain).collect();
+        let amps: Vec<f64> = spec[..=columns].iter().map(|c| 2.0 * super::spectrum::magnitude(*c) / gain).collect();
         let span = map.sample_at((first + segment_revs) as f64) - map.sample_at(first as f64);
         rows.push((segment_revs as f64 / span, amps));
     }

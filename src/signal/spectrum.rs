@@ -9,70 +9,105 @@
 use super::{Sample, SignalError, Spectrum};
 use realfft::RealFftPlanner;
 use realfft::num_complex::Complex;
-use std::sync::Arc;
 
-/// Reusable FFT context: plans are cached per length, scratch buffers kept between calls.
-pub struct Fft {
-    planner: RealFftPlanner<f64>,
+/// |c| of a complex value (re, im): sqrt(re^2 + im^2), without `hypot`'s guard against overflow (several
+/// times slower; a spectrum of f32 samples stays below 1e60).
+#[inline]
+pub fn magnitude(c: (f64, f64)) -> f64 {
+    (c.0 * c.0 + c.1 * c.1).sqrt()
+}
+
+/// Plans shared by every [`Fft`] of the process: each length is planned once (a 60 s recording's
+/// diagnosis runs a dozen contexts in parallel, which used to plan the same lengths each).
+struct Plans {
+    real: RealFftPlanner<f64>,
     complex: rustfft::FftPlanner<f64>,
+}
+
+fn plans() -> std::sync::MutexGuard<'static, Plans> {
+    static PLANS: std::sync::OnceLock<std::sync::Mutex<Plans>> = std::sync::OnceLock::new();
+    PLANS
+        .get_or_init(|| {
+            std::sync::Mutex::new(Plans { real: RealFftPlanner::new(), complex: rustfft::FftPlanner::new() })
+        })
+        .lock()
+        // a planner holds only finished plans: one left by a panicking thread is still sound
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Reusable FFT context: plans come from the process-wide cache, the spectrum and scratch buffers are
+/// kept between calls up to [`KEPT_BUFFER`] entries (a record-long transform's are freed at once).
+#[derive(Default)]
+pub struct Fft {
+    spec: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
 }
 
-impl Default for Fft {
-    fn default() -> Self {
-        Self::new()
-    }
-}
+/// Longest spectrum or scratch buffer (complex entries, 2 MiB) an [`Fft`] keeps for its next call.
+const KEPT_BUFFER: usize = 1 << 17;
 
 impl Fft {
     /// A fresh context.
     pub fn new() -> Self {
-        Self { planner: RealFftPlanner::new(), complex: rustfft::FftPlanner::new(), scratch: Vec::new() }
+        Self::default()
     }
 
-    fn forward_plan(&mut self, n: usize) -> Arc<dyn realfft::RealToComplex<f64>> {
-        self.planner.plan_fft_forward(n)
+    fn scratch(&mut self, len: usize) -> &mut [Complex<f64>] {
+        if self.scratch.len() < len {
+            self.scratch.resize(len, Complex::new(0.0, 0.0));
+        }
+        &mut self.scratch[..len]
+    }
+
+    /// Takes the spectrum buffer back after a call, and frees both buffers when they are record-long.
+    fn keep(&mut self, buf: Vec<Complex<f64>>) {
+        if buf.len() <= KEPT_BUFFER {
+            self.spec = buf;
+        }
+        if self.scratch.len() > KEPT_BUFFER {
+            self.scratch = Vec::new();
+        }
     }
 
     /// Unnormalised forward transform of `input` (overwritten) into `out` (len N/2 + 1).
     pub fn forward(&mut self, input: &mut [f64], out: &mut Vec<(f64, f64)>) {
-        let n = input.len();
-        let plan = self.forward_plan(n);
-        let mut spec = plan.make_output_vec();
-        if self.scratch.len() < plan.get_scratch_len() {
-            self.scratch.resize(plan.get_scratch_len(), Complex::new(0.0, 0.0));
-        }
-        plan.process_with_scratch(input, &mut spec, &mut self.scratch[..plan.get_scratch_len()])
-            .expect("sizes from the plan");
+        let plan = plans().real.plan_fft_forward(input.len());
+        let mut spec = std::mem::take(&mut self.spec);
+        spec.resize(plan.complex_len(), Complex::new(0.0, 0.0));
+        plan.process_with_scratch(input, &mut spec, self.scratch(plan.get_scratch_len())).expect("sizes from the plan");
         out.clear();
         out.extend(spec.iter().map(|c| (c.re, c.im)));
+        self.keep(spec);
     }
 
     /// Unnormalised complex inverse transform in place: x_n = sum_k X_k exp(+2 pi i k n / N).
     pub fn inverse_complex(&mut self, data: &mut [(f64, f64)]) {
-        let plan = self.complex.plan_fft_inverse(data.len());
-        let mut buf: Vec<Complex<f64>> = data.iter().map(|&(r, i)| Complex::new(r, i)).collect();
-        plan.process(&mut buf);
-        for (d, c) in data.iter_mut().zip(buf) {
+        let plan = plans().complex.plan_fft_inverse(data.len());
+        let mut buf = std::mem::take(&mut self.spec);
+        buf.clear();
+        buf.extend(data.iter().map(|&(r, i)| Complex::new(r, i)));
+        plan.process_with_scratch(&mut buf, self.scratch(plan.get_inplace_scratch_len()));
+        for (d, c) in data.iter_mut().zip(&buf) {
             *d = (c.re, c.im);
         }
+        self.keep(buf);
     }
 
     /// Inverse of [`forward`](Self::forward) including the 1/N factor: `spec` (len N/2 + 1) -> N samples.
     pub fn inverse(&mut self, spec: &[(f64, f64)], n: usize) -> Vec<f64> {
-        let plan = self.planner.plan_fft_inverse(n);
-        let mut input: Vec<Complex<f64>> = spec.iter().map(|&(r, i)| Complex::new(r, i)).collect();
+        let plan = plans().real.plan_fft_inverse(n);
+        let mut input = std::mem::take(&mut self.spec);
+        input.clear();
+        input.extend(spec.iter().map(|&(r, i)| Complex::new(r, i)));
         // a real signal's DC and Nyquist bins are real
         input[0].im = 0.0;
         if n % 2 == 0 {
             input[n / 2].im = 0.0;
         }
         let mut out = plan.make_output_vec();
-        if self.scratch.len() < plan.get_scratch_len() {
-            self.scratch.resize(plan.get_scratch_len(), Complex::new(0.0, 0.0));
-        }
-        plan.process_with_scratch(&mut input, &mut out, &mut self.scratch[..plan.get_scratch_len()])
+        plan.process_with_scratch(&mut input, &mut out, self.scratch(plan.get_scratch_len()))
             .expect("sizes from the plan");
+        self.keep(input);
         let scale = 1.0 / n as f64;
         out.iter_mut().for_each(|v| *v *= scale);
         out
@@ -95,7 +130,7 @@ pub fn periodic_amplitudes_with(fft: &mut Fft, samples: &[f64]) -> Vec<f64> {
     let mut input = samples.to_vec();
     let mut out = Vec::new();
     fft.forward(&mut input, &mut out);
-    out.iter().enumerate().map(|(k, c)| bin_scale(k, n) * c.0.hypot(c.1) / n as f64).collect()
+    out.iter().enumerate().map(|(k, c)| bin_scale(k, n) * magnitude(*c) / n as f64).collect()
 }
 
 fn bin_scale(k: usize, n: usize) -> f64 {

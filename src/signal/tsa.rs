@@ -62,10 +62,15 @@ impl AngleMap {
     /// Sample indices at the angles `rev0 + i step` (revolutions, `step` > 0) for every entry of `out`:
     /// [`sample_at`](Self::sample_at) with each revolution's cubic built once.
     pub fn fill_positions(&self, rev0: f64, step: f64, out: &mut [f64]) {
+        self.fill_positions_from(rev0, step, 0, out);
+    }
+
+    /// [`fill_positions`](Self::fill_positions) for the entries `first ..` of a longer array.
+    fn fill_positions_from(&self, rev0: f64, step: f64, first: usize, out: &mut [f64]) {
         let mut k = usize::MAX;
         let mut c = [0.0; 4];
         for (i, o) in out.iter_mut().enumerate() {
-            let rev = rev0 + i as f64 * step;
+            let rev = rev0 + (first + i) as f64 * step;
             let kk = self.segment(rev);
             if kk != k {
                 k = kk;
@@ -76,18 +81,20 @@ impl AngleMap {
         }
     }
 
-    /// `out[i]` = `x` at the angle `rev0 + i step` revolutions ([`Interpolator`]): the positions are filled
-    /// into `out` and replaced by the values a block at a time, so a record-long resampling holds no second
-    /// array of its length.
+    /// `out[i]` = `x` at the angle `rev0 + i step` revolutions ([`Interpolator`]): blocks of `out` in
+    /// parallel, each filled with its positions and then replaced by the values, so a record-long
+    /// resampling holds no second array of its length.
     pub fn resample<T: Sample>(&self, x: &[T], rev0: f64, step: f64, out: &mut [f64]) {
+        use rayon::prelude::*;
         const BLOCK: usize = 1 << 16;
-        self.fill_positions(rev0, step, out);
-        let mut at = vec![0.0; out.len().min(BLOCK)];
-        for block in out.chunks_mut(BLOCK) {
-            let at = &mut at[..block.len()];
-            at.copy_from_slice(block);
-            Interpolator::shared().fill(x, at, block);
-        }
+        out.par_chunks_mut(BLOCK).enumerate().for_each_init(
+            || vec![0.0; BLOCK],
+            |at, (b, block)| {
+                let at = &mut at[..block.len()];
+                self.fill_positions_from(rev0, step, b * BLOCK, at);
+                Interpolator::shared().fill(x, at, block);
+            },
+        );
     }
 
     /// The revolution whose cubic covers angle `rev` (the first or last outside the covered range).
@@ -390,7 +397,7 @@ pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: us
     let amplitudes = spec
         .iter()
         .enumerate()
-        .map(|(k, c)| if k == 0 || k == l / 2 { 1.0 } else { 2.0 } * c.0.hypot(c.1) / l as f64)
+        .map(|(k, c)| if k == 0 || k == l / 2 { 1.0 } else { 2.0 } * super::spectrum::magnitude(*c) / l as f64)
         .collect();
     let nb = spec.len();
     let is_mesh = |k: usize| mesh_order > 0 && k % mesh_order == 0;

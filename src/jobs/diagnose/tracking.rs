@@ -220,7 +220,7 @@ fn shaft_through_mesh(
     let p = MESH_CYCLE_POINTS;
     let mut last = None;
     let (x, tracked) = match channels.iter().find_map(|x| {
-        let t = angle::track_mesh(fft, x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES);
+        let t = angle::track_mesh(x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES);
         match t {
             Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
             Ok(_) => None,
@@ -405,22 +405,28 @@ pub(super) fn track(
         })
         .collect();
     candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
-    let tracked: Vec<Result<angle::Tracked, _>> = candidates
+    // the ridges of the two best channels in parallel; the demodulation (which keeps the ridge's line
+    // height) follows the higher one, and the other when that one fails
+    let mut ridges: Vec<(usize, Result<angle::MeshRidge, _>)> = candidates
         .par_iter()
         .take(2)
-        .map(|&(c, order, _)| angle::track_mesh(&mut Fft::new(), &rec.channels[c - 1], period, order))
+        .map(|&(c, order, _)| (c, angle::mesh_ridge(&rec.channels[c - 1], period, order)))
         .collect();
-    let best = tracked.into_iter().reduce(|a, b| match (&a, &b) {
-        (Ok(x), Ok(y)) => {
-            if y.line_snr_db > x.line_snr_db {
-                b
-            } else {
-                a
-            }
-        }
-        (Err(_), _) => b,
-        _ => a,
+    ridges.sort_by(|a, b| match (&a.1, &b.1) {
+        (Ok(x), Ok(y)) => y.line_snr_db.total_cmp(&x.line_snr_db),
+        (Ok(_), Err(_)) => std::cmp::Ordering::Less,
+        (Err(_), Ok(_)) => std::cmp::Ordering::Greater,
+        _ => std::cmp::Ordering::Equal,
     });
+    let mut best = None;
+    for (c, r) in ridges {
+        let t = r.and_then(|r| angle::follow_ridge(&rec.channels[c - 1], r));
+        let done = t.is_ok();
+        best = Some(t);
+        if done {
+            break;
+        }
+    }
     match best {
         Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
             warnings.push(format!(

@@ -60,7 +60,7 @@ fn first_common_start(pinion: &[f64], wheel: &[f64], teeth: (usize, usize)) -> O
 /// # Errors
 /// The mesh line cannot be followed.
 pub fn angle_from_mesh(x: &[f32], period: f64, z1: usize) -> Result<Angle, String> {
-    let tracked = angle::track_mesh(&mut Fft::new(), x, period, z1 as f64).map_err(|e| e.to_string())?;
+    let tracked = angle::track_mesh(x, period, z1 as f64).map_err(|e| e.to_string())?;
     let speed = SpeedProfile::of(&tracked.map);
     Ok(Angle { map: tracked.map, origin: PhaseOrigin::Arbitrary, wheel_start: None, speed })
 }
