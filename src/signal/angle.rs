@@ -244,22 +244,29 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
     map.fill_positions(0.0, 1.0 / per_rev as f64, &mut edges);
     let m = (8 * nb).next_power_of_two();
     let mut y = vec![(0.0, 0.0); m];
-    let mut wsum = 0.0;
-    for (b, e) in edges.windows(2).enumerate() {
-        let (i0, i1) = (e[0].ceil().max(0.0) as usize, (e[1].ceil().max(0.0) as usize).min(x.len()));
-        if i1 <= i0 {
-            continue;
-        }
-        // angle (revolutions) at sample i: b / per_rev + (i - e0) / (e1 - e0) / per_rev
-        let slope = 1.0 / ((e[1] - e[0]) * per_rev as f64);
-        let th0 = b as f64 / per_rev as f64 + (i0 as f64 - e[0]) * slope;
-        let (sr, si) = phasor_sum(&x[i0..i1], th0, slope, order);
-        let w = 0.5 - 0.5 * (TAU * (b as f64 + 0.5) / nb as f64).cos();
-        let k = (i1 - i0) as f64;
-        // conjugated: the inverse transform of the conjugate is the conjugate of the forward transform
-        y[b] = (w * sr / k, -w * si / k);
-        wsum += w;
-    }
+    // the blocks are independent: summed in parallel; each gives its entry and its window weight
+    let w: Vec<f64> = y[..nb]
+        .par_iter_mut()
+        .with_min_len(256)
+        .zip(edges.par_windows(2))
+        .enumerate()
+        .map(|(b, (y, e))| {
+            let (i0, i1) = (e[0].ceil().max(0.0) as usize, (e[1].ceil().max(0.0) as usize).min(x.len()));
+            if i1 <= i0 {
+                return 0.0;
+            }
+            // angle (revolutions) at sample i: b / per_rev + (i - e0) / (e1 - e0) / per_rev
+            let slope = 1.0 / ((e[1] - e[0]) * per_rev as f64);
+            let th0 = b as f64 / per_rev as f64 + (i0 as f64 - e[0]) * slope;
+            let (sr, si) = phasor_sum(&x[i0..i1], th0, slope, order);
+            let w = 0.5 - 0.5 * (TAU * (b as f64 + 0.5) / nb as f64).cos();
+            let k = (i1 - i0) as f64;
+            // conjugated: the inverse transform of the conjugate is the conjugate of the forward transform
+            *y = (w * sr / k, -w * si / k);
+            w
+        })
+        .collect();
+    let wsum: f64 = w.iter().sum();
     fft.inverse_complex(&mut y);
     y.iter().map(|c| 2.0 * (c.0 * c.0 + c.1 * c.1).sqrt() / wsum).collect()
 }

@@ -295,11 +295,10 @@ pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points:
             (cr, ci) = (cr * rotation.0 - ci * rotation.1, cr * rotation.1 + ci * rotation.0);
         }
     }
-    let mut spec = Vec::new();
-    fft.forward(&mut y, &mut spec);
+    let mut amps = fft.forward_magnitudes(&mut y);
     drop(y);
-    let orders = (0..spec.len()).map(|k| k as f64 / revs.max(1) as f64).collect();
-    let amps = spec.iter().map(|c| 2.0 * magnitude(*c) / gain).collect();
+    amps.iter_mut().for_each(|a| *a *= 2.0 / gain);
+    let orders = (0..amps.len()).map(|k| k as f64 / revs.max(1) as f64).collect();
     (orders, amps)
 }
 

@@ -35,6 +35,22 @@ fn plans() -> std::sync::MutexGuard<'static, Plans> {
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
+/// Longest transform (entries) whose plan the process keeps: a record-long plan's twiddles (15 MB for the
+/// order spectrum of a 60 s recording) are freed after its one use.
+const KEPT_PLAN: usize = 1 << 18;
+
+fn real_forward(n: usize) -> std::sync::Arc<dyn realfft::RealToComplex<f64>> {
+    if n <= KEPT_PLAN { plans().real.plan_fft_forward(n) } else { RealFftPlanner::new().plan_fft_forward(n) }
+}
+
+fn real_inverse(n: usize) -> std::sync::Arc<dyn realfft::ComplexToReal<f64>> {
+    if n <= KEPT_PLAN { plans().real.plan_fft_inverse(n) } else { RealFftPlanner::new().plan_fft_inverse(n) }
+}
+
+fn complex_inverse(n: usize) -> std::sync::Arc<dyn rustfft::Fft<f64>> {
+    if n <= KEPT_PLAN { plans().complex.plan_fft_inverse(n) } else { rustfft::FftPlanner::new().plan_fft_inverse(n) }
+}
+
 /// Reusable FFT context: plans come from the process-wide cache, the spectrum and scratch buffers are
 /// kept between calls up to [`KEPT_BUFFER`] entries (a record-long transform's are freed at once).
 #[derive(Default)]
@@ -71,7 +87,7 @@ impl Fft {
 
     /// Unnormalised forward transform of `input` (overwritten) into `out` (len N/2 + 1).
     pub fn forward(&mut self, input: &mut [f64], out: &mut Vec<(f64, f64)>) {
-        let plan = plans().real.plan_fft_forward(input.len());
+        let plan = real_forward(input.len());
         let mut spec = std::mem::take(&mut self.spec);
         spec.resize(plan.complex_len(), Complex::new(0.0, 0.0));
         plan.process_with_scratch(input, &mut spec, self.scratch(plan.get_scratch_len())).expect("sizes from the plan");
@@ -80,9 +96,21 @@ impl Fft {
         self.keep(spec);
     }
 
+    /// |X_k| for k = 0..=N/2 of the unnormalised forward transform of `input` (overwritten): what
+    /// [`forward`](Self::forward) gives, without a second record-long copy of the spectrum.
+    pub fn forward_magnitudes(&mut self, input: &mut [f64]) -> Vec<f64> {
+        let plan = real_forward(input.len());
+        let mut spec = std::mem::take(&mut self.spec);
+        spec.resize(plan.complex_len(), Complex::new(0.0, 0.0));
+        plan.process_with_scratch(input, &mut spec, self.scratch(plan.get_scratch_len())).expect("sizes from the plan");
+        let m = spec.iter().map(|c| magnitude((c.re, c.im))).collect();
+        self.keep(spec);
+        m
+    }
+
     /// Unnormalised complex inverse transform in place: x_n = sum_k X_k exp(+2 pi i k n / N).
     pub fn inverse_complex(&mut self, data: &mut [(f64, f64)]) {
-        let plan = plans().complex.plan_fft_inverse(data.len());
+        let plan = complex_inverse(data.len());
         let mut buf = std::mem::take(&mut self.spec);
         buf.clear();
         buf.extend(data.iter().map(|&(r, i)| Complex::new(r, i)));
@@ -95,7 +123,7 @@ impl Fft {
 
     /// Inverse of [`forward`](Self::forward) including the 1/N factor: `spec` (len N/2 + 1) -> N samples.
     pub fn inverse(&mut self, spec: &[(f64, f64)], n: usize) -> Vec<f64> {
-        let plan = plans().real.plan_fft_inverse(n);
+        let plan = real_inverse(n);
         let mut input = std::mem::take(&mut self.spec);
         input.clear();
         input.extend(spec.iter().map(|&(r, i)| Complex::new(r, i)));

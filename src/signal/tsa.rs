@@ -66,18 +66,27 @@ impl AngleMap {
     }
 
     /// [`fill_positions`](Self::fill_positions) for the entries `first ..` of a longer array.
+    /// Runs of entries within one revolution are evaluated with that revolution's cubic in a loop of their
+    /// own (no search per entry); an entry on the boundary may take either neighbour's cubic, which agree
+    /// there.
     fn fill_positions_from(&self, rev0: f64, step: f64, first: usize, out: &mut [f64]) {
-        let mut k = usize::MAX;
-        let mut c = [0.0; 4];
-        for (i, o) in out.iter_mut().enumerate() {
-            let rev = rev0 + (first + i) as f64 * step;
-            let kk = self.segment(rev);
-            if kk != k {
-                k = kk;
-                c = self.cubic(k);
+        let last = self.revolutions().saturating_sub(1);
+        let mut i = 0;
+        while i < out.len() {
+            let k = self.segment(rev0 + (first + i) as f64 * step);
+            let c = self.cubic(k);
+            // entries before the next revolution's start (all the rest in the last revolution)
+            let end = if k >= last {
+                out.len()
+            } else {
+                let next = ((k + 1) as f64 - rev0) / step - first as f64;
+                (next.ceil().max(0.0) as usize).clamp(i + 1, out.len())
+            };
+            for (j, o) in out[i..end].iter_mut().enumerate() {
+                let t = rev0 + (first + i + j) as f64 * step - k as f64;
+                *o = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
             }
-            let t = rev - k as f64;
-            *o = c[0] + t * (c[1] + t * (c[2] + t * c[3]));
+            i = end;
         }
     }
 

@@ -141,9 +141,9 @@ pub(super) fn analyse(
                 .collect::<Vec<GearIndicators>>()
         },
         || match (mesh_orders.first(), o.teeth) {
-            (Some(&zp), Some((_, zw))) => (wheel_teeth(&mut Fft::new(), &rec.channels[first - 1], &map, zp, zw), None),
+            (Some(&zp), Some((_, zw))) => (wheel_teeth(&rec.channels[first - 1], &map, zp, zw), None),
             (Some(&z), None) => {
-                let other = other_gear_teeth(&mut Fft::new(), &rec.channels[first - 1], &map, z);
+                let other = other_gear_teeth(&rec.channels[first - 1], &map, z);
                 (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
             }
             _ => (None, None),
@@ -313,18 +313,20 @@ pub(super) fn tsa_indicators(
     let mean = x.iter().sum::<f64>() / x.len() as f64;
     let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
     let side = amplitudes[z - 1] + amplitudes[z + 1];
+    let rms = ind::rms(&centred);
+    let [fm4, m6a, m8a] = ind::normalized_moments_4_6_8(difference);
     let mut m = BTreeMap::new();
-    m.insert("rms".into(), ind::rms(&centred));
+    m.insert("rms".into(), rms);
     m.insert("kurtosis".into(), ind::kurtosis(x));
     m.insert("crest_factor".into(), ind::crest_factor(&centred));
     m.insert("fm0".into(), ind::fm0(x, &mesh_amps));
-    m.insert("fm4".into(), ind::normalized_moment(difference, 4));
-    m.insert("m6a".into(), ind::normalized_moment(difference, 6));
-    m.insert("m8a".into(), ind::normalized_moment(difference, 8));
+    m.insert("fm4".into(), fm4);
+    m.insert("m6a".into(), m6a);
+    m.insert("m8a".into(), m8a);
     m.insert("na4".into(), ind::kurtosis(residual));
     m.insert("er".into(), ind::energy_ratio(difference, regular));
     m.insert("si".into(), side / 2.0);
-    m.insert("slf".into(), side / ind::rms(&centred));
+    m.insert("slf".into(), side / rms);
     m.insert("ser".into(), ind::sideband_energy_ratio(amplitudes, z, 1));
     (m, d)
 }

@@ -63,13 +63,15 @@ impl GearLines {
 /// within 12 resolution bins of a whole order of the tracked shaft are its own and do not count, nor
 /// lines beyond the +-7 orders read). None when the record is shorter than 16 revolutions or no mesh
 /// harmonic lies below 0.45 of the sample rate.
-fn other_gear_scan(fft: &mut Fft, x: &[f32], map: &AngleMap, z: usize, extra: Option<usize>) -> Option<Vec<GearLines>> {
+fn other_gear_scan(x: &[f32], map: &AngleMap, z: usize, extra: Option<usize>) -> Option<Vec<GearLines>> {
     const PER_REV: usize = 16;
     let period = map.mean_period_samples();
     let revs = map.revolutions() as f64;
-    let harmonics: Vec<Vec<f64>> = (1..=2)
+    // the two harmonics' basebands in parallel
+    let harmonics: Vec<Vec<f64>> = (1..=2usize)
+        .into_par_iter()
         .filter(|k| ((k * z) as f64 + 4.0) / period < 0.45)
-        .map(|k| angle::baseband_lines(fft, x, map, (k * z) as f64, PER_REV))
+        .map(|k| angle::baseband_lines(&mut Fft::new(), x, map, (k * z) as f64, PER_REV))
         .filter(|a| !a.is_empty())
         .collect();
     if harmonics.is_empty() || revs < 16.0 {
@@ -114,6 +116,8 @@ fn other_gear_scan(fft: &mut Fft, x: &[f32], map: &AngleMap, z: usize, extra: Op
     Some(
         counts
             .filter(|&n| n != z)
+            .collect::<Vec<_>>()
+            .into_par_iter()
             .map(|n| {
                 let (first_score, first_present, first_read, first_amplitude) = lines(n, &[-1, 1]);
                 GearLines {
@@ -141,8 +145,8 @@ fn best_other_gear(scan: &[GearLines]) -> Option<GearLines> {
 /// The given wheel teeth checked against the wheel's sidebands on the pinion's angle ([`other_gear_scan`]
 /// with z = zp): a warning when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger
 /// than the given count's, or when no count has its +-1 lines (then the teeth could not be checked).
-pub(super) fn wheel_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<String> {
-    let scan = other_gear_scan(fft, x, map, zp, Some(zw))?;
+pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<String> {
+    let scan = other_gear_scan(x, map, zp, Some(zw))?;
     let Some(best) = best_other_gear(&scan) else {
         return Some(format!(
             "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
@@ -174,8 +178,8 @@ pub(super) const MIN_OTHER_GEAR_CONFIDENCE: f64 = 0.5;
 /// - its margin: 1 - r / s, s its score and r the best score of a count that qualifies too and shares none
 ///   of its lines (counts whose +-1..3 lines fall within 3 resolution bins of its +-1 lines, or whose +-1
 ///   lines fall on its +-2..3, are harmonics or neighbours of the same lines).
-pub(super) fn other_gear_teeth(fft: &mut Fft, x: &[f32], map: &AngleMap, z: usize) -> Option<OtherGear> {
-    let scan = other_gear_scan(fft, x, map, z, None)?;
+pub(super) fn other_gear_teeth(x: &[f32], map: &AngleMap, z: usize) -> Option<OtherGear> {
+    let scan = other_gear_scan(x, map, z, None)?;
     let best = best_other_gear(&scan)?;
     let near = 3.0 / map.revolutions() as f64;
     let d = |n: usize| z as f64 / n as f64;
