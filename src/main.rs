@@ -5,7 +5,6 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    keep_freed_memory();
     // SIGINT, SIGTERM, SIGHUP: remove the temporary files of outputs not yet in place, then stop (130 as a
     // shell reports an interrupt). Installed before the first temporary file only: the handler's thread
     // costs about 0.3 ms of a 5 ms run that writes nothing. If it cannot be installed the run goes on.
@@ -16,6 +15,9 @@ fn main() -> ExitCode {
         });
     });
     let cli = gearvib::cli::parse_args();
+    if cli.reads_recordings() {
+        keep_freed_memory();
+    }
     match gearvib::cli::run(cli) {
         Ok(code) => ExitCode::from(code),
         Err(e) if e.is_broken_pipe() => ExitCode::SUCCESS,
@@ -27,11 +29,12 @@ fn main() -> ExitCode {
 }
 
 /// glibc's allocator by default hands every freed block of more than 128 KiB (adaptively up to 32 MiB)
-/// back to the system and each arena's top beyond 128 KiB, and gives each thread its own arena: the
-/// diagnosis of a long recording, which allocates and frees record-long buffers from several threads,
-/// then spends a fifth of its time in page faults and TLB flushes. One arena that keeps up to 64 MiB of
-/// freed memory for reuse takes that away (60 s x 4 channels: 0.27 -> 0.24 s, peak memory unchanged within
-/// 3 %).
+/// back to the system, trims each arena's top beyond 128 KiB, and gives each thread an arena of its own:
+/// the diagnosis of a long recording, which allocates and frees record-long buffers from several
+/// threads, then spends a fifth of its time in page faults and TLB flushes. One arena that keeps up to
+/// 64 MiB of freed memory for reuse takes that away (60 s x 4 channels: 0.27 -> 0.23 s, 99 -> 91 MB
+/// peak). Not for the solvers: their many small allocations from every thread contend for one arena (a
+/// 2000-point sweep 20 % slower).
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn keep_freed_memory() {
     const M_TRIM_THRESHOLD: i32 = -1;
@@ -41,7 +44,7 @@ fn keep_freed_memory() {
         fn mallopt(param: i32, value: i32) -> i32;
     }
     // SAFETY: mallopt only changes the allocator's parameters; it is called before any other thread
-    // exists and before the program's first allocation of any size that the parameters affect.
+    // exists, so no allocation runs concurrently with it.
     unsafe {
         mallopt(M_ARENA_MAX, 1);
         mallopt(M_MMAP_THRESHOLD, 32 << 20);

@@ -12,6 +12,14 @@ pub struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// Whether the command analyses recordings (record-long buffers allocated and freed by several
+    /// threads at once), for the binary's choice of allocator settings.
+    pub fn reads_recordings(&self) -> bool {
+        matches!(self.command, Command::Diagnose(_))
+    }
+}
+
 /// The commands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
