@@ -133,7 +133,7 @@ pub struct DiagnoseArgs {
     /// Envelope band in Hz, LO,HI (default: the band of largest spectral kurtosis from the kurtogram).
     #[arg(long, value_name = "LO,HI")]
     pub envelope_band: Option<String>,
-    /// Remove this shaft's family of lines (pinion or wheel; needs --teeth) by comb liftering of the real
+    /// Remove this shaft's family of lines (pinion, or wheel with --teeth) by comb liftering of the real
     /// cepstrum before the envelope analysis, so what does not repeat with that shaft (a bearing, the other
     /// gear) shows in the envelope.
     #[arg(long, value_parser = ["pinion", "wheel"])]

@@ -44,10 +44,12 @@ pub(super) fn analyse(
     };
     let period = map.mean_period_samples();
     let points = tsa_points(period);
-    // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown)
+    // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown); a given or
+    // measured speed is the pinion's, an estimated period belongs to a shaft nobody named
+    let reference = if source == SpeedSource::Estimated { Shaft::Estimated } else { Shaft::Pinion };
     let gears: Vec<(Shaft, f64, Option<usize>)> = match o.teeth {
         Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
-        None => vec![(Shaft::Estimated, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
+        None => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
     // one TSA per channel and gear, in parallel
     let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
@@ -184,6 +186,7 @@ pub(super) fn analyse(
         .collect();
     let shafts = match o.teeth {
         Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
+        None if reference == Shaft::Pinion => ShaftHz::Pinion { pinion: shaft_hz },
         None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
     };
     let mut deciding = None;
@@ -239,8 +242,10 @@ pub(super) fn analyse(
                 })?;
                 let y =
                     crate::signal::envelope::lifter_comb(&mut fft, x, period / ratio, 1).map_err(|e| bad(path, e))?;
-                envelope_plan(&mut fft, &y, fs, &map, d.mesh_order, choice).and_then(|(band, ola)| {
-                    let (e, r) = envelope_of(&mut fft, &y, fs, &band, ola)?;
+                // the plan's overlap-add is for a spectrum pass over the recording, which the liftered
+                // signal never gets: its envelope takes a pass of its own
+                envelope_plan(&mut fft, &y, fs, &map, d.mesh_order, choice).and_then(|(band, _)| {
+                    let (e, r) = envelope_of(&mut fft, &y, fs, &band, None)?;
                     Ok(envelope(&mut fft, band, &e, r, fs, &map, &ratios))
                 })
             }

@@ -189,9 +189,10 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
     let mut residual: BTreeMap<(Shaft, usize), Vec<f64>> = BTreeMap::new();
     for d in baselines {
         for g in &d.gears {
-            pooled.entry((g.gear, g.channel)).or_default().extend(&g.blocks);
-            *revs.entry((g.gear, g.channel)).or_default() += g.revolutions;
-            residual.entry((g.gear, g.channel)).or_default().push(crate::signal::indicators::rms(&g.residual));
+            let key = (g.gear.baseline_key(), g.channel);
+            pooled.entry(key).or_default().extend(&g.blocks);
+            *revs.entry(key).or_default() += g.revolutions;
+            residual.entry(key).or_default().push(crate::signal::indicators::rms(&g.residual));
         }
     }
     let mut gears = BTreeMap::new();
@@ -252,19 +253,19 @@ impl Reference {
     /// block indicators of 8 revolutions cannot tell the two apart as well.
     pub fn residual_growth(&self, g: &GearIndicators) -> f64 {
         self.gears
-            .get(&(g.gear, g.channel))
+            .get(&(g.gear.baseline_key(), g.channel))
             .map_or(f64::NAN, |r| crate::signal::indicators::rms(&g.residual) / r.residual_rms.max(f64::MIN_POSITIVE))
     }
 
     /// Whether the reference holds the gear and channel of `g`.
     pub fn covers(&self, g: &GearIndicators) -> bool {
-        self.gears.contains_key(&(g.gear, g.channel))
+        self.gears.contains_key(&(g.gear.baseline_key(), g.channel))
     }
 }
 
 /// Scores every deciding indicator of one gear and channel (empty when the reference lacks it).
 pub fn score_one(g: &GearIndicators, r: &Reference) -> Vec<Score> {
-    r.gears.get(&(g.gear, g.channel)).map(|gr| score_gear(g, gr)).unwrap_or_default()
+    r.gears.get(&(g.gear.baseline_key(), g.channel)).map(|gr| score_gear(g, gr)).unwrap_or_default()
 }
 
 fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {

@@ -76,7 +76,7 @@ impl Na4History {
     /// Adds the next recording (time order) and fills its NA4.
     pub fn apply(&mut self, d: &mut Diagnosis) {
         for g in &mut d.gears {
-            let h = self.seen.entry((g.gear, g.channel)).or_default();
+            let h = self.seen.entry((g.gear.baseline_key(), g.channel)).or_default();
             h.push(ind::sum_sq_dev(&g.residual));
             g.indicators.insert("na4".into(), ind::na4(&g.residual, h));
         }

@@ -29,7 +29,10 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             let x_label = format!("{} tooth in mesh (tooth k spans k-1 .. k of {}; {origin})", g.gear, g.mesh_order);
             let mut tsa_series = vec![Series { name: "TSA".into(), points: along(t), style: Style::Line, color: 0 }];
             // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
-            if let Some((_, _, b)) = d.baseline_tsas.iter().find(|b| b.0 == ch && b.1 == g.gear && b.2.len() == t.len())
+            if let Some((_, _, b)) = d
+                .baseline_tsas
+                .iter()
+                .find(|b| b.0 == ch && b.1.baseline_key() == g.gear.baseline_key() && b.2.len() == t.len())
             {
                 // without a tachometer both origins are arbitrary: the baseline is turned to fit best
                 let (b, how) = match d.speed_profile.tracking {
@@ -112,6 +115,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         };
         let shafts = match d.shaft_hz {
             ShaftHz::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
+            ShaftHz::Pinion { .. } => vec![Shaft::Pinion],
             ShaftHz::Estimated { .. } => vec![Shaft::Estimated],
         };
         for (i, shaft) in shafts.into_iter().enumerate() {
@@ -327,7 +331,7 @@ pub(super) fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summa
     let mut series =
         vec![Series { name: "squared-envelope order spectrum".into(), points: pts, style: Style::Line, color: 4 }];
     let reference = match d.shaft_hz {
-        ShaftHz::Pair { .. } => "pinion",
+        ShaftHz::Pair { .. } | ShaftHz::Pinion { .. } => "pinion",
         ShaftHz::Estimated { .. } => "estimated shaft",
     };
     let mut markers = Vec::new();

@@ -19,6 +19,16 @@ pub enum Shaft {
 }
 
 impl Shaft {
+    /// The shaft as a baseline knows it: the shaft of an estimated period is the reference shaft, as the
+    /// pinion is when its speed was given or measured (a baseline and a recording whose speeds came
+    /// different ways still compare their reference shafts).
+    pub fn baseline_key(self) -> Self {
+        match self {
+            Self::Estimated => Self::Pinion,
+            s => s,
+        }
+    }
+
     /// Name shown to people and in the JSON.
     pub fn name(self) -> &'static str {
         match self {
@@ -36,7 +46,8 @@ impl std::fmt::Display for Shaft {
 }
 
 /// Shaft frequencies in Hz (`null` when the sample rate is unknown): pinion and wheel when the teeth are
-/// known, else the one estimated shaft.
+/// known, the pinion alone when its speed was given or measured without the teeth, else the one shaft
+/// of the estimated period.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum ShaftHz {
@@ -46,6 +57,12 @@ pub enum ShaftHz {
         pinion: Option<f64>,
         /// Wheel (output) shaft, Hz.
         wheel: Option<f64>,
+    },
+    /// The pinion shaft alone: its speed given or from its tachometer, the teeth unknown (so the wheel's
+    /// speed is too), Hz.
+    Pinion {
+        /// Pinion (input) shaft, Hz.
+        pinion: Option<f64>,
     },
     /// The shaft of the estimated period, Hz.
     Estimated {
@@ -58,14 +75,14 @@ impl ShaftHz {
     /// The reference shaft's frequency (the pinion, or the estimated shaft), Hz.
     pub fn reference(&self) -> Option<f64> {
         match *self {
-            Self::Pair { pinion, .. } => pinion,
+            Self::Pair { pinion, .. } | Self::Pinion { pinion } => pinion,
             Self::Estimated { estimated_shaft } => estimated_shaft,
         }
     }
-    /// The pinion's frequency when the teeth are known, Hz.
+    /// The pinion's frequency when its shaft is known to be the reference, Hz.
     pub fn pinion(&self) -> Option<f64> {
         match *self {
-            Self::Pair { pinion, .. } => pinion,
+            Self::Pair { pinion, .. } | Self::Pinion { pinion } => pinion,
             Self::Estimated { .. } => None,
         }
     }
@@ -73,6 +90,7 @@ impl ShaftHz {
     pub fn entries(&self) -> Vec<(&'static str, Option<f64>)> {
         match *self {
             Self::Pair { pinion, wheel } => vec![("pinion", pinion), ("wheel", wheel)],
+            Self::Pinion { pinion } => vec![("pinion", pinion)],
             Self::Estimated { estimated_shaft } => vec![("estimated_shaft", estimated_shaft)],
         }
     }
