@@ -143,6 +143,8 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
         tacho_channel: k.tacho,
         channel: k.channel,
         unit: k.unit.clone(),
+        // the curves handed to numpy hold every channel's spectrum
+        all_spectra: true,
         ..Default::default()
     })
 }

@@ -59,6 +59,70 @@ pub fn normalized_moments_4_6_8(x: &[f64]) -> [f64; 3] {
     [n * s4 / (s2 * s2), n * n * s6 / (s2 * s2 * s2), n * n * n * s8 / (s2 * s2 * s2 * s2)]
 }
 
+/// Range and moments of a raw channel, from [`channel_moments`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChannelMoments {
+    /// Smallest and largest sample.
+    pub min: f32,
+    /// Largest sample.
+    pub max: f32,
+    /// [`rms`] of the samples.
+    pub rms: f64,
+    /// [`kurtosis`] of the samples.
+    pub kurtosis: f64,
+}
+
+/// Range, RMS and kurtosis of a channel in two passes (the mean, then the central moments), each summed
+/// in eight lanes so that it vectorises; `Err(i)` with the index of the first sample that is not finite.
+///
+/// # Errors
+/// The index of the first NaN or infinite sample.
+pub fn channel_moments(x: &[f32]) -> Result<ChannelMoments, usize> {
+    const L: usize = 8;
+    let (mut lo, mut hi, mut sum) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0.0f64; L]);
+    let chunks = x.chunks_exact(L);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..L {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+            sum[k] += f64::from(c[k]);
+        }
+    }
+    for (k, v) in rest.iter().enumerate() {
+        lo[k] = lo[k].min(*v);
+        hi[k] = hi[k].max(*v);
+        sum[k] += f64::from(*v);
+    }
+    let (min, max) =
+        (lo.iter().copied().fold(f32::INFINITY, f32::min), hi.iter().copied().fold(f32::NEG_INFINITY, f32::max));
+    let total: f64 = sum.iter().sum();
+    // min / max skip NaN, an infinity makes the sum infinite or NaN: either shows in one of the three
+    if !(min.is_finite() && max.is_finite() && total.is_finite()) {
+        return Err(x.iter().position(|v| !v.is_finite()).unwrap_or(0));
+    }
+    let n = x.len().max(1) as f64;
+    let mean = total / n;
+    let (mut s2, mut s4) = ([0.0f64; L], [0.0f64; L]);
+    let chunks = x.chunks_exact(L);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..L {
+            let d = f64::from(c[k]) - mean;
+            s2[k] += d * d;
+            s4[k] += d * d * d * d;
+        }
+    }
+    for (k, v) in rest.iter().enumerate() {
+        let d = f64::from(*v) - mean;
+        s2[k] += d * d;
+        s4[k] += d * d * d * d;
+    }
+    let (s2, s4): (f64, f64) = (s2.iter().sum(), s4.iter().sum());
+    // sum x^2 = sum (x - mean)^2 + n mean^2
+    Ok(ChannelMoments { min, max, rms: ((s2 + n * mean * mean) / n).sqrt(), kurtosis: n * s4 / (s2 * s2) })
+}
+
 /// Non-excess kurtosis (3 for Gaussian).
 pub fn kurtosis<T: Sample>(x: &[T]) -> f64 {
     normalized_moment(x, 4)
@@ -116,6 +180,15 @@ mod tests {
         assert!((kurtosis(&x) - 5.0 * s4 / (s2 * s2)).abs() < 1e-12);
         assert!((normalized_moment(&x, 6) - 25.0 * s6 / (s2 * s2 * s2)).abs() < 1e-12);
         assert!((normalized_moment(&x, 8) - 125.0 * s8 / (s2 * s2 * s2 * s2)).abs() < 1e-12);
+        // the channel moments of the same samples (f32 exactly), and the first non-finite sample found
+        let c = channel_moments(&[1.0f32, 2.0, 3.0, 4.0, 10.0]).unwrap();
+        assert!((c.kurtosis - 5.0 * s4 / (s2 * s2)).abs() < 1e-12 && (c.rms - (26.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!((c.min, c.max), (1.0, 10.0));
+        let mut long: Vec<f32> = (0..37).map(|i| i as f32).collect();
+        long[29] = f32::NAN;
+        assert_eq!(channel_moments(&long), Err(29));
+        long[29] = f32::NEG_INFINITY;
+        assert_eq!(channel_moments(&long), Err(29));
         // the one-pass FM4 / M6A / M8A against the same hand sums (rounding of a few operations only)
         let [m4, m6, m8] = normalized_moments_4_6_8(&x);
         assert!((m4 - 5.0 * s4 / (s2 * s2)).abs() < 1e-12);

@@ -264,23 +264,26 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
 }
 
 /// [`tsa`] and, in the same pass, the averages of consecutive blocks of `block_revs` revolutions (the
-/// revolutions after the last whole block count in the full average only).
+/// revolutions after the last whole block count in the full average only), each handed to `on_block` as
+/// it completes: what it returns is kept, the block's average is not (a 60 s recording's blocks of
+/// four channels would hold 20 MB).
 ///
 /// # Errors
 /// As [`tsa`].
-pub fn tsa_with_blocks<T: Sample>(
+pub fn tsa_with_blocks<T: Sample, B>(
     x: &[T],
     map: &AngleMap,
     ratio: f64,
     points: usize,
     min_revs: usize,
     block_revs: usize,
-) -> Result<(Tsa, Vec<Vec<f64>>), SignalError> {
+    mut on_block: impl FnMut(&[f64]) -> B,
+) -> Result<(Tsa, Vec<B>), SignalError> {
     let per = block_revs.max(1);
     if map.constant.is_some() {
         let full = tsa(x, map, ratio, points, min_revs)?;
         let blocks = (0..full.revolutions / per)
-            .map(|b| tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per))
+            .map(|b| on_block(&tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per)))
             .collect();
         return Ok((full, blocks));
     }
@@ -301,7 +304,8 @@ pub fn tsa_with_blocks<T: Sample>(
             *b += v;
         }
         if (j + 1) % per == 0 {
-            blocks.push(block.iter().map(|v| v / per as f64).collect());
+            block.iter_mut().for_each(|v| *v /= per as f64);
+            blocks.push(on_block(&block));
             block.iter_mut().for_each(|v| *v = 0.0);
         }
     }

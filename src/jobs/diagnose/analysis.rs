@@ -11,7 +11,7 @@ pub(super) fn analyse(
     geometry: Option<&Geometry>,
 ) -> Result<Diagnosis, Error> {
     let mut warnings = Vec::new();
-    let Checked { tacho, channels, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
+    let Checked { tacho, channels, moments, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
     let mut fft = Fft::new();
     let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
     let (source, confidence) = (nominal.source, nominal.confidence);
@@ -51,16 +51,46 @@ pub(super) fn analyse(
         Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
         None => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
-    // one TSA per channel and gear, in parallel
+    // one TSA per channel and gear, in parallel; each block's indicators as the block completes when the
+    // gear's mesh order is known (else the block is kept until the TSAs give it)
     let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
-    let tsas = jobs
-        .par_iter()
-        .map(|&(c, gi)| {
-            tsa::tsa_with_blocks(&rec.channels[c - 1], &map, gears[gi].1, points, o.min_revolutions, o.block_revs())
-                .map(|(t, blocks)| (c, gi, t, blocks))
-                .map_err(|e| bad(path, e))
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
+    // the given wheel teeth checked, or the meshing gear's estimated, from the sidebands on the tracked
+    // angle of the first channel: at the same time as the TSAs when the mesh order is known already
+    let first = channels[0];
+    let teeth_scan = |z: usize| match o.teeth {
+        Some((_, zw)) => (wheel_teeth(&rec.channels[first - 1], &map, z, zw), None),
+        None => {
+            let other = other_gear_teeth(&rec.channels[first - 1], &map, z);
+            (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
+        }
+    };
+    let (tsas, early_scan) = rayon::join(
+        || {
+            jobs.par_iter()
+                .map(|&(c, gi)| {
+                    let mut fft = Fft::new();
+                    let on_block = |b: &[f64]| match gears[gi].2 {
+                        Some(z) => PendingBlock::Done(block_indicators(&mut fft, b, z, o.shaft_orders)),
+                        None => PendingBlock::Raw(b.to_vec()),
+                    };
+                    tsa::tsa_with_blocks(
+                        &rec.channels[c - 1],
+                        &map,
+                        gears[gi].1,
+                        points,
+                        o.min_revolutions,
+                        o.block_revs(),
+                        on_block,
+                    )
+                    .map(|(t, blocks)| (c, gi, t, blocks))
+                    .map_err(|e| bad(path, e))
+                })
+                .collect::<Result<Vec<(usize, usize, tsa::Tsa, Vec<PendingBlock>)>, Error>>()
+        },
+        || gears[0].2.map(teeth_scan),
+    );
+    let tsas = tsas?;
+    let (tsas, mut block_lists): (Vec<_>, Vec<_>) = tsas.into_iter().map(|(c, gi, t, b)| ((c, gi, t), b)).unzip();
     let mut teeth_source = match (o.teeth, geometry.and_then(|g| g.mesh_order)) {
         (Some(_), _) => TeethSource::Given,
         (None, Some(_)) => TeethSource::Baseline,
@@ -117,45 +147,42 @@ pub(super) fn analyse(
             }
         }
         mesh_orders.push(z);
-        for (c, _, t, blocks) in tsas.iter().filter(|t| t.1 == gi) {
-            pending.push((*name, *c, z, t, blocks));
+        for (i, (c, _, t)) in tsas.iter().enumerate().filter(|(_, t)| t.1 == gi) {
+            pending.push((*name, *c, z, t, std::mem::take(&mut block_lists[i])));
         }
     }
-    // ---- the gears' indicators, and at the same time the given wheel teeth checked against the wheel's
-    // sidebands on the pinion's angle; then the spectra and mesh harmonics (deciding channel chosen later:
+    // ---- the gears' indicators, and at the same time the teeth scan when it waited for the mesh order;
+    // then the spectra and mesh harmonics (deciding channel chosen later:
     // the first for now; its envelope band is chosen first, so that the amplitude spectrum's segments also
     // give its envelope)
     let shaft_hz = fs.map(|fs| fs / period);
     let ratios: Vec<(Shaft, f64)> = gears.iter().map(|g| (g.0, g.1)).collect();
     let choice =
         BandChoice { levels: o.kurtogram_levels, band: o.envelope_band.or(geometry.and_then(|g| g.envelope_band)) };
-    let first = channels[0];
     let (gear_results, (wheel_warning, other_gear)) = rayon::join(
         || {
             pending
-                .par_iter()
-                .map(|&(name, c, z, t, blocks)| {
+                .into_par_iter()
+                .map(|(name, c, z, t, blocks)| {
                     let mut fft = Fft::new();
                     let mut g = gear_indicators(&mut fft, name, c, z, t, o.shaft_orders);
-                    g.blocks = block_indicators(&mut fft, blocks, z, o.shaft_orders);
+                    g.blocks = blocks
+                        .into_iter()
+                        .map(|b| match b {
+                            PendingBlock::Done(b) => b,
+                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, o.shaft_orders),
+                        })
+                        .collect();
                     g
                 })
                 .collect::<Vec<GearIndicators>>()
         },
-        || match (mesh_orders.first(), o.teeth) {
-            (Some(&zp), Some((_, zw))) => (wheel_teeth(&rec.channels[first - 1], &map, zp, zw), None),
-            (Some(&z), None) => {
-                let other = other_gear_teeth(&rec.channels[first - 1], &map, z);
-                (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
-            }
-            _ => (None, None),
-        },
+        || early_scan.unwrap_or_else(|| teeth_scan(mesh_orders[0])),
     );
     warnings.extend(wheel_warning);
     // the averages and their blocks are in the indicators now: free them before the spectra (run at the
     // same time as the gears, the spectra's buffers and the TSAs together took the peak over 100 MiB on a
     // 60 s x 4 channel recording)
-    drop(pending);
     drop(tsas);
     let mut plan = match (fs, o.lifter) {
         (Some(fs), None) => Some(envelope_plan(&mut fft, &rec.channels[first - 1], fs, &map, mesh_orders[0], choice)),
@@ -165,8 +192,10 @@ pub(super) fn analyse(
         Some(Ok((_, ola))) => ola.take(),
         _ => None,
     });
+    // the deciding channel's spectra (its mesh harmonics, envelope and cepstrum); the others' only on request
+    let spectrum_channels: Vec<usize> = channels.iter().copied().filter(|&c| c == first || o.all_spectra).collect();
     let spectra = match fs {
-        Some(fs) => channels
+        Some(fs) => spectrum_channels
             .par_iter()
             .map(|&c| {
                 let ola = if c == first { ola.lock().map(|mut o| o.take()).unwrap_or(None) } else { None };
@@ -177,13 +206,15 @@ pub(super) fn analyse(
             .collect::<Result<Vec<_>, Error>>()?,
         None => Vec::new(),
     };
-    let raw = channels
-        .par_iter()
-        .map(|&c| {
-            let x = &rec.channels[c - 1];
-            BTreeMap::from([("rms".to_string(), ind::rms(x)), ("kurtosis".to_string(), ind::kurtosis(x))])
-        })
+    let raw = moments
+        .iter()
+        .map(|m| BTreeMap::from([("rms".to_string(), m.rms), ("kurtosis".to_string(), m.kurtosis)]))
         .collect();
+    // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map): the others'
+    // samples are freed before the envelope's record-long buffers are allocated
+    for &c in channels.iter().filter(|&&c| c != first) {
+        rec.channels[c - 1] = std::borrow::Cow::Borrowed(&[]);
+    }
     let shafts = match o.teeth {
         Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
         None if reference == Shaft::Pinion => ShaftHz::Pinion { pinion: shaft_hz },
@@ -336,26 +367,28 @@ pub(super) fn tsa_indicators(
     (m, d)
 }
 
-/// Indicators of the block averages of a gear (consecutive blocks of whole revolutions; the statistical
+/// A block average of a gear's TSA: its indicators, or the average itself until the gear's mesh order
+/// is known.
+pub(super) enum PendingBlock {
+    Done(crate::report::summary::Block),
+    Raw(Vec<f64>),
+}
+
+/// Indicators of one block average of a gear (consecutive blocks of whole revolutions; the statistical
 /// baseline's samples; a recording under test is scored by the median of its own blocks, so both sides
 /// average the same number of revolutions).
 pub(super) fn block_indicators(
     fft: &mut Fft,
-    blocks: &[Vec<f64>],
+    block: &[f64],
     z: usize,
     shaft_orders: usize,
-) -> Vec<crate::report::summary::Block> {
-    blocks
-        .iter()
-        .map(|t| {
-            let (mut indicators, d) = tsa_indicators(fft, t, z, shaft_orders);
-            let n = d.residual.len() as f64;
-            let mean = d.residual.iter().sum::<f64>() / n;
-            indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
-            indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
-            crate::report::summary::Block { indicators, amplitudes: d.amplitudes }
-        })
-        .collect()
+) -> crate::report::summary::Block {
+    let (mut indicators, d) = tsa_indicators(fft, block, z, shaft_orders);
+    let n = d.residual.len() as f64;
+    let mean = d.residual.iter().sum::<f64>() / n;
+    indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
+    indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
+    crate::report::summary::Block { indicators, amplitudes: d.amplitudes }
 }
 
 /// Mesh harmonics and sidebands (3 per shaft on each side) from the raw amplitude spectrum when the

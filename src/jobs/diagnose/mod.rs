@@ -348,6 +348,9 @@ pub struct Options {
     pub block_revs: Option<usize>,
     /// Shaft orders 1..=n counted as regular.
     pub shaft_orders: usize,
+    /// Amplitude spectra of every analysed channel, not only of the deciding one (the first): the text,
+    /// the JSON and the images use the deciding channel's alone; a library caller may want them all.
+    pub all_spectra: bool,
 }
 
 impl Options {
@@ -376,6 +379,7 @@ impl Default for Options {
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
+            all_spectra: false,
         }
     }
 }

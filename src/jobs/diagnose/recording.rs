@@ -86,11 +86,17 @@ pub(super) fn looks_like_pulses(x: &[f32]) -> bool {
     levels.len() == 2
 }
 
-pub(super) fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut Vec<String>) -> Result<(), Error> {
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(bad(path, format!("channel {idx} has a non-finite sample at index {i}")));
-    }
-    let (lo, hi) = x.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+/// Checks one channel (finite, not constant, clipping warned about) and returns its raw RMS and kurtosis
+/// from the same passes.
+pub(super) fn check_channel(
+    path: &Path,
+    idx: usize,
+    x: &[f32],
+    warnings: &mut Vec<String>,
+) -> Result<ind::ChannelMoments, Error> {
+    let m = ind::channel_moments(x)
+        .map_err(|i| bad(path, format!("channel {idx} has a non-finite sample at index {i}")))?;
+    let (lo, hi) = (m.min, m.max);
     if lo == hi {
         return Err(bad(path, format!("channel {idx} is constant ({lo}): nothing to analyse")));
     }
@@ -105,7 +111,7 @@ pub(super) fn check_channel(path: &Path, idx: usize, x: &[f32], warnings: &mut V
     if stuck as f64 > 1e-4 * x.len() as f64 {
         warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
     }
-    Ok(())
+    Ok(m)
 }
 
 /// Fewest samples per shaft revolution a TSA can use (the resampling keeps at least 64 points).
@@ -162,11 +168,13 @@ pub(super) fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<O
     }
 }
 
-/// What [`check_recording`] established: the tachometer channel, the vibration channels (1-based), the
-/// longest channel's samples and the sample rate in Hz (`None` when unknown).
+/// What [`check_recording`] established: the tachometer channel, the vibration channels (1-based) with
+/// their raw RMS and kurtosis, the longest channel's samples and the sample rate in Hz (`None` when
+/// unknown).
 pub(super) struct Checked {
     pub tacho: Option<usize>,
     pub channels: Vec<usize>,
+    pub moments: Vec<ind::ChannelMoments>,
     pub samples: usize,
     pub fs: Option<f64>,
 }
@@ -234,15 +242,18 @@ pub(super) fn check_recording(
     if channels.is_empty() {
         return Err(bad(path, "no channel left to analyse besides the tachometer"));
     }
-    let checks: Vec<Result<Vec<String>, Error>> = channels
+    let checks: Vec<Result<(ind::ChannelMoments, Vec<String>), Error>> = channels
         .par_iter()
         .map(|&c| {
             let mut w = Vec::new();
-            check_channel(path, c, &rec.channels[c - 1], &mut w).map(|_| w)
+            check_channel(path, c, &rec.channels[c - 1], &mut w).map(|m| (m, w))
         })
         .collect();
+    let mut moments = Vec::new();
     for c in checks {
-        warnings.extend(c?);
+        let (m, w) = c?;
+        moments.push(m);
+        warnings.extend(w);
     }
-    Ok(Checked { tacho, channels, samples: n, fs })
+    Ok(Checked { tacho, channels, moments, samples: n, fs })
 }

@@ -527,7 +527,8 @@ pub struct Diagnosis {
     pub unit: String,
     /// Warnings (clipping, estimated quantities).
     pub warnings: Vec<String>,
-    /// Amplitude spectrum per analysed channel (empty when the sample rate is unknown).
+    /// Amplitude spectrum of the deciding channel, or of every analysed channel with
+    /// `Options::all_spectra` (empty when the sample rate is unknown).
     #[serde(skip)]
     pub spectra: Vec<(usize, Spectrum)>,
     /// The first baseline's amplitude spectrum of each channel, for the overlay in the images.
@@ -544,7 +545,7 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
-    /// Amplitude spectrum per analysed channel (when the sample rate is known).
+    /// Amplitude spectra (see the field `spectra`).
     pub fn spectra(&self) -> &[(usize, Spectrum)] {
         &self.spectra
     }
