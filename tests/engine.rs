@@ -191,7 +191,7 @@ fn press_reproduces_table_2_and_symmetry() {
             }
         }
         for (o, a) in &q2 {
-            if *o > 0.0 && (*o as usize) % 2 == 0 {
+            if *o > 0.0 && (*o as usize).is_multiple_of(2) {
                 assert!(*a < 1e-9 * peak2, "{case} q2 order {o}: {a}");
             }
         }

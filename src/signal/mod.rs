@@ -33,6 +33,8 @@ pub trait Sample: Copy + Send + Sync {
     fn f(self) -> f64;
     /// `sum_k x[k] taps[k]` over 16 samples, in eight independent lanes (so the compiler vectorises it).
     fn dot16(x: &[Self], taps: &[f32; 16]) -> f64;
+    /// The samples as f32, when they are (for the interpolation's explicit vector kernel).
+    fn as_f32(x: &[Self]) -> Option<&[f32]>;
 }
 
 impl Sample for f32 {
@@ -47,6 +49,9 @@ impl Sample for f32 {
         let b: [f32; 4] = std::array::from_fn(|k| a[k] + a[k + 4]);
         f64::from((b[0] + b[2]) + (b[1] + b[3]))
     }
+    fn as_f32(x: &[f32]) -> Option<&[f32]> {
+        Some(x)
+    }
 }
 
 impl Sample for f64 {
@@ -59,6 +64,9 @@ impl Sample for f64 {
         let a: [f64; 8] = std::array::from_fn(|k| x[k] * f64::from(taps[k]) + x[k + 8] * f64::from(taps[k + 8]));
         let b: [f64; 4] = std::array::from_fn(|k| a[k] + a[k + 4]);
         (b[0] + b[2]) + (b[1] + b[3])
+    }
+    fn as_f32(_: &[f64]) -> Option<&[f32]> {
+        None
     }
 }
 

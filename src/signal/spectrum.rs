@@ -129,7 +129,7 @@ impl Fft {
         input.extend(spec.iter().map(|&(r, i)| Complex::new(r, i)));
         // a real signal's DC and Nyquist bins are real
         input[0].im = 0.0;
-        if n % 2 == 0 {
+        if n.is_multiple_of(2) {
             input[n / 2].im = 0.0;
         }
         let mut out = plan.make_output_vec();
@@ -162,7 +162,7 @@ pub fn periodic_amplitudes_with(fft: &mut Fft, samples: &[f64]) -> Vec<f64> {
 }
 
 fn bin_scale(k: usize, n: usize) -> f64 {
-    if k == 0 || (n % 2 == 0 && k == n / 2) { 1.0 } else { 2.0 }
+    if k == 0 || (n.is_multiple_of(2) && k == n / 2) { 1.0 } else { 2.0 }
 }
 
 /// Peak amplitude of the strongest sinusoid within +-`search` cycles per sample of `f` (cycles per

@@ -216,6 +216,90 @@ impl Interpolator {
         self.fill_portable(x, positions, out);
     }
 
+    /// `outs[k][i]` = `xs[k]` at fractional index `positions[i]` for every channel k ([`fill`](Self::fill)
+    /// of each), each position's taps looked up once for all channels.
+    pub fn fill_many<T: Sample>(&self, xs: &[&[T]], positions: &[f64], outs: &mut [Vec<f64>]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: as in `fill`: the same code, compiled for the features detected just above.
+            unsafe { self.fill_many_avx2(xs, positions, outs) };
+            return;
+        }
+        self.fill_many_portable(xs, positions, outs);
+    }
+
+    #[inline(always)]
+    fn fill_many_portable<T: Sample>(&self, xs: &[&[T]], positions: &[f64], outs: &mut [Vec<f64>]) {
+        for (i, &s) in positions.iter().enumerate() {
+            let s = s.max(0.0);
+            let k = s as isize;
+            let taps = &self.table[((s - k as f64) * PHASES as f64 + 0.5) as usize];
+            let first = k - (HALF as isize - 1);
+            for (x, out) in xs.iter().zip(outs.iter_mut()) {
+                let n = x.len() as isize;
+                out[i] = if first >= 0 && first + 2 * HALF as isize <= n {
+                    T::dot16(&x[first as usize..first as usize + 2 * HALF], taps)
+                } else {
+                    taps.iter()
+                        .enumerate()
+                        .map(|(j, t)| f64::from(*t) * x[(first + j as isize).clamp(0, n - 1) as usize].f())
+                        .sum()
+                };
+            }
+        }
+    }
+
+    /// # Safety
+    /// The processor must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn fill_many_avx2<T: Sample>(&self, xs: &[&[T]], positions: &[f64], outs: &mut [Vec<f64>]) {
+        match xs.iter().map(|x| T::as_f32(x)).collect::<Option<Vec<&[f32]>>>() {
+            Some(f32s) => {
+                let mut outs: Vec<&mut [f64]> = outs.iter_mut().map(|o| o.as_mut_slice()).collect();
+                self.fill_f32_avx2(&f32s, positions, &mut outs);
+            }
+            None => self.fill_many_portable(xs, positions, outs),
+        }
+    }
+
+    /// The f32 kernel of [`fill_many`](Self::fill_many) in 256-bit vectors: the same products and the same
+    /// order of sums as [`Sample::dot16`] (so the same values), which the compiler left in 64-bit pieces.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn fill_f32_avx2(&self, xs: &[&[f32]], positions: &[f64], outs: &mut [&mut [f64]]) {
+        use std::arch::x86_64::{
+            _mm_add_ps, _mm_add_ss, _mm_cvtss_f32, _mm_movehl_ps, _mm_shuffle_ps, _mm256_add_ps,
+            _mm256_castps256_ps128, _mm256_extractf128_ps, _mm256_loadu_ps, _mm256_mul_ps,
+        };
+        for (i, &s) in positions.iter().enumerate() {
+            let s = s.max(0.0);
+            let k = s as isize;
+            let taps = &self.table[((s - k as f64) * PHASES as f64 + 0.5) as usize];
+            let first = k - (HALF as isize - 1);
+            // SAFETY: a row of the table holds 16 f32, read as two vectors of 8
+            let (t0, t1) = unsafe { (_mm256_loadu_ps(taps.as_ptr()), _mm256_loadu_ps(taps.as_ptr().add(8))) };
+            for (x, out) in xs.iter().zip(outs.iter_mut()) {
+                let n = x.len() as isize;
+                out[i] = if first >= 0 && first + 2 * HALF as isize <= n {
+                    let p = &x[first as usize..first as usize + 2 * HALF];
+                    // SAFETY: `p` holds 16 f32, read as two vectors of 8
+                    let (a0, a1) = unsafe { (_mm256_loadu_ps(p.as_ptr()), _mm256_loadu_ps(p.as_ptr().add(8))) };
+                    // a_k = x_k t_k + x_(k+8) t_(k+8); b_k = a_k + a_(k+4); (b0 + b2) + (b1 + b3)
+                    let a = _mm256_add_ps(_mm256_mul_ps(a0, t0), _mm256_mul_ps(a1, t1));
+                    let b = _mm_add_ps(_mm256_castps256_ps128(a), _mm256_extractf128_ps::<1>(a));
+                    let c = _mm_add_ps(b, _mm_movehl_ps(b, b));
+                    f64::from(_mm_cvtss_f32(_mm_add_ss(c, _mm_shuffle_ps::<1>(c, c))))
+                } else {
+                    taps.iter()
+                        .enumerate()
+                        .map(|(j, t)| f64::from(*t) * f64::from(x[(first + j as isize).clamp(0, n - 1) as usize]))
+                        .sum()
+                };
+            }
+        }
+    }
+
     #[inline(always)]
     fn fill_portable<T: Sample>(&self, x: &[T], positions: &[f64], out: &mut [f64]) {
         for (o, &s) in out.iter_mut().zip(positions) {
@@ -228,7 +312,10 @@ impl Interpolator {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn fill_avx2<T: Sample>(&self, x: &[T], positions: &[f64], out: &mut [f64]) {
-        self.fill_portable(x, positions, out);
+        match T::as_f32(x) {
+            Some(x) => self.fill_f32_avx2(&[x], positions, &mut [out]),
+            None => self.fill_portable(x, positions, out),
+        }
     }
 }
 
@@ -311,6 +398,87 @@ pub fn tsa_with_blocks<T: Sample, B>(
     }
     full.iter_mut().for_each(|v| *v /= revs as f64);
     Ok((Tsa { samples: full, revolutions: revs }, blocks))
+}
+
+/// [`tsa_with_blocks`] of several channels sampled alike, in one pass: each revolution's sample positions
+/// and interpolation taps are found once for all channels, and runs of whole blocks are averaged in
+/// parallel (each with its own `Fft` for `on_block`, which gets the channel's index in `xs`). The full
+/// averages sum the runs' partial sums in order, so the result does not depend on the threads.
+///
+/// # Errors
+/// As [`tsa`].
+pub fn tsa_with_blocks_of_channels<T: Sample, B: Send>(
+    xs: &[&[T]],
+    map: &AngleMap,
+    ratio: f64,
+    points: usize,
+    min_revs: usize,
+    block_revs: usize,
+    on_block: impl Fn(&mut Fft, usize, &[f64]) -> B + Sync,
+) -> Result<Vec<(Tsa, Vec<B>)>, SignalError> {
+    use rayon::prelude::*;
+    let per = block_revs.max(1);
+    let revs = revolutions_of(map, ratio);
+    if map.constant.is_some() || revs < min_revs {
+        let mut fft = Fft::new();
+        return xs
+            .iter()
+            .enumerate()
+            .map(|(k, x)| tsa_with_blocks(x, map, ratio, points, min_revs, block_revs, |b| on_block(&mut fft, k, b)))
+            .collect();
+    }
+    // runs of whole blocks (about 16 per call, so two cores share them evenly); the revolutions after the
+    // last whole block join the last run and count in the full averages only
+    let blocks = revs / per;
+    let run_blocks = blocks.div_ceil(16).max(1);
+    let runs: Vec<std::ops::Range<usize>> = (0..blocks.div_ceil(run_blocks).max(1))
+        .map(|r| r * run_blocks * per..((r + 1) * run_blocks * per).min(blocks * per))
+        .collect();
+    let last = runs.len() - 1;
+    // per run: each channel's partial sum of revolutions and its finished blocks
+    type Run<B> = (Vec<Vec<f64>>, Vec<Vec<B>>);
+    let parts: Vec<Run<B>> = runs
+        .into_par_iter()
+        .enumerate()
+        .map(|(r, range)| {
+            let range = if r == last { range.start..revs } else { range };
+            let interp = Interpolator::shared();
+            let mut fft = Fft::new();
+            let mut full = vec![vec![0.0; points]; xs.len()];
+            let mut block = vec![vec![0.0; points]; xs.len()];
+            let mut values = vec![vec![0.0; points]; xs.len()];
+            let mut done: Vec<Vec<B>> = (0..xs.len()).map(|_| Vec::new()).collect();
+            let mut at = vec![0.0; points];
+            for j in range {
+                map.fill_positions(j as f64 / ratio, 1.0 / (points as f64 * ratio), &mut at);
+                interp.fill_many(xs, &at, &mut values);
+                for k in 0..xs.len() {
+                    for ((f, b), v) in full[k].iter_mut().zip(block[k].iter_mut()).zip(&values[k]) {
+                        *f += v;
+                        *b += v;
+                    }
+                    if (j + 1) % per == 0 && j < blocks * per {
+                        block[k].iter_mut().for_each(|v| *v /= per as f64);
+                        done[k].push(on_block(&mut fft, k, &block[k]));
+                        block[k].iter_mut().for_each(|v| *v = 0.0);
+                    }
+                }
+            }
+            (full, done)
+        })
+        .collect();
+    let mut out: Vec<(Tsa, Vec<B>)> =
+        (0..xs.len()).map(|_| (Tsa { samples: vec![0.0; points], revolutions: revs }, Vec::new())).collect();
+    for (full, done) in parts {
+        for (k, (f, d)) in full.into_iter().zip(done).enumerate() {
+            out[k].0.samples.iter_mut().zip(&f).for_each(|(a, v)| *a += v);
+            out[k].1.extend(d);
+        }
+    }
+    for (t, _) in &mut out {
+        t.samples.iter_mut().for_each(|v| *v /= revs as f64);
+    }
+    Ok(out)
 }
 
 /// Revolutions of the shaft turning `ratio` times per reference revolution that `map` covers whole.
@@ -413,7 +581,7 @@ pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: us
         .map(|(k, c)| if k == 0 || k == l / 2 { 1.0 } else { 2.0 } * super::spectrum::magnitude(*c) / l as f64)
         .collect();
     let nb = spec.len();
-    let is_mesh = |k: usize| mesh_order > 0 && k % mesh_order == 0;
+    let is_mesh = |k: usize| mesh_order > 0 && k.is_multiple_of(mesh_order);
     let is_side =
         |k: usize| mesh_order > 0 && (k % mesh_order == 1 || k % mesh_order == mesh_order - 1) && k + 1 >= mesh_order;
     let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k));

@@ -92,7 +92,7 @@ pub struct Stepper<'a> {
 fn companion_form(p: &DMatrix<f64>) -> bool {
     let n = p.nrows();
     let half = n / 2;
-    n % 2 == 0 && (0..n).all(|j| (0..half).all(|i| p[(i, j)] == if j == half + i { 1.0 } else { 0.0 }))
+    n.is_multiple_of(2) && (0..n).all(|j| (0..half).all(|i| p[(i, j)] == if j == half + i { 1.0 } else { 0.0 }))
 }
 
 impl<'a> Stepper<'a> {

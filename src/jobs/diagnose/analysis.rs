@@ -51,9 +51,10 @@ pub(super) fn analyse(
         Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
         None => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
-    // one TSA per channel and gear, in parallel; each block's indicators as the block completes when the
-    // gear's mesh order is known (else the block is kept until the TSAs give it)
-    let jobs: Vec<(usize, usize)> = channels.iter().flat_map(|&c| (0..gears.len()).map(move |gi| (c, gi))).collect();
+    // the TSAs of every channel, gear by gear (each in parallel runs of blocks, the channels sharing the
+    // angle's interpolation); each block's indicators as the block completes when the gear's mesh order
+    // is known (else the block is kept until the TSAs give it)
+    let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
     // the given wheel teeth checked, or the meshing gear's estimated, from the sidebands on the tracked
     // angle of the first channel: at the same time as the TSAs when the mesh order is known already
     let first = channels[0];
@@ -66,26 +67,25 @@ pub(super) fn analyse(
     };
     let (tsas, early_scan) = rayon::join(
         || {
-            jobs.par_iter()
-                .map(|&(c, gi)| {
-                    let mut fft = Fft::new();
-                    let on_block = |b: &[f64]| match gears[gi].2 {
-                        Some(z) => PendingBlock::Done(block_indicators(&mut fft, b, z, o.shaft_orders)),
-                        None => PendingBlock::Raw(b.to_vec()),
-                    };
-                    tsa::tsa_with_blocks(
-                        &rec.channels[c - 1],
-                        &map,
-                        gears[gi].1,
-                        points,
-                        o.min_revolutions,
-                        o.block_revs(),
-                        on_block,
-                    )
-                    .map(|(t, blocks)| (c, gi, t, blocks))
-                    .map_err(|e| bad(path, e))
-                })
-                .collect::<Result<Vec<(usize, usize, tsa::Tsa, Vec<PendingBlock>)>, Error>>()
+            let mut out = Vec::new();
+            for (gi, &(_, ratio, z)) in gears.iter().enumerate() {
+                let on_block = |fft: &mut Fft, _: usize, b: &[f64]| match z {
+                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, o.shaft_orders)),
+                    None => PendingBlock::Raw(b.to_vec()),
+                };
+                let per_channel = tsa::tsa_with_blocks_of_channels(
+                    &views,
+                    &map,
+                    ratio,
+                    points,
+                    o.min_revolutions,
+                    o.block_revs(),
+                    on_block,
+                )
+                .map_err(|e| bad(path, e))?;
+                out.extend(channels.iter().zip(per_channel).map(|(&c, (t, blocks))| (c, gi, t, blocks)));
+            }
+            Ok::<_, Error>(out)
         },
         || gears[0].2.map(teeth_scan),
     );

@@ -331,8 +331,10 @@ fn fundamental_mesh_by(amp: &dyn Fn(f64, f64) -> f64, z: usize) -> usize {
         near.sort_by(f64::total_cmp);
         amp(c as f64, 0.2) >= 4.0 * 0.5 * (near[2] + near[3])
     };
-    let mut candidates: Vec<usize> =
-        [z / 3, z / 2, z, 2 * z, 3 * z].into_iter().filter(|&c| c >= 8 && (c % z == 0 || z % c == 0)).collect();
+    let mut candidates: Vec<usize> = [z / 3, z / 2, z, 2 * z, 3 * z]
+        .into_iter()
+        .filter(|&c| c >= 8 && (c % z == 0 || z.is_multiple_of(c)))
+        .collect();
     candidates.dedup();
     for c in candidates {
         // +-0.2 orders: a wheel of 2.5 times as many teeth puts lines every 0.4 pinion orders
