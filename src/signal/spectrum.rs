@@ -36,8 +36,8 @@ fn plans() -> std::sync::MutexGuard<'static, Plans> {
 }
 
 /// Longest transform (entries) whose plan the process keeps: a record-long plan's twiddles (15 MB for the
-/// order spectrum of a 60 s recording) are freed after its one use.
-const KEPT_PLAN: usize = 1 << 18;
+/// order spectrum of a 60 s recording, 4 MB for a teeth scan's baseband) are freed after use.
+const KEPT_PLAN: usize = 1 << 17;
 
 fn real_forward(n: usize) -> std::sync::Arc<dyn realfft::RealToComplex<f64>> {
     if n <= KEPT_PLAN { plans().real.plan_fft_forward(n) } else { RealFftPlanner::new().plan_fft_forward(n) }

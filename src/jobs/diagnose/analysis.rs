@@ -180,6 +180,11 @@ pub(super) fn analyse(
         || early_scan.unwrap_or_else(|| teeth_scan(mesh_orders[0])),
     );
     warnings.extend(wheel_warning);
+    // the TSAs and the teeth scan are done: unless their spectra are asked for, the other channels'
+    // samples are freed before the spectra's and the envelope's record-long buffers are allocated
+    if !o.all_spectra {
+        free_other_channels(&mut rec, &channels, first);
+    }
     // the averages and their blocks are in the indicators now: free them before the spectra (run at the
     // same time as the gears, the spectra's buffers and the TSAs together took the peak over 100 MiB on a
     // 60 s x 4 channel recording)
@@ -210,11 +215,8 @@ pub(super) fn analyse(
         .iter()
         .map(|m| BTreeMap::from([("rms".to_string(), m.rms), ("kurtosis".to_string(), m.kurtosis)]))
         .collect();
-    // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map): the others'
-    // samples are freed before the envelope's record-long buffers are allocated
-    for &c in channels.iter().filter(|&&c| c != first) {
-        rec.channels[c - 1] = std::borrow::Cow::Borrowed(&[]);
-    }
+    // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map)
+    free_other_channels(&mut rec, &channels, first);
     let shafts = match o.teeth {
         Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
         None if reference == Shaft::Pinion => ShaftHz::Pinion { pinion: shaft_hz },
@@ -305,6 +307,14 @@ pub(super) fn analyse(
         d.order_map = order_map(&mut fft, &rec.channels[channels[0] - 1], &map, d.mesh_order);
     }
     Ok(d)
+}
+
+/// Frees the samples of every channel of `channels` but `keep` (the recording's raw statistics were taken
+/// by the checks).
+fn free_other_channels(rec: &mut Recording, channels: &[usize], keep: usize) {
+    for &c in channels.iter().filter(|&&c| c != keep) {
+        rec.channels[c - 1] = std::borrow::Cow::Borrowed(&[]);
+    }
 }
 
 /// Points per revolution of a TSA: the revolution's samples rounded up to a power of two (64 ..= 65536).
