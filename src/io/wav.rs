@@ -277,9 +277,11 @@ fn read_frames(
         let n = left.min(per_block);
         let block = &mut buf[..n * frame];
         r.read_exact(block).map_err(|e| DataError::io(path, e))?;
-        for (ch, c) in channels.iter_mut().enumerate().filter(|(ch, _)| wanted[*ch]) {
+        // the channels of a block are decoded in parallel (each into its own vector)
+        use rayon::prelude::*;
+        channels.par_iter_mut().enumerate().filter(|(ch, _)| wanted[*ch]).for_each(|(ch, c)| {
             decode_channel(block, frame, ch * width, enc, c);
-        }
+        });
         left -= n;
     }
     Ok(channels)
