@@ -187,20 +187,27 @@ impl Interpolator {
     #[inline(always)]
     pub fn at<T: Sample>(&self, x: &[T], s: f64) -> f64 {
         let n = x.len() as isize;
-        // casts instead of floor/round: those are library calls on baseline x86-64
-        let s = s.max(0.0);
-        let i = s as isize;
-        let frac = s - i as f64;
-        let taps = &self.table[(frac * PHASES as f64 + 0.5) as usize];
-        let first = i - (HALF as isize - 1);
+        let (first, taps) = self.taps_at(s);
         if first >= 0 && first + 2 * HALF as isize <= n {
             T::dot16(&x[first as usize..first as usize + 2 * HALF], taps)
         } else {
-            taps.iter()
-                .enumerate()
-                .map(|(j, t)| f64::from(*t) * x[(first + j as isize).clamp(0, n - 1) as usize].f())
-                .sum()
+            Self::at_edge(x, first, taps)
         }
+    }
+
+    /// The first of the 16 samples around fractional index `s` (clamped at 0) and their taps.
+    #[inline(always)]
+    fn taps_at(&self, s: f64) -> (isize, &[f32; 2 * HALF]) {
+        // casts instead of floor/round: those are library calls on baseline x86-64
+        let s = s.max(0.0);
+        let i = s as isize;
+        (i - (HALF as isize - 1), &self.table[((s - i as f64) * PHASES as f64 + 0.5) as usize])
+    }
+
+    /// The 16-tap sum from sample `first` on when it runs past an end (the end samples repeat).
+    fn at_edge<T: Sample>(x: &[T], first: isize, taps: &[f32; 2 * HALF]) -> f64 {
+        let n = x.len() as isize;
+        taps.iter().enumerate().map(|(j, t)| f64::from(*t) * x[(first + j as isize).clamp(0, n - 1) as usize].f()).sum()
     }
 
     /// `out[i]` = `x` at fractional index `positions[i]` ([`at`](Self::at) for each), with the 16-tap
@@ -231,19 +238,12 @@ impl Interpolator {
     #[inline(always)]
     fn fill_many_portable<T: Sample>(&self, xs: &[&[T]], positions: &[f64], outs: &mut [Vec<f64>]) {
         for (i, &s) in positions.iter().enumerate() {
-            let s = s.max(0.0);
-            let k = s as isize;
-            let taps = &self.table[((s - k as f64) * PHASES as f64 + 0.5) as usize];
-            let first = k - (HALF as isize - 1);
+            let (first, taps) = self.taps_at(s);
             for (x, out) in xs.iter().zip(outs.iter_mut()) {
-                let n = x.len() as isize;
-                out[i] = if first >= 0 && first + 2 * HALF as isize <= n {
+                out[i] = if first >= 0 && first + 2 * HALF as isize <= x.len() as isize {
                     T::dot16(&x[first as usize..first as usize + 2 * HALF], taps)
                 } else {
-                    taps.iter()
-                        .enumerate()
-                        .map(|(j, t)| f64::from(*t) * x[(first + j as isize).clamp(0, n - 1) as usize].f())
-                        .sum()
+                    Self::at_edge(x, first, taps)
                 };
             }
         }
@@ -273,15 +273,11 @@ impl Interpolator {
             _mm256_castps256_ps128, _mm256_extractf128_ps, _mm256_loadu_ps, _mm256_mul_ps,
         };
         for (i, &s) in positions.iter().enumerate() {
-            let s = s.max(0.0);
-            let k = s as isize;
-            let taps = &self.table[((s - k as f64) * PHASES as f64 + 0.5) as usize];
-            let first = k - (HALF as isize - 1);
+            let (first, taps) = self.taps_at(s);
             // SAFETY: a row of the table holds 16 f32, read as two vectors of 8
             let (t0, t1) = unsafe { (_mm256_loadu_ps(taps.as_ptr()), _mm256_loadu_ps(taps.as_ptr().add(8))) };
             for (x, out) in xs.iter().zip(outs.iter_mut()) {
-                let n = x.len() as isize;
-                out[i] = if first >= 0 && first + 2 * HALF as isize <= n {
+                out[i] = if first >= 0 && first + 2 * HALF as isize <= x.len() as isize {
                     let p = &x[first as usize..first as usize + 2 * HALF];
                     // SAFETY: `p` holds 16 f32, read as two vectors of 8
                     let (a0, a1) = unsafe { (_mm256_loadu_ps(p.as_ptr()), _mm256_loadu_ps(p.as_ptr().add(8))) };
@@ -291,10 +287,7 @@ impl Interpolator {
                     let c = _mm_add_ps(b, _mm_movehl_ps(b, b));
                     f64::from(_mm_cvtss_f32(_mm_add_ss(c, _mm_shuffle_ps::<1>(c, c))))
                 } else {
-                    taps.iter()
-                        .enumerate()
-                        .map(|(j, t)| f64::from(*t) * f64::from(x[(first + j as isize).clamp(0, n - 1) as usize]))
-                        .sum()
+                    Self::at_edge(x, first, taps)
                 };
             }
         }
