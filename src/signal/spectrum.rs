@@ -52,7 +52,7 @@ fn complex_inverse(n: usize) -> std::sync::Arc<dyn rustfft::Fft<f64>> {
 }
 
 /// Reusable FFT context: plans come from the process-wide cache, the spectrum and scratch buffers are
-/// kept between calls up to [`KEPT_BUFFER`] entries (a record-long transform's are freed at once).
+/// kept between calls up to 2^17 complex entries (a record-long transform's are freed at once).
 #[derive(Default)]
 pub struct Fft {
     spec: Vec<Complex<f64>>,
