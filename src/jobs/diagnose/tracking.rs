@@ -355,6 +355,11 @@ pub(super) fn ind_line(x: &[f32], f: f64, search: f64) -> f64 {
 /// itself, good to about 1e-4): 0.5 % leaves room for a drift that is not symmetric in time.
 const MAX_TRACKING_SHIFT_ESTIMATED: f64 = 0.005;
 
+/// Line-to-band ratio from which the best channel's mesh line is followed without looking at the second
+/// channel's, dB (14 dB over the weakest line trusted; a 60 s recording's short-time spectra of a channel
+/// cost 20 ms).
+const CLEAR_LINE_DB: f64 = 20.0;
+
 /// Line-to-band ratio below which a tracked mesh line is too weak to trust, dB.
 const MIN_TRACKING_SNR_DB: f64 = 6.0;
 
@@ -407,13 +412,14 @@ pub(super) fn track(
         })
         .collect();
     candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
-    // the ridges of the two best channels in parallel; the demodulation (which keeps the ridge's line
-    // height) follows the higher one, and the other when that one fails
-    let mut ridges: Vec<(usize, Result<angle::MeshRidge, _>)> = candidates
-        .par_iter()
-        .take(2)
-        .map(|&(c, order, _)| (c, angle::mesh_ridge(&rec.channels[c - 1], period, order)))
-        .collect();
+    // the ridge of the best channel, and of the second unless the first's line stands clear of its band;
+    // the demodulation (which keeps the ridge's line height) follows the higher one, and the other when
+    // that one fails
+    let ridge_of = |&(c, order, _): &(usize, f64, f64)| (c, angle::mesh_ridge(&rec.channels[c - 1], period, order));
+    let mut ridges: Vec<(usize, Result<angle::MeshRidge, _>)> = candidates.iter().take(1).map(ridge_of).collect();
+    if !ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB)) {
+        ridges.extend(candidates.iter().skip(1).take(1).map(ridge_of));
+    }
     ridges.sort_by(|a, b| match (&a.1, &b.1) {
         (Ok(x), Ok(y)) => y.line_snr_db.total_cmp(&x.line_snr_db),
         (Ok(_), Err(_)) => std::cmp::Ordering::Less,
