@@ -396,8 +396,9 @@ pub(super) fn track(
         }
     };
     // the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
-    // second ten times the first) on each channel, relative to the channel's RMS; the two channels where it
-    // stands out most are tracked and the one whose tracked line has the better SNR is used
+    // second ten times the first) on each channel, relative to the channel's RMS; the channel where it
+    // stands out most is tracked (with the second, when its line is weak, and the one whose tracked line
+    // has the better SNR is used)
     let mut candidates: Vec<(usize, f64, f64)> = channels
         .par_iter()
         .map(|&c| {
