@@ -16,7 +16,7 @@
 //!
 //! Revolutions start where theta crosses an integer; [`AngleMap`] interpolates between the starts.
 
-use super::spectrum::{Fft, hann};
+use super::spectrum::{Fft, hann, phasor_sum};
 use super::tsa::AngleMap;
 use super::{Sample, SignalError};
 use rayon::prelude::*;
@@ -269,41 +269,6 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
     let wsum: f64 = w.iter().sum();
     fft.inverse_complex(&mut y);
     y.iter().map(|c| 2.0 * (c.0 * c.0 + c.1 * c.1).sqrt() / wsum).collect()
-}
-
-/// sum over the samples v_i of `x` of v_i exp(-i 2 pi order theta_i), with the angle theta_i = th0 + i slope
-/// (revolutions) linear over the block: a rotating phasor, one complex multiplication per sample, in four
-/// interleaved lanes (each rotating by four steps) so that the products do not wait on each other.
-fn phasor_sum<T: Sample>(x: &[T], th0: f64, slope: f64, order: f64) -> (f64, f64) {
-    use std::f64::consts::TAU;
-    const LANES: usize = 4;
-    let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
-    let step = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
-    let step2 = mul(step, step);
-    let step4 = mul(step2, step2);
-    let first = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
-    let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
-    let mut p = first;
-    for l in 0..LANES {
-        (re[l], im[l]) = p;
-        p = mul(p, step);
-    }
-    let (mut sr, mut si) = ([0.0; LANES], [0.0; LANES]);
-    let chunks = x.chunks_exact(LANES);
-    let rest = chunks.remainder();
-    for c in chunks {
-        for l in 0..LANES {
-            let v = c[l].f();
-            sr[l] += v * re[l];
-            si[l] += v * im[l];
-            (re[l], im[l]) = (re[l] * step4.0 - im[l] * step4.1, re[l] * step4.1 + im[l] * step4.0);
-        }
-    }
-    for (l, v) in rest.iter().enumerate() {
-        sr[l] += v.f() * re[l];
-        si[l] += v.f() * im[l];
-    }
-    (sr.iter().sum(), si.iter().sum())
 }
 
 /// Knots (sample index, angle in revolutions) of the ridge stage and the median line-to-band ratio.

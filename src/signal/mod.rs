@@ -4,6 +4,7 @@
 pub mod angle;
 pub mod envelope;
 pub mod indicators;
+pub mod interpolate;
 pub mod order_map;
 pub mod spectrum;
 pub mod speed;

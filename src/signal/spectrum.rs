@@ -85,27 +85,29 @@ impl Fft {
         }
     }
 
-    /// Unnormalised forward transform of `input` (overwritten) into `out` (len N/2 + 1).
-    pub fn forward(&mut self, input: &mut [f64], out: &mut Vec<(f64, f64)>) {
+    /// The forward transform of `input` (overwritten), each bin X_k handed to `read`, k = 0..=N/2.
+    fn forward_with<R>(&mut self, input: &mut [f64], read: impl FnOnce(&[Complex<f64>]) -> R) -> R {
         let plan = real_forward(input.len());
         let mut spec = std::mem::take(&mut self.spec);
         spec.resize(plan.complex_len(), Complex::new(0.0, 0.0));
         plan.process_with_scratch(input, &mut spec, self.scratch(plan.get_scratch_len())).expect("sizes from the plan");
-        out.clear();
-        out.extend(spec.iter().map(|c| (c.re, c.im)));
+        let r = read(&spec);
         self.keep(spec);
+        r
+    }
+
+    /// Unnormalised forward transform of `input` (overwritten) into `out` (len N/2 + 1).
+    pub fn forward(&mut self, input: &mut [f64], out: &mut Vec<(f64, f64)>) {
+        self.forward_with(input, |spec| {
+            out.clear();
+            out.extend(spec.iter().map(|c| (c.re, c.im)));
+        });
     }
 
     /// |X_k| for k = 0..=N/2 of the unnormalised forward transform of `input` (overwritten): what
     /// [`forward`](Self::forward) gives, without a second record-long copy of the spectrum.
     pub fn forward_magnitudes(&mut self, input: &mut [f64]) -> Vec<f64> {
-        let plan = real_forward(input.len());
-        let mut spec = std::mem::take(&mut self.spec);
-        spec.resize(plan.complex_len(), Complex::new(0.0, 0.0));
-        plan.process_with_scratch(input, &mut spec, self.scratch(plan.get_scratch_len())).expect("sizes from the plan");
-        let m = spec.iter().map(|c| magnitude((c.re, c.im))).collect();
-        self.keep(spec);
-        m
+        self.forward_with(input, |spec| spec.iter().map(|c| magnitude((c.re, c.im))).collect())
     }
 
     /// Unnormalised complex inverse transform in place: x_n = sum_k X_k exp(+2 pi i k n / N).
@@ -188,33 +190,41 @@ pub fn line_amplitude<T: Sample>(x: &[T], f: f64, search: f64) -> f64 {
     let mean = x[..n].iter().map(|v| v.f()).sum::<f64>() / n as f64;
     let gain = w.iter().sum::<f64>();
     let y: Vec<f64> = x[..n].iter().zip(w).map(|(v, wi)| (v.f() - mean) * wi).collect();
-    (-4..=4).map(|j| 2.0 * magnitude(rotating_sum(&y, f + search * j as f64 / 4.0)) / gain).fold(0.0, f64::max)
+    // sum y_i exp(+i 2 pi f_j i): the phasor sum at angle i f_j of order -1
+    (-4..=4).map(|j| 2.0 * magnitude(phasor_sum(&y, 0.0, f + search * j as f64 / 4.0, -1.0)) / gain).fold(0.0, f64::max)
 }
 
-/// sum_i y_i exp(+i 2 pi f i) (f in cycles per sample) by a rotating phasor, in four interleaved lanes
-/// (each turning four steps at a time) so that the products do not wait on each other.
-fn rotating_sum(y: &[f64], f: f64) -> (f64, f64) {
+/// sum over the samples v_i of `x` of v_i exp(-i 2 pi order theta_i), with the angle theta_i = th0 + i slope
+/// (revolutions) linear over the block: a rotating phasor, one complex multiplication per sample, in four
+/// interleaved lanes (each rotating by four steps) so that the products do not wait on each other.
+pub(super) fn phasor_sum<T: Sample>(x: &[T], th0: f64, slope: f64, order: f64) -> (f64, f64) {
+    use std::f64::consts::TAU;
     const LANES: usize = 4;
     let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
-    let step = ((std::f64::consts::TAU * f).cos(), (std::f64::consts::TAU * f).sin());
-    let step4 = mul(mul(step, step), mul(step, step));
-    let mut p = [(1.0, 0.0); LANES];
-    for l in 1..LANES {
-        p[l] = mul(p[l - 1], step);
+    let step = ((-TAU * order * slope).cos(), (-TAU * order * slope).sin());
+    let step2 = mul(step, step);
+    let step4 = mul(step2, step2);
+    let first = ((-TAU * order * th0).cos(), (-TAU * order * th0).sin());
+    let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+    let mut p = first;
+    for l in 0..LANES {
+        (re[l], im[l]) = p;
+        p = mul(p, step);
     }
     let (mut sr, mut si) = ([0.0; LANES], [0.0; LANES]);
-    let chunks = y.chunks_exact(LANES);
+    let chunks = x.chunks_exact(LANES);
     let rest = chunks.remainder();
     for c in chunks {
         for l in 0..LANES {
-            sr[l] += c[l] * p[l].0;
-            si[l] += c[l] * p[l].1;
-            p[l] = mul(p[l], step4);
+            let v = c[l].f();
+            sr[l] += v * re[l];
+            si[l] += v * im[l];
+            (re[l], im[l]) = (re[l] * step4.0 - im[l] * step4.1, re[l] * step4.1 + im[l] * step4.0);
         }
     }
     for (l, v) in rest.iter().enumerate() {
-        sr[l] += v * p[l].0;
-        si[l] += v * p[l].1;
+        sr[l] += v.f() * re[l];
+        si[l] += v.f() * im[l];
     }
     (sr.iter().sum(), si.iter().sum())
 }

@@ -73,16 +73,9 @@ pub(super) fn analyse(
                     Some(z) => PendingBlock::Done(block_indicators(fft, b, z, o.shaft_orders)),
                     None => PendingBlock::Raw(b.to_vec()),
                 };
-                let per_channel = tsa::tsa_with_blocks_of_channels(
-                    &views,
-                    &map,
-                    ratio,
-                    points,
-                    o.min_revolutions,
-                    o.block_revs(),
-                    on_block,
-                )
-                .map_err(|e| bad(path, e))?;
+                let per_channel =
+                    tsa::tsa_with_blocks(&views, &map, ratio, points, o.min_revolutions, o.block_revs(), on_block)
+                        .map_err(|e| bad(path, e))?;
                 out.extend(channels.iter().zip(per_channel).map(|(&c, (t, blocks))| (c, gi, t, blocks)));
             }
             Ok::<_, Error>(out)
@@ -185,9 +178,7 @@ pub(super) fn analyse(
     if !o.all_spectra {
         free_other_channels(&mut rec, &channels, first);
     }
-    // the averages and their blocks are in the indicators now: free them before the spectra (run at the
-    // same time as the gears, the spectra's buffers and the TSAs together took the peak over 100 MiB on a
-    // 60 s x 4 channel recording)
+    // the averages are in the indicators now: free them before the spectra's record-long buffers
     drop(tsas);
     let mut plan = match (fs, o.lifter) {
         (Some(fs), None) => Some(envelope_plan(&mut fft, &rec.channels[first - 1], fs, &map, mesh_orders[0], choice)),
