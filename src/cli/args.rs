@@ -104,9 +104,14 @@ pub struct DiagnoseArgs {
     /// Analyse only this channel (1-based); default: all but the tachometer.
     #[arg(long)]
     pub channel: Option<usize>,
-    /// Sample rate in Hz (overrides the file; needed for a CSV without a time column).
+    /// Sample rate in Hz (needed for a CSV without a time column; one that contradicts the file's own is
+    /// refused unless --fs-override).
     #[arg(long)]
     pub fs: Option<f64>,
+    /// The --fs rate overrides the rate in the file's header or time column (a logger that wrote a wrong
+    /// header).
+    #[arg(long)]
+    pub fs_override: bool,
     /// The sample rate is not known: analyse in orders of the estimated shaft period only.
     #[arg(long)]
     pub fs_unknown: bool,
@@ -116,6 +121,10 @@ pub struct DiagnoseArgs {
     /// Pinion (input) shaft speed in Hz.
     #[arg(long)]
     pub shaft_hz: Option<f64>,
+    /// Relative tolerance of a given speed: with the teeth known, the mesh line is sought within it and
+    /// the measured speed used (a nameplate speed is off by the motor's slip).
+    #[arg(long, default_value_t = 0.05)]
+    pub speed_tolerance: f64,
     /// Teeth of pinion and wheel, e.g. 14,39.
     #[arg(long, value_name = "ZP,ZW")]
     pub teeth: Option<String>,

@@ -108,6 +108,10 @@ fn restate_for_flags(e: Error) -> Error {
             file,
             message: "no sample rate: the file has no time column; pass --fs HZ, or --fs-unknown to analyse in shaft orders only".into(),
         }),
+        Error::Job(JobError::SampleRateConflict { file, given_hz, file_hz }) => CliError::flag(
+            &format!("--fs {given_hz}"),
+            format!("contradicts the {file_hz} Hz sample rate of {file}; add --fs-override if the file's rate is wrong"),
+        ),
         Error::Job(JobError::Aliasing { file, message }) => {
             Error::Job(JobError::Aliasing { file, message: format!("{message} or pass --allow-aliasing") })
         }
@@ -249,6 +253,14 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>
     };
     if let Some(fs) = a.fs {
         positive("--fs", fs)?;
+    } else if a.fs_override {
+        return Err(CliError::flag("--fs-override", "needs --fs: the sample rate that overrides the file's"));
+    }
+    if !(a.speed_tolerance.is_finite() && (0.0..=0.2).contains(&a.speed_tolerance)) {
+        return Err(CliError::flag(
+            "--speed-tolerance",
+            format!("must be between 0 and 0.2 (relative), got {}", a.speed_tolerance),
+        ));
     }
     let mut teeth = a.teeth.as_deref().map(parse_teeth).transpose()?;
     if teeth.is_none() {
@@ -259,8 +271,10 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>
     let options = jobs::diagnose::Options {
         channel: a.channel,
         fs_hz: a.fs,
+        fs_override: a.fs_override,
         fs_unknown: a.fs_unknown,
         shaft_hz,
+        speed_tolerance: a.speed_tolerance,
         teeth,
         tacho_channel: a.tacho_channel,
         pulses_per_rev: a.pulses_per_rev,
@@ -292,13 +306,15 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
     if a.json && job.report.is_none() {
         // JSON Lines as the recordings are judged: a directory of any size in bounded memory
         let mut worst = VerdictState::Healthy;
+        let mut unjudged = false;
         jobs::diagnose::run_streaming(&job, &mut |d| {
             worst = worst.max(d.verdict.state);
+            unjudged |= d.verdict.state == VerdictState::NotJudged;
             json_line(out, &d)?;
             out.flush().map_err(CliError::from)?;
             Ok(())
         })?;
-        return Ok(fail_code(a.fail_on, worst));
+        return Ok(fail_code(a.fail_on, worst, unjudged));
     }
     let done = with_spinner("diagnosing", || jobs::diagnose::run(&job))?;
     if !a.json && !done.report_files.is_empty() {
@@ -312,14 +328,17 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
         }
     }
     let worst = done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy);
-    Ok(fail_code(a.fail_on, worst))
+    let unjudged = done.diagnoses.iter().any(|d| d.verdict.state == VerdictState::NotJudged);
+    Ok(fail_code(a.fail_on, worst, unjudged))
 }
 
-/// Exit code of `diagnose`: 1 when `--fail-on` is given and the worst verdict reaches it, else 0.
-fn fail_code(fail_on: Option<FailOn>, worst: VerdictState) -> u8 {
+/// Exit code of `diagnose`: 1 when `--fail-on` is given and the worst verdict reaches it; else 3 when a
+/// recording could not be judged (nothing unscored passes for healthy); else 0.
+fn fail_code(fail_on: Option<FailOn>, worst: VerdictState, unjudged: bool) -> u8 {
     match fail_on {
         Some(FailOn::Faulty) if worst >= VerdictState::Faulty => 1,
         Some(FailOn::Suspect) if worst >= VerdictState::Suspect => 1,
+        _ if unjudged => 3,
         _ => 0,
     }
 }

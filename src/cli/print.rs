@@ -56,7 +56,14 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             None => format!("{k} period {:.3} samples", d.shaft_period_samples),
         })
         .collect();
-    writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?;
+    match (d.speed_given_hz, d.speed_deviation_percent) {
+        (Some(g), Some(off)) => writeln!(
+            w,
+            "speed            {} (measured; given {g:.4} Hz, {off:+.2} % from it)",
+            shafts.join(", ")
+        )?,
+        _ => writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?,
+    }
     let p = &d.speed_profile;
     let range = match (p.min_hz, p.max_hz) {
         (Some(lo), Some(hi)) => {

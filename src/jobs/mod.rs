@@ -65,6 +65,16 @@ pub enum JobError {
         /// True when a given speed is what needs it.
         for_speed: bool,
     },
+    /// A given sample rate contradicts the file's own (its header or time column).
+    #[error("{file}: the given sample rate {given_hz} Hz contradicts the file's {file_hz} Hz; say that it overrides the file to use it")]
+    SampleRateConflict {
+        /// The file.
+        file: String,
+        /// The given rate, Hz.
+        given_hz: f64,
+        /// The file's rate, Hz.
+        file_hz: f64,
+    },
     /// A given value is out of its meaningful range.
     #[error("{what}: {message}")]
     Value {

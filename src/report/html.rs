@@ -192,7 +192,12 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
             v.map_or(format!("{k}: period {:.2} samples", d.shaft_period_samples), |f| format!("{k} {f:.4} Hz"))
         })
         .collect();
-    facts.push(format!("Speed: {} ({}).", shafts.join(", "), d.speed_source));
+    facts.push(match (d.speed_given_hz, d.speed_deviation_percent) {
+        (Some(g), Some(off)) => {
+            format!("Speed: {} (measured; the given {g:.4} Hz is {off:+.2} % from it).", shafts.join(", "))
+        }
+        _ => format!("Speed: {} ({}).", shafts.join(", "), d.speed_source),
+    });
     let p = &d.speed_profile;
     facts.push(format!(
         "Tracking: {}{}; change over the recording {:+.3} %.",

@@ -23,13 +23,22 @@ pub(super) fn analyse(
         rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);
     }
     let profile = angle::SpeedProfile::of(&map);
-    if let (Some(hz), Some(fs), Tracking::MeshPhase) = (o.shaft_hz, fs, tracking) {
-        let off = profile.mean * fs / hz - 1.0;
-        if off.abs() > 0.01 {
+    // a given speed is a nominal one: what was measured (mesh comb and tracking, or the tachometer) is used,
+    // and its deviation from the given speed reported
+    let speed_given = o.shaft_hz.zip(fs).map(|(hz, fs)| (hz, 100.0 * (profile.mean * fs / hz - 1.0)));
+    if let Some((hz, off)) = speed_given {
+        if off.abs() > 100.0 * o.speed_tolerance {
             warnings.push(format!(
-                "the given speed {hz:.4} Hz differs by {:+.2} % from the speed tracked on the mesh line ({:.4} Hz): the tracked speed is used; check the given speed",
-                100.0 * off,
-                profile.mean * fs
+                "the given speed {hz:.4} Hz is {off:+.2} % from the measured {:.4} Hz ({}), beyond the +-{:.1} % tolerance: check the given speed",
+                profile.mean * fs.unwrap_or(0.0),
+                tracking,
+                100.0 * o.speed_tolerance
+            ));
+        } else if off.abs() > 0.5 {
+            warnings.push(format!(
+                "the given speed {hz:.4} Hz is {off:+.2} % from the measured {:.4} Hz ({}): the measured speed is used (a nameplate speed is off by the motor's slip)",
+                profile.mean * fs.unwrap_or(0.0),
+                tracking
             ));
         }
     }
@@ -43,7 +52,10 @@ pub(super) fn analyse(
         line_snr_db,
     };
     let period = map.mean_period_samples();
-    let points = tsa_points(period);
+    // the baseline's averaging length when there is one: the recording under test is averaged exactly as
+    // the baseline was (a revolution of 1023.9 and one of 1024.1 samples would otherwise round to averages
+    // of 1024 and 2048 points, whose blocks cannot be compared)
+    let points = geometry.and_then(|g| g.tsa_points).unwrap_or_else(|| tsa_points(period));
     // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown); a given or
     // measured speed is the pinion's, an estimated period belongs to a shaft nobody named
     let reference = if source == SpeedSource::Estimated { Shaft::Estimated } else { Shaft::Pinion };
@@ -232,6 +244,8 @@ pub(super) fn analyse(
         shaft_period_samples: period,
         speed_source: source,
         speed_confidence: confidence,
+        speed_given_hz: speed_given.map(|g| g.0),
+        speed_deviation_percent: speed_given.map(|g| g.1),
         speed_profile,
         mesh_hz: shaft_hz.map(|f| f * mesh_orders[0] as f64),
         mesh_order: mesh_orders[0],

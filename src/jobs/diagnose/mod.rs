@@ -157,6 +157,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
         period_samples: (b.speed_source == SpeedSource::Estimated).then_some(b.shaft_period_samples),
         mesh_order: (b.teeth_source == TeethSource::Estimated).then_some(b.mesh_order),
         envelope_band: b.envelope.as_ref().map(|e| (e.band_hz[0], e.band_hz[1])),
+        tsa_points: b.gears.first().map(|g| g.tsa.len()),
     });
     let mut baselines: Vec<Diagnosis> = first.into_iter().collect();
     let rest: Vec<Result<Diagnosis, Error>> = baseline_files
@@ -317,12 +318,18 @@ pub fn write_report(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, Error> {
 pub struct Options {
     /// 1-based channel to analyse (all but the tachometer when `None`).
     pub channel: Option<usize>,
-    /// Sample rate override in Hz.
+    /// Sample rate in Hz, for a file without one; one that contradicts the file's is refused unless
+    /// `fs_override`.
     pub fs_hz: Option<f64>,
+    /// `fs_hz` overrides the file's own rate.
+    pub fs_override: bool,
     /// Analyse in orders only when no sample rate is known.
     pub fs_unknown: bool,
-    /// Pinion (input) shaft speed in Hz.
+    /// Pinion (input) shaft speed in Hz: a nominal speed, searched on the mesh comb within
+    /// +-`speed_tolerance` when the teeth are known.
     pub shaft_hz: Option<f64>,
+    /// Relative tolerance of a given speed (0.05: the mesh line is sought within +-5 %).
+    pub speed_tolerance: f64,
     /// Teeth of pinion and wheel.
     pub teeth: Option<(usize, usize)>,
     /// 1-based tachometer channel (pinion shaft).
@@ -365,8 +372,10 @@ impl Default for Options {
         Self {
             channel: None,
             fs_hz: None,
+            fs_override: false,
             fs_unknown: false,
             shaft_hz: None,
+            speed_tolerance: DEFAULT_SPEED_TOLERANCE,
             teeth: None,
             tacho_channel: None,
             pulses_per_rev: 1,
@@ -384,6 +393,9 @@ impl Default for Options {
     }
 }
 
+/// Default relative tolerance of a given speed: a nameplate speed is off by the motor's slip (1-4 %).
+pub const DEFAULT_SPEED_TOLERANCE: f64 = 0.05;
+
 fn bad(path: &Path, msg: impl std::fmt::Display) -> Error {
     JobError::Input { file: path.display().to_string(), message: msg.to_string() }.into()
 }
@@ -399,4 +411,7 @@ pub struct Geometry {
     /// The baseline's envelope band in Hz: recordings are demodulated in the same band, so their envelope
     /// lines compare with the baseline's.
     pub envelope_band: Option<(f64, f64)>,
+    /// Points per revolution of the baseline's averages: every recording is averaged on as many, so that
+    /// its blocks and the baseline's hold the same orders.
+    pub tsa_points: Option<usize>,
 }

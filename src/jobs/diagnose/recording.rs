@@ -158,6 +158,9 @@ pub(super) fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<O
             }
             .into());
         }
+        if let Some(file_hz) = rec.sample_rate_hz.filter(|f| (f / fs - 1.0).abs() > 1e-6 && !o.fs_override) {
+            return Err(JobError::SampleRateConflict { file: path.display().to_string(), given_hz: fs, file_hz }.into());
+        }
         return Ok(Some(fs));
     }
     match rec.sample_rate_hz {

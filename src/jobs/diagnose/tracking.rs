@@ -39,8 +39,12 @@ pub(super) fn nominal_speed(
         let fs = fs
             .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
         check_given_speed(path, hz, fs, n, o.min_revolutions)?;
+        let period = match o.teeth {
+            Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
+            None => fs / hz,
+        };
         return Ok(Nominal {
-            map: AngleMap::constant(fs / hz, 0.0, n),
+            map: AngleMap::constant(period, 0.0, n),
             source: SpeedSource::Given,
             confidence: 1.0,
             mesh_order: None,
@@ -130,6 +134,42 @@ pub(super) fn nominal_speed(
             .map(|z| fundamental_mesh(&views, est.period_samples, z))
             .filter(|&z| z >= 8),
     })
+}
+
+/// Mesh comb height over the spectrum's median level from which the comb's speed replaces a given one, dB:
+/// a mesh line 10 dB over the noise floor is clear on any recording that has one.
+const MIN_COMB_DB: f64 = 10.0;
+
+/// The pinion period (samples) of a given nominal speed (period `nominal`), searched on the mesh comb of
+/// `zp` teeth within the tolerance on the analysed channels (the one where the comb stands highest); the
+/// nominal period when no comb stands [`MIN_COMB_DB`] over the floor, with a warning.
+fn given_on_mesh_comb(
+    rec: &Recording,
+    channels: &[usize],
+    nominal: f64,
+    zp: usize,
+    o: &Options,
+    fft: &mut Fft,
+    warnings: &mut Vec<String>,
+) -> f64 {
+    let best = channels
+        .iter()
+        .filter_map(|&c| {
+            let x = &rec.channels[c - 1];
+            speed::mesh_comb_period(fft, &x[..x.len().min(1 << 21)], nominal, zp, o.speed_tolerance).ok()
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    match best {
+        Some((p, db)) if db >= MIN_COMB_DB => p,
+        Some((_, db)) => {
+            warnings.push(format!(
+                "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: the given speed is used as it is",
+                100.0 * o.speed_tolerance
+            ));
+            nominal
+        }
+        None => nominal,
+    }
 }
 
 /// Points per mesh cycle when a record is resampled on the mesh line's angle to find its shaft.

@@ -181,21 +181,62 @@ fn gear_state(triggers: &[Trigger], t: &Thresholds) -> VerdictState {
     if triggers.len() >= t.faulty_count { VerdictState::Faulty } else { top }
 }
 
-/// Verdict against the statistical baseline of the same machine, or on absolute limits without one.
+/// Why a gear could not be judged, or `None` when it could: against a baseline, every deciding indicator
+/// must have been scored on at least one block of the same length as the baseline's; without one, FM4, M6A
+/// and NA4 must be numbers.
+fn unscored(d: &Diagnosis, g: &GearIndicators, reference: Option<&Reference>) -> Option<String> {
+    let what = format!("{} (channel {})", g.gear, g.channel);
+    match reference {
+        Some(r) if !r.covers(g) => {
+            Some(format!("{what}: the baseline holds no such gear and channel, so it cannot be scored"))
+        }
+        Some(_) => {
+            let scored = d.scores.iter().filter(|s| s.gear == g.gear && s.channel == g.channel).count();
+            (scored == 0).then(|| {
+                format!(
+                    "{what}: none of its {} block(s) could be scored against the baseline (their averages do not hold the baseline's orders, or every value is not a number)",
+                    g.blocks.len()
+                )
+            })
+        }
+        None => {
+            let bad: Vec<&str> = [("fm4", "FM4"), ("m6a", "M6A"), ("na4", "NA4")]
+                .iter()
+                .filter(|(k, _)| !get(&g.indicators, k).is_finite())
+                .map(|(_, n)| *n)
+                .collect();
+            (!bad.is_empty()).then(|| {
+                format!(
+                    "{what}: {} not a number (the average holds no difference or residual signal to measure: check the teeth and the speed)",
+                    bad.join(", ")
+                )
+            })
+        }
+    }
+}
+
+/// Verdict against the statistical baseline of the same machine, or on absolute limits without one. A gear
+/// that cannot be scored (see [`unscored`]) is never taken for healthy: when no judged gear shows a fault,
+/// the recording is [`VerdictState::NotJudged`] with the reasons.
 pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
     // (gear, channel, triggers, weight of the gear's evidence)
     let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>, f64)> = Vec::new();
+    let mut not_judged = Vec::new();
     d.scores.clear();
     let gears = d.gears.clone();
     for g in &gears {
         let (trig, weight) = match reference {
             Some(r) if r.covers(g) => (against_baseline(d, g, r), r.residual_growth(g)),
-            _ => {
+            Some(_) => (Vec::new(), f64::NAN),
+            None => {
                 let trig = absolute(g, t);
                 let w = trig.iter().map(|t| t.ratio).fold(0.0, f64::max);
                 (trig, w)
             }
         };
+        if let Some(why) = unscored(d, g, reference) {
+            not_judged.push(why);
+        }
         per_gear.push((g.gear, g.channel, trig, weight));
     }
     // the gear: the worst state, and among equal states the one whose residual grew most (with a baseline)
@@ -211,10 +252,18 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
             let own = |x: &Trigger| x.text.starts_with(&format!("{gear} (channel {channel})"));
             all.sort_by(|a, b| own(b).cmp(&own(a)).then(b.ratio.total_cmp(&a.ratio)));
             reasons.extend(all.iter().take(t.max_reasons).map(|t| t.text.clone()));
+            reasons.extend(not_judged.iter().map(|w| format!("not judged: {w}")));
             if let Some(g) = d.gears.iter().find(|g| g.gear == *gear && g.channel == *channel) {
                 d.indicators = g.indicators.clone();
             }
             (gear_state(trig, t), VerdictGear::from(*gear))
+        }
+        _ if !not_judged.is_empty() || d.gears.is_empty() => {
+            if d.gears.is_empty() {
+                reasons.push("no gear average could be computed".into());
+            }
+            reasons.extend(not_judged.iter().cloned());
+            (VerdictState::NotJudged, VerdictGear::None)
         }
         _ => {
             reasons.push(match reference {
@@ -282,7 +331,7 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
     );
     let gear = VerdictGear::from(line.shaft);
     match d.verdict.state {
-        VerdictState::Healthy => {
+        VerdictState::Healthy | VerdictState::NotJudged => {
             d.verdict.state = VerdictState::Suspect;
             d.verdict.gear = gear;
             d.verdict.reasons.insert(0, reason);

@@ -180,8 +180,12 @@ pub enum TeethSource {
 
 /// Condition of a recording.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum VerdictState {
+    /// The recording could not be scored (no comparable block, an indicator that is not a number, a gear
+    /// the baseline does not hold): never taken for healthy. Lowest in the order, so that any gear that
+    /// could be judged and shows a fault decides.
+    NotJudged,
     /// No indicator beyond its limit.
     Healthy,
     /// One indicator beyond its first limit.
@@ -194,6 +198,7 @@ impl VerdictState {
     /// Lower-case name.
     pub fn name(self) -> &'static str {
         match self {
+            Self::NotJudged => "not judged",
             Self::Healthy => "healthy",
             Self::Suspect => "suspect",
             Self::Faulty => "faulty",
@@ -490,6 +495,13 @@ pub struct Diagnosis {
     pub speed_source: SpeedSource,
     /// Confidence of an estimated speed (autocorrelation at the period, 0..1); 1 when given.
     pub speed_confidence: f64,
+    /// The pinion speed the user gave (a nominal speed, Hz), when given: the speed used is the one measured
+    /// on the mesh line within the given tolerance (`shaft_hz`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_given_hz: Option<f64>,
+    /// The measured mean speed against the given one, percent (`(measured / given - 1) x 100`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_deviation_percent: Option<f64>,
     /// The reference shaft's speed over the recording.
     pub speed_profile: SpeedProfile,
     /// Mesh frequency in Hz (`null` when unknown).
