@@ -57,12 +57,16 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
         })
         .collect();
     match (d.speed_given_hz, d.speed_deviation_percent) {
-        (Some(g), Some(off)) => writeln!(
+        (Some(g), Some(off)) => {
+            writeln!(w, "speed            {} (measured; given {g:.4} Hz, {off:+.2} % from it)", shafts.join(", "))?
+        }
+        _ => writeln!(
             w,
-            "speed            {} (measured; given {g:.4} Hz, {off:+.2} % from it)",
-            shafts.join(", ")
+            "speed            {} ({}, confidence {:.2})",
+            shafts.join(", "),
+            d.speed_source,
+            d.speed_confidence
         )?,
-        _ => writeln!(w, "speed            {} ({}, confidence {:.2})", shafts.join(", "), d.speed_source, d.speed_confidence)?,
     }
     let p = &d.speed_profile;
     let range = match (p.min_hz, p.max_hz) {

@@ -66,7 +66,9 @@ pub enum JobError {
         for_speed: bool,
     },
     /// A given sample rate contradicts the file's own (its header or time column).
-    #[error("{file}: the given sample rate {given_hz} Hz contradicts the file's {file_hz} Hz; say that it overrides the file to use it")]
+    #[error(
+        "{file}: the given sample rate {given_hz} Hz contradicts the file's {file_hz} Hz; say that it overrides the file to use it"
+    )]
     SampleRateConflict {
         /// The file.
         file: String,

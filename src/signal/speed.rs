@@ -253,9 +253,8 @@ pub fn mesh_comb_period<T: Sample>(
         let (lo, hi) = ((b - 0.5).floor().max(0.0) as usize, (b + 0.5).ceil() as usize);
         (lo..=hi.min(amp.len() - 1)).map(|i| amp[i]).fold(0.0, f64::max)
     };
-    let comb = |period: f64| -> f64 {
-        (1..=4).map(|k| (k * z) as f64 / period).filter(|&f| f < 0.45).map(at).sum::<f64>()
-    };
+    let comb =
+        |period: f64| -> f64 { (1..=4).map(|k| (k * z) as f64 / period).filter(|&f| f < 0.45).map(at).sum::<f64>() };
     // steps of a quarter bin at the first mesh harmonic
     let f0 = 1.0 / nominal;
     let step = 0.25 / (n as f64 * z as f64);

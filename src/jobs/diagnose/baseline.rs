@@ -60,6 +60,10 @@ pub const DECIDING: [(&str, &str, &str); 8] = [
     ("spectral_change", "spectral change", "the order spectrum of the average has changed"),
 ];
 
+/// Deciding indicators that scale with the absolute level of the signal (the others are ratios of the
+/// signal to itself): they cannot decide when the two sides' units differ or one is unknown.
+pub const LEVEL_DEPENDENT: [&str; 3] = ["na4_star", "si", "spectral_change"];
+
 /// A distribution over blocks.
 #[derive(Clone, Copy, Debug)]
 struct Stat {

@@ -21,6 +21,10 @@ pub struct Compatibility {
     pub warnings: Vec<String>,
     /// Why the operating point differs from the baseline's (the verdict then stays at most suspect).
     pub operating_point: Option<String>,
+    /// Whether absolute levels compare: false when one side's unit is unknown (samples in the file's own
+    /// scale, e.g. an integer WAV without its sidecar), so the indicators that scale with the level
+    /// ([`super::baseline::LEVEL_DEPENDENT`]) do not decide.
+    pub levels_comparable: bool,
 }
 
 /// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
@@ -43,6 +47,14 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
     let mut warnings = Vec::new();
     if !d.unit.is_empty() && !b.unit.is_empty() && d.unit != b.unit {
         return Err(refuse(format!("it is in {} and the recording in {}", b.unit, d.unit)));
+    }
+    let levels_comparable = d.unit.is_empty() == b.unit.is_empty();
+    if !levels_comparable {
+        let (known, unknown) = if d.unit.is_empty() { (&b.file, &d.file) } else { (&d.file, &b.file) };
+        warnings.push(format!(
+            "{unknown} names no unit (its samples are in the file's own scale) while {known} is in {}: absolute levels cannot be compared, so NA4*, SI and the spectral change do not decide; the verdict rests on the level-free indicators (give the unit and sensitivity, or keep the sidecar, to compare levels)",
+            if d.unit.is_empty() { &b.unit } else { &d.unit }
+        ));
     }
     if let Some(c) = d.channels.iter().find(|c| !b.channels.contains(c)) {
         return Err(refuse(format!(
@@ -87,12 +99,12 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
         let level = |x: &Diagnosis, k: usize| x.raw.get(k).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
         if let Some(j) = j {
             let r = level(d, i) / level(b, j);
-            if !(0.5..=2.0).contains(&r) {
+            if levels_comparable && !(0.5..=2.0).contains(&r) {
                 warnings.push(format!(
                     "channel {c}: the overall level is {r:.2} times the baseline's: the operating condition (load) may differ, and the indicators that scale with it move too"
                 ));
             }
         }
     }
-    Ok(Compatibility { warnings, operating_point })
+    Ok(Compatibility { warnings, operating_point, levels_comparable })
 }

@@ -226,17 +226,19 @@ pub fn run_streaming_prepared(
 /// ensemble so far, the envelope's evidence, the operating-point cap, the model comparison.
 fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, report: bool) -> Result<Diagnosis, Error> {
     let mut cap = None;
+    let mut levels = true;
     if let Some(b) = p.baselines.first() {
         let c = compatibility(&d, b)?;
         d.warnings.extend(c.warnings);
         cap = c.operating_point;
+        levels = c.levels_comparable;
         if report {
             d.baseline_spectra = b.spectra.clone();
             d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
         }
     }
     history.apply(&mut d);
-    judge(&mut d, p.reference.as_ref(), &Thresholds::default());
+    verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
     if let Some(e) = p.baselines.first().and_then(|b| b.envelope.as_ref()) {
         verdict::envelope_evidence(&mut d, e);
     }

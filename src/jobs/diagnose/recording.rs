@@ -46,22 +46,25 @@ pub fn diagnose_in_memory(
     analyse(name, rec, o, geometry)
 }
 
-/// `--sensitivity` (samples divided by it) and `--unit` (for channels whose file names no unit, or for all
-/// with a sensitivity) applied to every channel but the tachometer.
+/// `--sensitivity` (samples divided by it) and `--unit` applied to every channel but the tachometer whose
+/// file names no physical unit (none, or volts: a sensitivity turns volts into the physical unit). A
+/// channel whose file already names its physical unit (a sidecar, a CSV header) is left as it is, so that
+/// a baseline read with its sidecar and a recording without one are both in the same unit.
 pub(super) fn apply_units(rec: &mut Recording, o: &Options, tacho: Option<usize>) {
     for (i, (x, unit)) in rec.channels.iter_mut().zip(rec.units.iter_mut()).enumerate() {
         if Some(i + 1) == tacho || unit == "pulse" {
+            continue;
+        }
+        let raw = unit.is_empty() || unit.eq_ignore_ascii_case("v") || unit.eq_ignore_ascii_case("mv");
+        if !raw {
             continue;
         }
         if let Some(s) = o.sensitivity {
             let k = (1.0 / s) as f32;
             x.to_mut().iter_mut().for_each(|v| *v *= k);
         }
-        // a sensitivity turns the recorded unit (volts) into the physical one: --unit then names it
-        if unit.is_empty() || o.sensitivity.is_some() {
-            if let Some(u) = &o.unit {
-                unit.clone_from(u);
-            }
+        if let Some(u) = &o.unit {
+            unit.clone_from(u);
         }
     }
 }

@@ -106,8 +106,14 @@ fn get(m: &BTreeMap<String, f64>, k: &str) -> f64 {
     m.get(k).copied().unwrap_or(f64::NAN)
 }
 
-fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference) -> Vec<Trigger> {
-    let scores: Vec<Score> = baseline::score_one(g, r);
+fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels: bool) -> Vec<Trigger> {
+    let mut scores: Vec<Score> = baseline::score_one(g, r);
+    if !levels {
+        scores
+            .iter_mut()
+            .filter(|s| baseline::LEVEL_DEPENDENT.contains(&s.indicator.as_str()))
+            .for_each(|s| s.decides = false);
+    }
     let mut out = Vec::new();
     for sc in &scores {
         let Some((_, name, why)) = baseline::DECIDING.iter().find(|x| x.0 == sc.indicator) else { continue };
@@ -219,6 +225,12 @@ fn unscored(d: &Diagnosis, g: &GearIndicators, reference: Option<&Reference>) ->
 /// that cannot be scored (see [`unscored`]) is never taken for healthy: when no judged gear shows a fault,
 /// the recording is [`VerdictState::NotJudged`] with the reasons.
 pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
+    judge_levels(d, reference, t, true);
+}
+
+/// [`judge`], with `levels` false when absolute levels do not compare with the baseline's (one side's
+/// unit unknown): the level-dependent indicators are scored but do not decide.
+pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds, levels: bool) {
     // (gear, channel, triggers, weight of the gear's evidence)
     let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>, f64)> = Vec::new();
     let mut not_judged = Vec::new();
@@ -226,7 +238,9 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
     let gears = d.gears.clone();
     for g in &gears {
         let (trig, weight) = match reference {
-            Some(r) if r.covers(g) => (against_baseline(d, g, r), r.residual_growth(g)),
+            Some(r) if r.covers(g) => {
+                (against_baseline(d, g, r, levels), if levels { r.residual_growth(g) } else { f64::NAN })
+            }
             Some(_) => (Vec::new(), f64::NAN),
             None => {
                 let trig = absolute(g, t);
