@@ -68,6 +68,10 @@ pub enum Command {
     },
     /// Diagnose recordings (WAV/CSV): spectra, TSA, condition indicators, sidebands, verdict.
     Diagnose(Box<DiagnoseArgs>),
+    /// Learn a healthy profile from healthy recordings of one machine (files or directories): the
+    /// machine, the processing settings and every indicator's healthy distribution, for `diagnose
+    /// --profile`.
+    Learn(Box<LearnArgs>),
     /// Fit a gear-pair scene to a recording: tooth-error harmonics, per-tooth deviation, path gains, and
     /// optionally a local fault (pit or crack) on one tooth.
     Identify(Box<IdentifyArgs>),
@@ -153,6 +157,10 @@ pub struct DiagnoseArgs {
     /// Revolutions per block of the statistical baseline (default 8, fewer when the baseline is short).
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000))]
     pub block_revs: Option<u64>,
+    /// A healthy profile written by `learn`: the recordings are judged against it with exactly its
+    /// settings (its teeth, speed, channels, tachometer, block length and band).
+    #[arg(long, conflicts_with = "baseline")]
+    pub profile: Option<String>,
     /// Scene to simulate at the recording's speed and compare with.
     #[arg(long)]
     pub scene: Option<String>,
@@ -176,6 +184,19 @@ pub struct DiagnoseArgs {
     /// One JSON object per recording, one per line.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Arguments of `learn`: the healthy recordings and the analysis flags of `diagnose`, and the profile to
+/// write.
+#[derive(clap::Args, Debug)]
+pub struct LearnArgs {
+    /// Where the profile goes (JSON).
+    #[arg(short = 'o', long = "output", value_name = "PROFILE.json", required = true)]
+    pub output: String,
+    /// The healthy recordings and how they are analysed (the flags of `diagnose`; --baseline, --profile,
+    /// --scene, --report and --fail-on do not apply).
+    #[command(flatten)]
+    pub analysis: DiagnoseArgs,
 }
 
 /// Arguments of `identify`.

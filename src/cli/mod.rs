@@ -6,7 +6,7 @@ pub mod args;
 pub mod print;
 pub mod progress;
 
-pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, parse_args};
+pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, LearnArgs, parse_args};
 
 use crate::Error;
 use crate::jobs::{self, ChannelRole, JobError};
@@ -78,6 +78,7 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
             sweep(&mut out, &job, json)
         }
         Command::Diagnose(args) => diagnose(&mut out, &args),
+        Command::Learn(args) => learn(&mut out, &args),
         Command::Identify(args) => identify(&mut out, &args),
         Command::Bench { scenes, report, json } => {
             let job = jobs::bench::BenchJob {
@@ -295,13 +296,67 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>
         recordings: a.recordings.iter().map(PathBuf::from).collect(),
         options,
         baselines: a.baseline.iter().map(PathBuf::from).collect(),
+        profile: a.profile.as_ref().map(PathBuf::from),
         scene: a.scene.as_ref().map(PathBuf::from),
         report: a.report.as_ref().map(PathBuf::from),
         in_memory: Vec::new(),
     })
 }
 
+/// Flags that fix the machine or its processing: a profile holds them, so they cannot be given with it.
+fn profile_conflicts(a: &DiagnoseArgs) -> Option<&'static str> {
+    [
+        (a.teeth.is_some(), "--teeth"),
+        (a.rpm.is_some(), "--rpm"),
+        (a.shaft_hz.is_some(), "--shaft-hz"),
+        (a.tacho_channel.is_some(), "--tacho-channel"),
+        (a.channel.is_some(), "--channel"),
+        (a.block_revs.is_some(), "--block-revs"),
+        (a.envelope_band.is_some(), "--envelope-band"),
+        (a.fs.is_some(), "--fs"),
+        (a.unit.is_some(), "--unit"),
+        (a.sensitivity.is_some(), "--sensitivity"),
+    ]
+    .into_iter()
+    .find(|c| c.0)
+    .map(|c| c.1)
+}
+
+fn learn(out: &mut dyn Write, a: &LearnArgs) -> Result<u8, Error> {
+    let d = &a.analysis;
+    for (given, flag) in [
+        (!d.baseline.is_empty(), "--baseline"),
+        (d.profile.is_some(), "--profile"),
+        (d.scene.is_some(), "--scene"),
+        (d.report.is_some(), "--report"),
+        (d.fail_on.is_some(), "--fail-on"),
+    ] {
+        if given {
+            return Err(CliError::flag(flag, "does not apply to learn: it learns a profile from healthy recordings"));
+        }
+    }
+    let job = diagnose_job(d)?;
+    let learn = jobs::diagnose::profile::LearnJob {
+        healthy: job.recordings,
+        options: job.options,
+        output: PathBuf::from(&a.output),
+    };
+    let p = with_spinner("learning", || jobs::diagnose::profile::learn(&learn))?;
+    if d.json {
+        writeln!(out, "{}", serde_json::to_string(&p).unwrap_or_default()).map_err(CliError::from)?;
+    } else {
+        print::profile(out, &p, &a.output).map_err(CliError::from)?;
+    }
+    Ok(0)
+}
+
 fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
+    if let (Some(_), Some(flag)) = (&a.profile, profile_conflicts(a)) {
+        return Err(CliError::flag(
+            flag,
+            "cannot be given with --profile: the profile fixes the machine and its processing",
+        ));
+    }
     let job = diagnose_job(a)?;
     if a.json && job.report.is_none() {
         // JSON Lines as the recordings are judged: a directory of any size in bounded memory

@@ -319,3 +319,31 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
     }
     Ok(())
 }
+
+/// What `learn` wrote: the machine and settings, and each gear's reference in a line.
+pub fn profile(w: &mut dyn Write, p: &crate::jobs::diagnose::profile::Profile, file: &str) -> std::io::Result<()> {
+    let o = &p.processing;
+    writeln!(w, "profile          {file} ({} healthy recording(s))", p.learned_from.len())?;
+    let teeth = o.teeth.map_or("estimated".to_string(), |(a, b)| format!("{a},{b}"));
+    writeln!(w, "teeth            {teeth}")?;
+    let speed = match (p.baseline.speed_hz, o.shaft_hz) {
+        (Some(m), Some(g)) => format!("{m:.4} Hz measured (given {g:.4} Hz, +-{:.1} %)", 100.0 * o.speed_tolerance),
+        (Some(m), None) => format!("{m:.4} Hz measured"),
+        (None, _) => format!("{:.3} samples per revolution", p.baseline.shaft_period_samples),
+    };
+    writeln!(w, "speed            {speed}, wandering +-{:.3} %", p.baseline.fluctuation_percent)?;
+    writeln!(
+        w,
+        "channels         {:?} in {}",
+        p.baseline.channels,
+        if p.baseline.unit.is_empty() { "the file's own scale (no unit)" } else { &p.baseline.unit }
+    )?;
+    writeln!(
+        w,
+        "processing       blocks of {} revolutions, averages of {} points per revolution{}",
+        o.block_revs.unwrap_or(0),
+        p.geometry.tsa_points.unwrap_or(0),
+        p.geometry.envelope_band.map_or(String::new(), |(a, b)| format!(", envelope band {a:.0}..{b:.0} Hz"))
+    )?;
+    Ok(())
+}

@@ -327,6 +327,16 @@ impl Scene {
     }
 }
 
+/// Parses a JSON document of any typed form (a profile, a machine file) with the failing field's path in
+/// the message.
+///
+/// # Errors
+/// [`SceneError::Json`] naming `file` and the field.
+pub fn parse_json<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T, SceneError> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(file, e))
+}
+
 fn json_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> SceneError {
     let path = e.path().to_string();
     let inner = e.into_inner();

@@ -14,6 +14,7 @@
 use super::JobError;
 use crate::Error;
 use crate::report::summary::{Block, Diagnosis, GearIndicators, Scale, Score, Shaft};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Standard normal quantile of the suspect limit: one-sided false-alarm probability 1e-3 per indicator.
@@ -65,7 +66,7 @@ pub const DECIDING: [(&str, &str, &str); 8] = [
 pub const LEVEL_DEPENDENT: [&str; 3] = ["na4_star", "si", "spectral_change"];
 
 /// A distribution over blocks.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 struct Stat {
     centre: f64,
     spread: f64,
@@ -140,7 +141,7 @@ impl Transform for Scale {
 }
 
 /// The reference of one gear on one channel.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct GearReference {
     stats: BTreeMap<String, Stat>,
     /// Median residual variance of the blocks (NA4*'s denominator).
@@ -155,11 +156,70 @@ struct GearReference {
 }
 
 /// The statistical baseline of every gear and channel.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(into = "ReferenceFile", try_from = "ReferenceFile")]
 pub struct Reference {
     gears: BTreeMap<(Shaft, usize), GearReference>,
     /// Files pooled.
     pub files: usize,
+}
+
+/// A [`Reference`] as stored in a profile: one entry per gear and channel (JSON has no tuple keys).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReferenceFile {
+    files: usize,
+    gears: Vec<GearEntry>,
+}
+
+/// One gear and channel of a stored reference.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GearEntry {
+    gear: Shaft,
+    channel: usize,
+    #[serde(flatten)]
+    reference: GearReference,
+}
+
+impl From<Reference> for ReferenceFile {
+    fn from(r: Reference) -> Self {
+        // a distribution without a finite value cannot score anything (and JSON has no NaN): left out
+        let gears = r
+            .gears
+            .into_iter()
+            .map(|((gear, channel), mut reference)| {
+                reference.stats.retain(|_, s| s.centre.is_finite() && s.min.is_finite() && s.max.is_finite());
+                GearEntry { gear, channel, reference }
+            })
+            .collect();
+        Self { files: r.files, gears }
+    }
+}
+
+impl TryFrom<ReferenceFile> for Reference {
+    type Error = String;
+    fn try_from(f: ReferenceFile) -> Result<Self, String> {
+        let mut gears = BTreeMap::new();
+        for g in f.gears {
+            let ok = g.reference.log_spectrum.iter().all(|v| v.is_finite())
+                && g.reference.stats.values().all(|s| s.spread > 0.0 && s.centre.is_finite() && s.count > 0)
+                && g.reference.residual_var > 0.0;
+            if !ok {
+                return Err(format!(
+                    "the {} (channel {}) has a distribution that is not finite or has no spread",
+                    g.gear, g.channel
+                ));
+            }
+            if gears.insert((g.gear, g.channel), g.reference).is_some() {
+                return Err(format!("the {} (channel {}) is listed twice", g.gear, g.channel));
+            }
+        }
+        if gears.is_empty() {
+            return Err("no gear".into());
+        }
+        Ok(Self { gears, files: f.files })
+    }
 }
 
 fn log_spectrum(a: &[f64], floor: f64) -> Vec<f64> {

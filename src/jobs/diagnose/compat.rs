@@ -1,6 +1,7 @@
 //! Whether a baseline fits a recording: unit, channels, speed and operating point.
 
 use super::*;
+use crate::report::summary::Envelope;
 
 /// Relative speed difference from the baseline beyond which a recording is refused: indicators change with
 /// speed (resonances move against the mesh orders), so a baseline at another speed is another machine state.
@@ -13,6 +14,48 @@ pub const WARN_SPEED_DIFFERENCE: f64 = 0.03;
 /// load to 90 % load on the SpectraQuest rig of `data/realdata`, while a broken tooth changes its speed by
 /// less than 0.05 %.
 pub const OPERATING_POINT_SPEED_DIFFERENCE: f64 = 0.002;
+
+/// What a recording is checked against: the facts of the first healthy recording of a baseline (or of a
+/// profile), enough to tell whether a recording comes from the same machine and operating point.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaselineFacts {
+    /// The healthy recording's file.
+    pub file: String,
+    /// Unit of its analysed channels ("" when its file names none).
+    pub unit: String,
+    /// Analysed channels (1-based).
+    pub channels: Vec<usize>,
+    /// Mean reference-shaft speed, Hz (`None` without a sample rate).
+    pub speed_hz: Option<f64>,
+    /// Shaft period, samples.
+    pub shaft_period_samples: f64,
+    /// Half the 10-90 % range of the revolutions' speeds, percent.
+    pub fluctuation_percent: f64,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: Option<f64>,
+    /// Raw RMS of each analysed channel, in `unit`.
+    pub raw_rms: Vec<f64>,
+    /// Its envelope analysis (the recordings are demodulated in the same band).
+    pub envelope: Option<Envelope>,
+}
+
+impl BaselineFacts {
+    /// The facts of a diagnosed healthy recording.
+    pub fn of(b: &Diagnosis) -> Self {
+        Self {
+            file: b.file.clone(),
+            unit: b.unit.clone(),
+            channels: b.channels.clone(),
+            speed_hz: b.speed_profile.mean_hz,
+            shaft_period_samples: b.shaft_period_samples,
+            fluctuation_percent: b.speed_profile.fluctuation_percent,
+            sample_rate_hz: b.sample_rate_hz,
+            raw_rms: b.raw.iter().map(|m| m.get("rms").copied().unwrap_or(f64::NAN)).collect(),
+            envelope: b.envelope.clone(),
+        }
+    }
+}
 
 /// What [`compatibility`] found.
 #[derive(Clone, Debug, Default)]
@@ -36,7 +79,7 @@ pub struct Compatibility {
 ///
 /// # Errors
 /// An incompatible baseline, naming both files and what differs.
-pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Error> {
+pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, Error> {
     let refuse = |what: String| -> Error {
         JobError::Value {
             what: "baseline".into(),
@@ -62,8 +105,9 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
             b.channels
         )));
     }
-    let speed = |x: &Diagnosis| x.speed_profile.mean_hz.unwrap_or(1.0 / x.shaft_period_samples);
-    let ratio = speed(d) / speed(b) - 1.0;
+    let speed_d = d.speed_profile.mean_hz.unwrap_or(1.0 / d.shaft_period_samples);
+    let speed_b = b.speed_hz.unwrap_or(1.0 / b.shaft_period_samples);
+    let ratio = speed_d / speed_b - 1.0;
     if ratio.abs() > MAX_SPEED_DIFFERENCE {
         return Err(refuse(format!(
             "its shaft speed differs by {:+.1} % (at most {} % is accepted: another operating point)",
@@ -79,7 +123,7 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
     }
     // a machine whose speed wanders within each recording covers a range of speeds in both: means that
     // differ by less than that wander are one operating point
-    let wander = 0.01 * d.speed_profile.fluctuation_percent.max(b.speed_profile.fluctuation_percent);
+    let wander = 0.01 * d.speed_profile.fluctuation_percent.max(b.fluctuation_percent);
     let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE.max(wander)).then(|| {
         format!(
             "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
@@ -96,9 +140,9 @@ pub fn compatibility(d: &Diagnosis, b: &Diagnosis) -> Result<Compatibility, Erro
     }
     for (i, c) in d.channels.iter().enumerate() {
         let j = b.channels.iter().position(|x| x == c);
-        let level = |x: &Diagnosis, k: usize| x.raw.get(k).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
         if let Some(j) = j {
-            let r = level(d, i) / level(b, j);
+            let now = d.raw.get(i).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
+            let r = now / b.raw_rms.get(j).copied().unwrap_or(f64::NAN);
             if levels_comparable && !(0.5..=2.0).contains(&r) {
                 warnings.push(format!(
                     "channel {c}: the overall level is {r:.2} times the baseline's: the operating condition (load) may differ, and the indicators that scale with it move too"

@@ -13,6 +13,7 @@ pub mod baseline;
 mod beyond;
 mod compare;
 mod compat;
+pub mod profile;
 mod recording;
 mod teeth;
 mod tracking;
@@ -24,7 +25,8 @@ use beyond::{
     BandChoice, ORDER_MAP_SPEED_CHANGE, cepstrum, channel_spectra, envelope, envelope_of, envelope_plan, order_map,
 };
 pub use compat::{
-    Compatibility, MAX_SPEED_DIFFERENCE, OPERATING_POINT_SPEED_DIFFERENCE, WARN_SPEED_DIFFERENCE, compatibility,
+    BaselineFacts, Compatibility, MAX_SPEED_DIFFERENCE, OPERATING_POINT_SPEED_DIFFERENCE, WARN_SPEED_DIFFERENCE,
+    compatibility,
 };
 use recording::*;
 pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, diagnose, diagnose_in_memory};
@@ -62,6 +64,9 @@ pub struct DiagnoseJob<'a> {
     /// Healthy recordings of the same machine (files, or directories whose .wav and .csv files are taken in
     /// name order): the statistical baseline.
     pub baselines: Vec<PathBuf>,
+    /// A healthy profile written by `learn` ([`profile::Profile`]): its processing settings replace
+    /// `options` (all but `all_spectra`) and its reference replaces `baselines`.
+    pub profile: Option<PathBuf>,
     /// Scene simulated at each recording's speed and compared with it.
     pub scene: Option<PathBuf>,
     /// Directory for the PNG images and the JSON of each recording.
@@ -122,28 +127,54 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
     Ok(DiagnoseOutcome { diagnoses: done, report_files })
 }
 
-/// The baseline side of a call, prepared once: options as fixed by the first baseline, the baselines'
-/// diagnoses, what they fix for the recordings, the statistical reference and the comparison scene. A
-/// caller that diagnoses recordings one call at a time against the same baseline (a Dask worker) prepares
-/// it once with [`prepare`] and passes it to [`run_streaming_prepared`].
+/// The baseline side of a call, prepared once: options as fixed by the first baseline (or a profile), the
+/// facts of the first healthy recording, what they fix for the recordings, the statistical reference and
+/// the comparison scene. A caller that diagnoses recordings one call at a time against the same baseline
+/// (a Dask worker) prepares it once with [`prepare`] and passes it to [`run_streaming_prepared`].
 pub struct Prepared {
     opts: Options,
-    baselines: Vec<Diagnosis>,
+    facts: Option<BaselineFacts>,
+    /// The first healthy recording's spectra and averages, drawn behind the recording's in the report
+    /// (none from a profile).
+    plots: Option<BaselinePlots>,
     geometry: Option<Geometry>,
     reference: Option<baseline::Reference>,
     scene: Option<compare::ModelScene>,
 }
 
-/// Prepares the baseline side of `job` (its recordings are not read).
+/// The first healthy recording's amplitude spectra per channel and its averages per channel and gear.
+type BaselinePlots = (Vec<(usize, crate::signal::Spectrum)>, Vec<(usize, Shaft, Vec<f64>)>);
+
+/// Prepares the baseline side of `job` (its recordings are not read): from its profile when it names one,
+/// else by learning its baseline recordings.
 ///
 /// # Errors
 /// A baseline cannot be read or analysed, baselines that do not fit each other, too short a baseline, an
-/// unreadable comparison scene.
+/// unreadable profile or comparison scene.
 pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
-    let mut opts = job.options.clone();
-    let baseline_files = expand_dirs(&job.baselines)?;
-    // the first baseline fixes what was estimated (speed, mesh order) and the block length; the others
-    // follow it
+    let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
+    if let Some(path) = &job.profile {
+        let p = profile::load(path)?;
+        let opts = Options { all_spectra: job.options.all_spectra, ..p.processing };
+        return Ok(Prepared {
+            opts,
+            facts: Some(p.baseline),
+            plots: None,
+            geometry: Some(p.geometry),
+            reference: Some(p.reference),
+            scene,
+        });
+    }
+    let mut learned = learn_baseline(&job.baselines, &job.options)?;
+    learned.scene = scene;
+    Ok(learned)
+}
+
+/// The baseline side learned from healthy recordings (files or directories): the first fixes what was
+/// estimated (speed, mesh order), the block length and the averaging length; the others follow it.
+fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Error> {
+    let mut opts = options.clone();
+    let baseline_files = expand_dirs(paths)?;
     let mut first = baseline_files.first().map(|b| diagnose(b, &opts, None)).transpose()?;
     if let (Some(b), None) = (&first, opts.block_revs) {
         let revs = b.gears.iter().map(|g| g.revolutions).min().unwrap_or(0) * baseline_files.len();
@@ -170,12 +201,17 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     for b in rest {
         baselines.push(b?);
     }
-    for b in baselines.iter().skip(1) {
-        compatibility(b, &baselines[0])?;
+    let facts = baselines.first().map(BaselineFacts::of);
+    if let Some(f) = &facts {
+        for b in baselines.iter().skip(1) {
+            compatibility(b, f)?;
+        }
     }
     let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.block_revs())).transpose()?;
-    let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
-    Ok(Prepared { opts, baselines, geometry, reference, scene })
+    let plots = baselines
+        .first()
+        .map(|b| (b.spectra.clone(), b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect::<Vec<_>>()));
+    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None })
 }
 
 /// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
@@ -227,19 +263,19 @@ pub fn run_streaming_prepared(
 fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, report: bool) -> Result<Diagnosis, Error> {
     let mut cap = None;
     let mut levels = true;
-    if let Some(b) = p.baselines.first() {
+    if let Some(b) = &p.facts {
         let c = compatibility(&d, b)?;
         d.warnings.extend(c.warnings);
         cap = c.operating_point;
         levels = c.levels_comparable;
-        if report {
-            d.baseline_spectra = b.spectra.clone();
-            d.baseline_tsas = b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect();
-        }
+    }
+    if let (true, Some((spectra, tsas))) = (report, &p.plots) {
+        d.baseline_spectra = spectra.clone();
+        d.baseline_tsas = tsas.clone();
     }
     history.apply(&mut d);
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
-    if let Some(e) = p.baselines.first().and_then(|b| b.envelope.as_ref()) {
+    if let Some(e) = p.facts.as_ref().and_then(|b| b.envelope.as_ref()) {
         verdict::envelope_evidence(&mut d, e);
     }
     if let Some(why) = cap {
@@ -278,7 +314,7 @@ fn auto_block_revs(baseline_revs: usize) -> usize {
 ///
 /// # Errors
 /// A directory that cannot be read or holds no recording.
-fn expand_dirs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
+pub(crate) fn expand_dirs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
     let mut out = Vec::new();
     for p in paths {
         if !p.is_dir() {
@@ -316,7 +352,9 @@ pub fn write_report(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, Error> {
 
 /// Options of [`diagnose`]. Defaults: all channels but the tachometer, sample rate from the file, speed
 /// estimated, teeth estimated, velocity, 8 revolutions at least, shaft orders 1..=2 in the regular signal.
-#[derive(Clone, Debug)]
+/// A profile stores them (`processing` of [`profile::Profile`]).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Options {
     /// 1-based channel to analyse (all but the tachometer when `None`).
     pub channel: Option<usize>,
@@ -359,6 +397,7 @@ pub struct Options {
     pub shaft_orders: usize,
     /// Amplitude spectra of every analysed channel, not only of the deciding one (the first): the text,
     /// the JSON and the images use the deciding channel's alone; a library caller may want them all.
+    #[serde(skip)]
     pub all_spectra: bool,
 }
 
@@ -404,7 +443,8 @@ fn bad(path: &Path, msg: impl std::fmt::Display) -> Error {
 
 /// Speed and gear geometry shared by all recordings of one call (from the options, the baseline or the
 /// first recording).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Geometry {
     /// Shaft period in samples, when known from the baseline.
     pub period_samples: Option<f64>,

@@ -1,11 +1,11 @@
 //! The diagnosis of one recording (`diagnose --json`, one object per recording).
 
 use crate::signal::Spectrum;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// A shaft of the gear pair, or the shaft of an estimated period when the teeth are not known.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub enum Shaft {
     /// The input (pinion) shaft.
     #[serde(rename = "pinion")]
@@ -321,7 +321,7 @@ pub struct Block {
 /// Where an indicator is scored: ratios of moments and energies vary by factors between blocks (their
 /// block-to-block spread is skewed, M6A from 11 to 25 around 13 on a real healthy gearbox), so they are
 /// scored on their logarithm; the spectral change is already a distance in dB.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Scale {
     /// The value itself.
@@ -331,7 +331,7 @@ pub enum Scale {
 }
 
 /// A line of the envelope's order spectrum at a shaft order.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct EnvelopeLine {
     /// The shaft.
     pub shaft: Shaft,
@@ -347,7 +347,7 @@ pub struct EnvelopeLine {
 
 /// The envelope analysis of the deciding channel: band from the fast kurtogram, the squared envelope's
 /// order spectrum on the tracked angle, the lines at the shafts' first orders.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Envelope {
     /// Band, Hz.
     pub band_hz: [f64; 2],

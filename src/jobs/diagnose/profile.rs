@@ -1,0 +1,146 @@
+//! The stored healthy profile: what `learn` taught from healthy recordings of one machine (the machine's
+//! speed, teeth, channels and units, the processing settings, the baseline's per-indicator distributions
+//! with their block counts), written as versioned JSON that people can read, and applied by `diagnose
+//! --profile` with exactly those settings.
+
+use super::{BaselineFacts, DiagnoseJob, Geometry, Options, baseline::Reference};
+use crate::Error;
+use crate::jobs::JobError;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What the file says it is.
+pub const FORMAT: &str = "gearvib healthy profile";
+/// Version of the profile layout; a profile of another version is refused.
+pub const VERSION: u32 = 1;
+/// Largest profile file read, bytes: a profile of a few gears and channels is tens of kilobytes.
+pub const MAX_PROFILE_BYTES: u64 = 64 << 20;
+
+/// A healthy profile.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Profile {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Always [`VERSION`].
+    pub version: u32,
+    /// The healthy recordings learned from, in the order given.
+    pub learned_from: Vec<String>,
+    /// The processing settings (teeth, given speed and its tolerance, channels, tachometer, units, block
+    /// length, envelope band...): every recording is diagnosed with exactly these.
+    pub processing: Options,
+    /// What the first healthy recording fixed for the others: its period and mesh order when estimated,
+    /// its envelope band and its averaging length.
+    pub geometry: Geometry,
+    /// The facts a recording is checked against (unit, channels, speed, sample rate, level).
+    pub baseline: BaselineFacts,
+    /// Per gear and channel, each deciding indicator's distribution over the healthy blocks.
+    pub reference: Reference,
+}
+
+/// A `learn` call: healthy recordings (files or directories), the options they are analysed with, and
+/// the profile to write.
+#[derive(Clone, Debug)]
+pub struct LearnJob {
+    /// Healthy recordings of one machine.
+    pub healthy: Vec<PathBuf>,
+    /// Analysis options.
+    pub options: Options,
+    /// Where the profile goes (written atomically).
+    pub output: PathBuf,
+}
+
+/// Learns the profile of `job`'s healthy recordings and writes it.
+///
+/// # Errors
+/// A recording cannot be read or analysed, the recordings do not fit each other, too few blocks, the
+/// profile cannot be written.
+pub fn learn(job: &LearnJob) -> Result<Profile, Error> {
+    crate::io::begin_run();
+    for h in &job.healthy {
+        crate::io::register_input(h);
+    }
+    let diagnose_job =
+        DiagnoseJob { baselines: job.healthy.clone(), options: job.options.clone(), ..Default::default() };
+    let p = super::prepare(&diagnose_job)?;
+    let (Some(facts), Some(geometry), Some(reference)) = (p.facts, p.geometry, p.reference) else {
+        return Err(JobError::Value { what: "healthy recordings".into(), message: "none given".into() }.into());
+    };
+    let profile = Profile {
+        format: FORMAT.into(),
+        version: VERSION,
+        learned_from: super::expand_dirs(&job.healthy)?.iter().map(|f| f.display().to_string()).collect(),
+        processing: p.opts,
+        geometry,
+        baseline: facts,
+        reference,
+    };
+    let text = serde_json::to_string_pretty(&profile).map_err(|e| bad(&job.output, e))?;
+    crate::io::write_atomic(&job.output, text.as_bytes())?;
+    Ok(profile)
+}
+
+/// Reads a profile, refusing one that is too large, not a regular file, of another format or version.
+///
+/// # Errors
+/// [`JobError::Input`] naming the file and what is wrong (the field path for a malformed profile).
+pub fn load(path: &Path) -> Result<Profile, Error> {
+    crate::io::register_input(path);
+    let meta = std::fs::metadata(path).map_err(|e| bad(path, format!("cannot read the profile: {e}")))?;
+    if !meta.is_file() {
+        return Err(bad(path, "the profile is not a regular file"));
+    }
+    if meta.len() > MAX_PROFILE_BYTES {
+        return Err(bad(
+            path,
+            format!("{} bytes: larger than any profile ({} MiB at most)", meta.len(), MAX_PROFILE_BYTES >> 20),
+        ));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, format!("cannot read the profile: {e}")))?;
+    let head: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(path, format!("not a JSON profile: {e}")))?;
+    if head.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
+        return Err(bad(
+            path,
+            format!("not a gearvib profile (its `format` is not \"{FORMAT}\"; write one with learn)"),
+        ));
+    }
+    if head.get("version").and_then(|v| v.as_u64()) != Some(u64::from(VERSION)) {
+        return Err(bad(
+            path,
+            format!("profile version {} is not {VERSION}: learn it again with this gearvib", head["version"]),
+        ));
+    }
+    let p: Profile = crate::scene::parse_json(&text, &path.display().to_string())
+        .map_err(|e| bad(path, e.to_string().trim_start_matches(&format!("{}: ", path.display())).to_string()))?;
+    check(&p).map_err(|m| bad(path, m))?;
+    Ok(p)
+}
+
+/// Values a profile must hold to be applied.
+fn check(p: &Profile) -> Result<(), String> {
+    let o = &p.processing;
+    if o.block_revs.is_none_or(|r| r < 2) {
+        return Err("field `processing.block_revs`: must be 2 or more".into());
+    }
+    if !(o.speed_tolerance.is_finite() && (0.0..=0.2).contains(&o.speed_tolerance)) {
+        return Err(format!("field `processing.speed_tolerance`: {} is not within 0..0.2", o.speed_tolerance));
+    }
+    if o.shaft_hz.is_some_and(|f| !(f.is_finite() && f > 0.0)) {
+        return Err("field `processing.shaft_hz`: must be positive".into());
+    }
+    if o.teeth.is_some_and(|(a, b)| a < 3 || b < 3 || a > 10_000 || b > 10_000) {
+        return Err("field `processing.teeth`: each gear needs 3 to 10000 teeth".into());
+    }
+    if p.geometry.tsa_points.is_some_and(|n| !(64..=1 << 16).contains(&n)) {
+        return Err("field `geometry.tsa_points`: must be within 64..=65536".into());
+    }
+    if p.baseline.channels.is_empty() {
+        return Err("field `baseline.channels`: empty".into());
+    }
+    Ok(())
+}
+
+fn bad(path: &Path, msg: impl std::fmt::Display) -> Error {
+    JobError::Input { file: path.display().to_string(), message: msg.to_string() }.into()
+}
