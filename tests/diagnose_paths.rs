@@ -29,8 +29,8 @@ fn channels(wav: &str) -> (u32, Vec<Vec<f64>>) {
 /// pulse channel.
 fn write_csv(dir: &Path, name: &str, fs: u32, ch: &[Vec<f64>], tacho: bool) -> String {
     let mut s = String::from(if tacho { "time [s],dq/dt [m/s],tacho\n" } else { "time [s],dq/dt [m/s]\n" });
-    for i in 0..ch[0].len() {
-        s.push_str(&format!("{:.7},{:.9e}", i as f64 / fs as f64, ch[0][i]));
+    for (i, v) in ch[0].iter().enumerate() {
+        s.push_str(&format!("{:.7},{v:.9e}", i as f64 / fs as f64));
         if tacho {
             s.push_str(&format!(",{:.4e}", ch[1][i]));
         }
