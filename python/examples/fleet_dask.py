@@ -17,7 +17,7 @@ import argparse
 import json
 import os
 import sys
-from typing import Optional, Sequence, Tuple
+from typing import Sequence
 
 
 def recordings(directory: str) -> list:
@@ -26,26 +26,52 @@ def recordings(directory: str) -> list:
     return [os.path.join(directory, n) for n in names]
 
 
-def diagnose_one(path: str, baseline: Sequence[str], teeth: Optional[Tuple[int, int]]) -> dict:
-    """One task: the diagnosis of one recording against the baseline (runs on a worker)."""
+def profile_file(text: str) -> str:
+    """The profile's text as a file on this worker (written once per process and profile)."""
+    import hashlib
+    import tempfile
+
+    name = os.path.join(tempfile.gettempdir(), "gearvib-profile-" + hashlib.sha256(text.encode()).hexdigest()[:16] + ".json")
+    if not os.path.exists(name):
+        tmp = name + ".%d.tmp" % os.getpid()
+        with open(tmp, "w") as f:
+            f.write(text)
+        os.replace(tmp, name)
+    return name
+
+
+def diagnose_one(path: str, profile_text: str) -> dict:
+    """One task: the diagnosis of one recording against the learned profile (runs on a worker; the profile
+    holds the teeth and every other setting, so the baseline is never reprocessed on a worker: the profile's
+    few kilobytes travel instead, and a worker on another machine needs no baseline file)."""
     import gearvib
 
     # a fleet's table holds the verdicts and indicators, not each recording's curves
-    return gearvib.diagnose(path, teeth=teeth, baseline=list(baseline), arrays=False)
+    return gearvib.diagnose(path, profile=profile_file(profile_text), arrays=False)
 
 
 def fleet(
     directory: str, baseline: Sequence[str], teeth=None, workers: int = 2, scheduler=None, processes: bool = False
 ) -> list:
-    """Diagnoses every recording of `directory` on Dask, one task per recording; returns the table."""
+    """Learns the baseline's profile once, then diagnoses every recording of `directory` against it on Dask,
+    one task per recording; returns the table."""
+    import tempfile
+
+    import gearvib
     from dask.distributed import Client, LocalCluster
+
+    profile = os.path.join(tempfile.mkdtemp(prefix="gearvib-fleet-"), "profile.json")
+    gearvib.learn(list(baseline), profile, teeth=teeth)
+    with open(profile) as f:
+        profile_text = f.read()
 
     cluster = (
         None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes)
     )
     client = Client(scheduler or cluster)
     try:
-        futures = [client.submit(diagnose_one, p, list(baseline), teeth, pure=False) for p in recordings(directory)]
+        text = client.scatter(profile_text, broadcast=True)
+        futures = [client.submit(diagnose_one, p, text, pure=False) for p in recordings(directory)]
         return client.gather(futures)
     finally:
         client.close()

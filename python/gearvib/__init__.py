@@ -95,13 +95,16 @@ def diagnose(
     unit: Optional[str] = None,
     baseline: Union[None, str, "os.PathLike[str]", Iterable[Union[str, "os.PathLike[str]"]]] = None,
     arrays: bool = True,
+    profile: Union[None, str, "os.PathLike[str]"] = None,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
     ``fs`` Hz, a WAV/CSV path, or a list of them (then a list of results, in order).
 
     ``rpm``: pinion speed in rev/min (estimated when absent); ``teeth``: (pinion, wheel); ``tacho``: the
     1-based tachometer channel; ``channel``: analyse only this 1-based channel; ``unit``: the samples'
-    physical unit; ``baseline``: healthy recordings of the same machine (paths or directories).
+    physical unit; ``baseline``: healthy recordings of the same machine (paths or directories);
+    ``profile``: a healthy profile written by :func:`learn` (its settings replace rpm, teeth, tacho, channel
+    and unit, and its reference replaces a baseline).
     Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...) with, unless
     ``arrays`` is False, numpy arrays: ``spectra`` (per channel: ``frequency_hz`` [Hz], ``amplitude`` [unit]),
     in each entry of ``gears`` the ``tsa``, ``residual`` and ``difference`` signals over one revolution
@@ -119,7 +122,10 @@ def diagnose(
         base = [os.fspath(baseline)]
     else:
         base = [os.fspath(b) for b in baseline]
-    raw = _gearvib.diagnose(paths, data, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base)
+    if profile is not None and base:
+        raise ValueError("baseline and profile: give one (a profile is a learned baseline)")
+    prof = os.fspath(profile) if profile is not None else None
+    raw = _gearvib.diagnose(paths, data, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base, prof)
     # files come back first, then arrays: restore the order given
     by_kind = {"path": iter(raw[: len(paths)]), "array": iter(raw[len(paths):])}
     out = [_with_arrays(*next(by_kind["path" if isinstance(x, (str, os.PathLike)) else "array"]), arrays) for x in items]
@@ -201,3 +207,22 @@ def write_recording(
         None if names is None else list(names),
         None if units is None else list(units),
     )
+
+
+def learn(
+    healthy: Union[str, "os.PathLike[str]", Iterable[Union[str, "os.PathLike[str]"]]],
+    output: Union[str, "os.PathLike[str]"],
+    fs: Optional[float] = None,
+    *,
+    rpm: Optional[float] = None,
+    teeth: Optional[Tuple[int, int]] = None,
+    tacho: Optional[int] = None,
+    channel: Optional[int] = None,
+    unit: Optional[str] = None,
+) -> dict:
+    """Learn a healthy profile from healthy recordings of one machine (paths or directories) and write it to
+    ``output`` (``gearvib learn ... -o output``); returns the profile as a dictionary. Pass ``output`` as
+    ``profile=`` to :func:`diagnose` to judge recordings against it with exactly its settings."""
+    paths = [os.fspath(healthy)] if isinstance(healthy, (str, os.PathLike)) else [os.fspath(h) for h in healthy]
+    text = _gearvib.learn(paths, os.fspath(output), fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit)
+    return json.loads(text)

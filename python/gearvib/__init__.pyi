@@ -31,6 +31,7 @@ def diagnose(
     unit: Optional[str] = ...,
     baseline: Union[None, PathLike, Iterable[PathLike]] = ...,
     arrays: bool = ...,
+    profile: Optional[PathLike] = ...,
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
     """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys plus
     numpy arrays (unless `arrays` is False): `spectra` [Hz, unit], per gear `tsa`, `residual`,
@@ -63,3 +64,16 @@ def write_recording(
     units: Optional[Sequence[str]] = ...,
 ) -> None:
     """Writes channels x samples at `fs` [Hz] to a WAV (float32, with a sidecar of names and units) or CSV."""
+
+def learn(
+    healthy: Union[PathLike, Iterable[PathLike]],
+    output: PathLike,
+    fs: Optional[float] = ...,
+    *,
+    rpm: Optional[float] = ...,
+    teeth: Optional[Tuple[int, int]] = ...,
+    tacho: Optional[int] = ...,
+    channel: Optional[int] = ...,
+    unit: Optional[str] = ...,
+) -> dict[str, Any]:
+    """The healthy profile learned from `healthy` and written to `output` (the `learn` JSON)."""

@@ -153,7 +153,7 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
 /// object as a JSON string, its curves as numpy arrays (see `Curves::into_py`)): files first, then the
 /// in-memory recordings (channels x samples, float32 or float64, any layout) named "array 1", "array 2", ...
 #[pyfunction]
-#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new()))]
+#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
     py: Python<'_>,
@@ -166,6 +166,7 @@ fn diagnose(
     channel: Option<usize>,
     unit: Option<String>,
     baseline: Vec<String>,
+    profile: Option<String>,
 ) -> PyResult<Vec<(String, Py<PyDict>)>> {
     // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
     // place, others are converted once
@@ -181,6 +182,7 @@ fn diagnose(
             recordings: paths.iter().map(PathBuf::from).collect(),
             options: job_options,
             baselines: baseline.iter().map(PathBuf::from).collect(),
+            profile: profile.map(PathBuf::from),
             in_memory,
             ..Default::default()
         };
@@ -194,6 +196,35 @@ fn diagnose(
     })
     .map_err(to_py)
     .and_then(|all| all.into_iter().map(|(text, curves)| Ok((text, curves.into_py(py)?))).collect())
+}
+
+/// learn(paths, output, fs, rpm, teeth, tacho, channel, unit) -> the profile written to `output`, as JSON
+/// text (`gearvib learn ... -o output`).
+#[pyfunction]
+#[pyo3(signature = (paths, output, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None))]
+#[allow(clippy::too_many_arguments)]
+fn learn(
+    py: Python<'_>,
+    paths: Vec<String>,
+    output: String,
+    fs: Option<f64>,
+    rpm: Option<f64>,
+    teeth: Option<(usize, usize)>,
+    tacho: Option<usize>,
+    channel: Option<usize>,
+    unit: Option<String>,
+) -> PyResult<String> {
+    let kw = Kw { rpm, teeth, tacho, channel, unit };
+    let options = options(&kw, fs).map_err(to_py)?;
+    py.detach(|| {
+        let job = gearvib::jobs::diagnose::profile::LearnJob {
+            healthy: paths.iter().map(PathBuf::from).collect(),
+            options,
+            output: PathBuf::from(&output),
+        };
+        gearvib::jobs::diagnose::profile::learn(&job).map(|p| serde_json::to_string(&p).unwrap_or_default())
+    })
+    .map_err(to_py)
 }
 
 /// The curves of a diagnosis that `--json` leaves out, for numpy: amplitude spectra per channel, each
@@ -270,8 +301,12 @@ fn prepared_for(job: &DiagnoseJob) -> Result<Arc<Prepared>, gearvib::Error> {
     let stamp = |p: &PathBuf| {
         std::fs::metadata(p).map(|m| (m.len(), m.modified().ok())).map_or_else(|e| e.to_string(), |m| format!("{m:?}"))
     };
-    let key =
-        format!("{:?}|{:?}", job.options, job.baselines.iter().map(|b| (b.clone(), stamp(b))).collect::<Vec<_>>());
+    let key = format!(
+        "{:?}|{:?}|{:?}",
+        job.options,
+        job.baselines.iter().map(|b| (b.clone(), stamp(b))).collect::<Vec<_>>(),
+        job.profile.as_ref().map(|p| (p.clone(), stamp(p)))
+    );
     let mut cache = PREPARED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     if let Some((k, p)) = cache.as_ref() {
         if *k == key {
@@ -279,7 +314,7 @@ fn prepared_for(job: &DiagnoseJob) -> Result<Arc<Prepared>, gearvib::Error> {
         }
     }
     let p = Arc::new(gearvib::jobs::diagnose::prepare(job)?);
-    if !job.baselines.is_empty() {
+    if !job.baselines.is_empty() || job.profile.is_some() {
         *cache = Some((key, Arc::clone(&p)));
     }
     Ok(p)
@@ -408,6 +443,7 @@ fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(stability, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(learn, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(write_recording, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;

@@ -239,3 +239,22 @@ def test_fleet_on_dask_equals_the_cli(tmp_path):
         assert got["file"] == ref["file"]
         assert got["verdict"] == ref["verdict"]
         assert got["scores"] == ref["scores"]
+
+
+def test_learn_then_diagnose_with_the_profile_equals_the_cli(tmp_path):
+    cracked, healthy = REC.format("cracked-pinion-tooth3"), REC.format("healthy")
+    out = tmp_path / "profile.json"
+    p = gearvib.learn(healthy, out, teeth=(14, 39))
+    assert p["format"] == "gearvib healthy profile" and p["processing"]["teeth"] == [14, 39]
+    assert json.loads(out.read_text()) == p
+    cli_out = tmp_path / "cli-profile.json"
+    subprocess.run([CLI, "learn", healthy, "--teeth", "14,39", "-o", str(cli_out)], check=True, capture_output=True)
+    assert json.loads(cli_out.read_text())["reference"] == p["reference"]
+    got = gearvib.diagnose(cracked, profile=out, arrays=False)
+    want = cli_json("diagnose", cracked, "--profile", str(out))[0]
+    assert got == want
+    # the profile gives the one-call baseline's verdict and scores
+    one_call = cli_json("diagnose", cracked, "--teeth", "14,39", "--baseline", healthy)[0]
+    assert got["verdict"] == one_call["verdict"] and got["scores"] == one_call["scores"]
+    with pytest.raises(ValueError):
+        gearvib.diagnose(cracked, profile=out, baseline=healthy)
