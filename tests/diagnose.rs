@@ -480,3 +480,49 @@ fn a_directory_streams_as_json_lines_equal_to_the_batch_run() {
         assert_eq!(d["verdict"], batch["verdict"], "{stem}");
     }
 }
+
+/// The bundled local faults are on pinion tooth 3 (their scenes: the crack's stiffness loss and the pit's
+/// profile deviation both during tooth 3's mesh cycle, counted from the tachometer's rising edge at angle
+/// 0): the verdict places them there, counted from the tachometer; the eccentric wheel is a distributed
+/// fault and gets no tooth; the cracked pinion's wheel indicators are said to be its cross-talk.
+#[test]
+fn local_faults_are_placed_on_their_tooth_and_cross_talk_is_named() {
+    let healthy = rec("healthy");
+    for (name, tooth) in
+        [("cracked-pinion-tooth3", Some(3)), ("pitted-pinion-tooth3", Some(3)), ("wheel-eccentricity", None)]
+    {
+        let d = diag_json(&[&rec(name), "--teeth", "14,39", "--baseline", &healthy]);
+        let v = &d["verdict"];
+        assert_eq!(v["tooth"].as_u64(), tooth, "{name}: {v}");
+        if tooth.is_some() {
+            assert_eq!(v["gear"], "pinion", "{name}");
+            assert_eq!(v["tooth_origin"], "tachometer pulse", "{name}");
+        }
+    }
+    let d = diag_json(&[&rec("cracked-pinion-tooth3"), "--teeth", "14,39", "--baseline", &healthy]);
+    let talk = d["verdict"]["cross_talk"].as_array().expect("the wheel's indicators are explained");
+    assert!(talk.iter().any(|c| c.as_str().unwrap().starts_with("the wheel's indicators moved too")), "{talk:?}");
+    // reasons name the deciding gear only: the wheel's are cross-talk
+    assert!(d["verdict"]["reasons"].as_array().unwrap().iter().all(|r| !r.as_str().unwrap().starts_with("wheel")));
+    // without a tachometer (speed given, angle from the mesh phase) the tooth is counted from an arbitrary
+    // origin and said to be
+    let d = diag_json(&[&rec("cracked-pinion-tooth3"), "--teeth", "14,39", "--rpm", "1800"]);
+    assert_eq!(d["verdict"]["gear"], "pinion");
+    assert_eq!(d["verdict"]["tooth_origin"], "arbitrary (no tachometer)");
+}
+
+/// A recording the baseline cannot score is never healthy: a baseline of one channel against a recording
+/// analysed on a channel the baseline lacks cannot happen (refused), but blocks of averages whose length
+/// differs from the baseline's can: the recording is then averaged on the baseline's length (the verdict
+/// rests on scores), and a NaN indicator without a baseline gives "not judged" with exit code 3.
+#[test]
+fn nothing_unscored_is_called_healthy() {
+    // teeth 3,3: the pinion's average holds no difference signal beyond its mesh lines (3 teeth, shaft
+    // orders 1..2 and the first sidebands leave nothing), so FM4 is not a number
+    let run = gearvib(&["diagnose", &rec("healthy"), "--teeth", "3,3", "--json"]);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap_or("{}")).expect("one JSON line");
+    assert!(d["indicators"]["fm4"].is_null(), "FM4 of a 3-tooth mesh on this recording is not a number");
+    assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+    assert_eq!(run.code, 3, "not judged has its own exit code");
+    assert!(d["verdict"]["reasons"][0].as_str().unwrap().contains("not a number"));
+}

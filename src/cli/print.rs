@@ -88,9 +88,12 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             g.teeth, g.confidence
         )?;
     }
-    writeln!(w, "VERDICT          {} (gear: {})", d.verdict.state.name().to_uppercase(), d.verdict.gear.name())?;
+    writeln!(w, "VERDICT          {} (gear: {})", d.verdict.state.name().to_uppercase(), d.verdict.place())?;
     for r in &d.verdict.reasons {
         writeln!(w, "  - {r}")?;
+    }
+    for c in &d.verdict.cross_talk {
+        writeln!(w, "  cross-talk: {c}")?;
     }
     writeln!(w, "indicators (TSA of each gear's shaft; FM4/M6A/M8A on the difference signal, NA4 on the residual):")?;
     let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest"];

@@ -263,9 +263,15 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         verdict: Some(Badge {
             state: d.verdict.state,
             word: d.verdict.state.name().to_uppercase(),
-            line: format!("gear: {}", d.verdict.gear.name()),
+            line: format!("gear: {}", d.verdict.place()),
         }),
-        reasons: d.verdict.reasons.clone(),
+        reasons: d
+            .verdict
+            .reasons
+            .iter()
+            .cloned()
+            .chain(d.verdict.cross_talk.iter().map(|c| format!("Cross-talk: {c}")))
+            .collect(),
         facts,
         tables,
         images: images.to_vec(),

@@ -255,7 +255,7 @@ pub(super) fn analyse(
         indicators: BTreeMap::new(),
         gears: gear_results,
         raw,
-        verdict: Verdict { state: VerdictState::Healthy, gear: VerdictGear::None, reasons: Vec::new() },
+        verdict: Verdict::new(VerdictState::Healthy, VerdictGear::None, Vec::new()),
         comparison: None,
         envelope: None,
         cepstrum: None,

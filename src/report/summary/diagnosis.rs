@@ -440,6 +440,51 @@ pub struct Verdict {
     pub gear: VerdictGear,
     /// Reasons in plain words.
     pub reasons: Vec<String>,
+    /// The tooth of a local fault (1-based), when the gear's difference signal holds one impulse per
+    /// revolution that places it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<usize>,
+    /// Where tooth 1 is counted from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth_origin: Option<ToothOrigin>,
+    /// The other gears whose indicators moved with the fault's, said to be its cross-talk (their averages
+    /// hold the faulty gear's impulses, smeared), not second faults.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cross_talk: Vec<String>,
+}
+
+impl Verdict {
+    /// The gear and, when placed, the tooth, in words: "pinion, tooth 3 (counted from the tachometer
+    /// pulse)".
+    pub fn place(&self) -> String {
+        match (self.tooth, self.tooth_origin) {
+            (Some(t), Some(ToothOrigin::Tachometer)) => {
+                format!("{}, tooth {t} (counted from the tachometer pulse)", self.gear.name())
+            }
+            (Some(t), _) => format!(
+                "{}, tooth {t} (counted from an arbitrary origin: no tachometer, so only the distance between teeth is meaningful)",
+                self.gear.name()
+            ),
+            _ => self.gear.name().to_string(),
+        }
+    }
+
+    /// A verdict without a tooth or cross-talk.
+    pub fn new(state: VerdictState, gear: VerdictGear, reasons: Vec<String>) -> Self {
+        Self { state, gear, reasons, tooth: None, tooth_origin: None, cross_talk: Vec::new() }
+    }
+}
+
+/// Where a placed tooth is counted from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ToothOrigin {
+    /// Tooth 1 is the one meshing at the tachometer's pulse.
+    #[serde(rename = "tachometer pulse")]
+    Tachometer,
+    /// No tachometer: tooth 1 is where the tracked angle happened to start; only the distance between teeth
+    /// is meaningful (another recording of the same machine may number them from elsewhere).
+    #[serde(rename = "arbitrary (no tachometer)")]
+    Arbitrary,
 }
 
 /// One line of the model comparison.
