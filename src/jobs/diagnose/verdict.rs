@@ -274,7 +274,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
                 trig.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
                 cross_talk.push(format!(
                     "the {other}'s indicators moved too ({}), less than the {gear}'s ({}): its average holds the {gear}'s fault smeared over its own revolutions, which is cross-talk, not a second fault",
-                    trig.first().map_or(String::new(), |t| t.text.splitn(2, ": ").nth(1).unwrap_or(&t.text).to_string()),
+                    trig.first().map_or(String::new(), |t| t.text.split_once(": ").map_or(t.text.as_str(), |x| x.1).to_string()),
                     evidence_weight(*weight, reference.is_some()),
                 ) + &format!(" (its own weight {})", evidence_weight(*w, reference.is_some())));
             }
