@@ -109,10 +109,11 @@ fn a_cracked_tooth_acts_where_that_tooth_meshes() {
         }
         let centre = (im.atan2(re) / (2.0 * PI)).rem_euclid(1.0) * z as f64;
         let expected = tooth as f64 - 0.5;
-        // contact spans +-eps/2 pitches around the centre; ringing (2-5 % damping, about 2 pitches to decay)
-        // pulls the centre later: allowed [-eps/2, +1.5] pitches
+        // the crack acts most in single-tooth contact, the middle 2 - eps pitches of its contact; the housing's
+        // ringing (decay time 1 / (zeta w), about one pitch) can only delay the centre: (-0.5, 1.0) pitch, which
+        // an off-by-one tooth number (1 pitch either way) falls out of
         let d = centre - expected;
-        assert!(d > -m.contact_ratio / 2.0 && d < 1.5, "{gear:?} tooth {tooth}: centre at {centre:.2} pitches");
+        assert!(d > -0.5 && d < 1.0, "{gear:?} tooth {tooth}: centre at {centre:.2} pitches");
         // and the crack's change is local: most of its energy within 4 pitches of the tooth
         let near: f64 = energy
             .iter()
@@ -427,9 +428,10 @@ fn scorecard() {
                         None if o.state == "faulty" => "FALSE ALARM",
                         None => "ok",
                     };
+                    // without a baseline a healthy verdict rests on absolute limits, not on scores
                     let note = match unscored_healthy(&o) {
-                        Some(_) => "HEALTHY UNSCORED",
-                        None => note,
+                        Some(_) if with_base => "HEALTHY UNSCORED",
+                        _ => note,
                     };
                     rows.push(format!(
                         "{:<20} {:<28} {:<14} {:<15} {:<10} {:<8} {:<6} {}{}",
@@ -459,7 +461,8 @@ fn scorecard() {
         println!("{r}");
     }
     for (k, (n, flagged, right)) in counts {
-        println!("{k}: {flagged} of {n} faults flagged, {right} on the right gear");
+        let alarms = rows.iter().filter(|r| r.contains(&format!(" {k} ")) && r.contains("FALSE ALARM")).count();
+        println!("{k}: {flagged} of {n} faults flagged, {right} on the right gear; {alarms} healthy called faulty");
     }
 }
 

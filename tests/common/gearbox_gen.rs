@@ -267,10 +267,15 @@ impl Mesh {
     /// Mesh force (N) for compression `delta` (m) and its rate at driving-gear absolute angle `a_drv` (rad), with
     /// the gears' runout `(error m, contact ratio)` of the moment.
     fn force(&self, a_drv: f64, runout: (f64, f64), delta: f64, rate: f64) -> f64 {
+        let u = a_drv * self.drv.teeth.len() as f64 / (2.0 * PI);
+        self.force_at(u, runout, delta, rate)
+    }
+
+    /// Mesh force (N) at mesh position `u` (mesh cycles); see [`Mesh::force`].
+    fn force_at(&self, u: f64, runout: (f64, f64), delta: f64, rate: f64) -> f64 {
         let (runout, eps) = runout;
         let z1 = self.drv.teeth.len() as i64;
         let z2 = self.drn.teeth.len() as i64;
-        let u = a_drv * z1 as f64 / (2.0 * PI);
         let mut force = 0.0;
         let mut touching = false;
         self.pairs(u, eps, |j, s| {
@@ -675,7 +680,7 @@ fn run_train(
         let next = train.drive(t + h, &clock);
         // output of this instant
         let mut bf = [0.0; 8];
-        for b in 0..nb.min(8) {
+        for b in 0..nb {
             bf[b] = kb * y[s + b] + cb * y[n2 / 2 + s + b];
         }
         let mut a = 0.0;
@@ -867,46 +872,82 @@ fn gear_geometry(z: usize) -> (f64, f64) {
 }
 
 fn pair_train(m: &Machine, fault: Option<Fault>, op_rng: &mut Rng, duration: f64) -> Train {
-    let mut gear_rng = Rng::new(m.seed);
-    let mut pinion = GearBody::made(m.zp, &mut gear_rng);
-    let mut wheel = GearBody::made(m.zw, &mut gear_rng);
-    if let Some(f) = fault {
-        let mut fr = Rng::new(m.seed ^ 0xFA17);
+    let f = fault.map(|f| (0, f));
+    serial_train(&[(m.zp, m.zw, m.contact_ratio)], f, m.seed, m.shaft_hz, duration, op_rng)
+}
+
+/// A serial train of stages `(driving teeth, driven teeth, contact ratio)`, stage i from shaft i to shaft i+1,
+/// 5000 N of mesh force (250 N/mm) in the last stage under the mean load; `fault` on (stage, gear of that stage).
+fn serial_train(
+    stages: &[(usize, usize, f64)],
+    fault: Option<(usize, Fault)>,
+    gear_seed: u64,
+    shaft_hz: f64,
+    duration: f64,
+    op_rng: &mut Rng,
+) -> Train {
+    let mut gear_rng = Rng::new(gear_seed);
+    let mut bodies: Vec<(GearBody, GearBody)> = stages
+        .iter()
+        .map(|&(z1, z2, _)| {
+            let drv = GearBody::made(z1, &mut gear_rng);
+            (drv, GearBody::made(z2, &mut gear_rng))
+        })
+        .collect();
+    if let Some((stage, f)) = fault {
+        let mut fr = Rng::new(gear_seed ^ 0xFA17);
         match f.gear {
-            Gear::Pinion => pinion.apply(f.kind, f.tooth, &mut fr),
-            Gear::Wheel => wheel.apply(f.kind, f.tooth, &mut fr),
+            Gear::Pinion => bodies[stage].0.apply(f.kind, f.tooth, &mut fr),
+            Gear::Wheel => bodies[stage].1.apply(f.kind, f.tooth, &mut fr),
         }
     }
-    let (rbp, ip) = gear_geometry(m.zp);
-    let (rbw, iw) = gear_geometry(m.zw);
-    let load_n = 5000.0; // 250 N/mm of face width
+    // shaft i carries the driven gear of stage i-1 and the driving gear of stage i
+    let mut inertia = vec![0.0; stages.len() + 1];
+    let mut ratio = vec![1.0; stages.len() + 1];
+    for (i, &(z1, z2, _)) in stages.iter().enumerate() {
+        inertia[i] += gear_geometry(z1).1;
+        inertia[i + 1] += gear_geometry(z2).1;
+        ratio[i + 1] = ratio[i] * z1 as f64 / z2 as f64;
+    }
+    let load_n = 5000.0; // 250 N/mm of face width, last stage
     let k_max = 2.8e8; // 1.4e10 N/m per m of face width
-    let eps = m.contact_ratio;
-    let single = load_n / k_max;
-    let meq = 1.0 / (rbp * rbp / ip + rbw * rbw / iw);
-    let mut mesh = Mesh {
-        drv: pinion,
-        drn: wheel,
-        contact_ratio: eps,
-        k_max,
-        relief: (0.5 * single, 0.5 * (eps - 1.0) / eps),
-        damping: 0.0,
-        contact_per_m: contact_change(rbp, m.zp),
-        rb_drv: rbp,
-        rb_drn: rbw,
-    };
-    mesh.damping = 2.0 * 0.04 * (mesh.mean_stiffness() * meq).sqrt();
-    let ratio = m.zp as f64 / m.zw as f64;
-    let j_motor = ip + iw * ratio * ratio;
+    let mut force = load_n;
+    let mut meshes = vec![];
+    for (i, (&(z1, z2, eps), (drv, drn))) in stages.iter().zip(bodies).enumerate().rev() {
+        let (rb1, rb2) = (gear_geometry(z1).0, gear_geometry(z2).0);
+        let single = force / k_max;
+        let meq = 1.0 / (rb1 * rb1 / inertia[i] + rb2 * rb2 / inertia[i + 1]);
+        let mut mesh = Mesh {
+            drv,
+            drn,
+            contact_ratio: eps,
+            k_max,
+            relief: (0.5 * single, 0.5 * (eps - 1.0) / eps),
+            damping: 0.0,
+            contact_per_m: contact_change(rb1, z1),
+            rb_drv: rb1,
+            rb_drn: rb2,
+        };
+        mesh.damping = 2.0 * 0.04 * (mesh.mean_stiffness() * meq).sqrt();
+        meshes.push(mesh);
+        if i > 0 {
+            // the next stage up carries this stage's torque on the shared shaft
+            force *= rb1 / gear_geometry(stages[i - 1].1).0;
+        }
+    }
+    meshes.reverse();
+    let j_motor: f64 = inertia.iter().zip(&ratio).map(|(j, r)| j * r * r).sum();
     let kc = (2.0 * PI * 120.0).powi(2) * j_motor;
     let (kb, mb) = (5e8, 4.0);
+    let last = &meshes[meshes.len() - 1];
+    let torque0 = load_n * last.rb_drn;
     Train {
-        inertia: vec![ip, iw],
-        ratio: vec![1.0, ratio],
-        meshes: vec![mesh],
+        inertia,
+        ratio,
+        meshes,
         coupling: (kc, 2.0 * 0.05 * (kc * j_motor).sqrt()),
         bearing: (kb, 2.0 * 0.03 * (kb * mb).sqrt(), mb),
-        op: Operating::new(m.shaft_hz, duration, load_n * rbw, op_rng),
+        op: Operating::new(shaft_hz, duration, torque0, op_rng),
     }
 }
 
@@ -915,24 +956,7 @@ fn pair_train(m: &Machine, fault: Option<Fault>, op_rng: &mut Rng, duration: f64
 pub fn generate(m: &Machine, fault: Option<Fault>, seed: u64, env: Option<&Environment>, duration: f64) -> Recording {
     let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ m.seed);
     let train = pair_train(m, fault, &mut rng, duration);
-    let mut house_rng = Rng::new(m.seed ^ 0x0B0D);
-    let modes = housing(m.fs, 2, &mut house_rng);
-    let samples = (duration * m.fs).round() as usize;
-    let (mut accel, angle, means) = run_train(&train, &modes, m.fs, m.oversampling(), samples);
-    let gear_rms = rms(&accel);
-    let plant;
-    let env = match env {
-        Some(e) => e,
-        None => {
-            plant = Environment::plant(m.fan_blades, &mut rng);
-            &plant
-        }
-    };
-    let freqs: Vec<f64> = modes.iter().map(|m| m.0).collect();
-    surround(&mut accel, &angle, m.fs, env, &freqs, &mut rng);
-    let statics = train.op.torque0 / train.meshes[0].rb_drn;
-    let mean_force = means.iter().map(|f| (*f, statics)).collect();
-    Recording { fs: m.fs, accel, tacho: tacho(&angle), mean_force, gear_rms, angle }
+    finish_train(&train, m.fs, m.oversampling(), m.seed, m.fan_blades, env, duration, &mut rng)
 }
 
 /// Writes a recording as a two-channel 32-bit float WAV (1: accelerometer m/s^2, 2: tachometer), atomically.
@@ -976,4 +1000,319 @@ pub fn dft_amplitude(x: &[f64], fs: f64, f: f64) -> f64 {
         wsum += win;
     }
     2.0 * (re * re + im * im).sqrt() / wsum
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// issue 30: a two-stage parallel box
+
+/// A two-stage parallel box: input -> intermediate (teeth[0] / teeth[1]) -> output (teeth[2] / teeth[3]).
+#[derive(Clone, Debug)]
+pub struct TwoStage {
+    pub teeth: [usize; 4],
+    pub input_hz: f64,
+    pub fs: f64,
+    pub contact_ratio: [f64; 2],
+    pub fan_blades: usize,
+    pub seed: u64,
+}
+
+impl TwoStage {
+    /// DESIGN.md's example box: 23/61 then 19/47 at 1480 rpm, recorded at 25.6 kHz.
+    pub fn example() -> Self {
+        TwoStage {
+            teeth: [23, 61, 19, 47],
+            input_hz: 1480.0 / 60.0,
+            fs: 25_600.0,
+            contact_ratio: [1.6, 1.5],
+            fan_blades: 9,
+            seed: 2361,
+        }
+    }
+    /// Speed of the intermediate and output shafts per input revolution.
+    pub fn ratios(&self) -> [f64; 3] {
+        let r1 = self.teeth[0] as f64 / self.teeth[1] as f64;
+        [1.0, r1, r1 * self.teeth[2] as f64 / self.teeth[3] as f64]
+    }
+}
+
+/// A fault in a two-stage box: `stage` 0 or 1, `fault.gear` Pinion for that stage's driving gear, Wheel for its
+/// driven one (the intermediate shaft carries stage 0's wheel and stage 1's pinion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StageFault {
+    pub stage: usize,
+    pub fault: Fault,
+}
+
+/// One recording of a two-stage box (accelerometer and input-shaft tachometer; `angle` is the input's).
+pub fn two_stage(
+    b: &TwoStage,
+    fault: Option<StageFault>,
+    seed: u64,
+    env: Option<&Environment>,
+    duration: f64,
+) -> Recording {
+    let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ b.seed);
+    let stages = [(b.teeth[0], b.teeth[1], b.contact_ratio[0]), (b.teeth[2], b.teeth[3], b.contact_ratio[1])];
+    let train = serial_train(&stages, fault.map(|f| (f.stage, f.fault)), b.seed, b.input_hz, duration, &mut rng);
+    let r = ((60_000.0 / b.fs).ceil() as usize).max(2);
+    finish_train(&train, b.fs, r, b.seed, b.fan_blades, env, duration, &mut rng)
+}
+
+/// Integrates a train and dresses the recording (housing, surroundings, tachometer on the input shaft).
+#[allow(clippy::too_many_arguments)]
+fn finish_train(
+    train: &Train,
+    fs: f64,
+    r: usize,
+    machine_seed: u64,
+    blades: usize,
+    env: Option<&Environment>,
+    duration: f64,
+    rng: &mut Rng,
+) -> Recording {
+    let mut house_rng = Rng::new(machine_seed ^ 0x0B0D);
+    let modes = housing(fs, 2 * train.meshes.len(), &mut house_rng);
+    let samples = (duration * fs).round() as usize;
+    let (mut accel, angle, means) = run_train(train, &modes, fs, r, samples);
+    let gear_rms = rms(&accel);
+    let plant;
+    let env = match env {
+        Some(e) => e,
+        None => {
+            plant = Environment::plant(blades, rng);
+            &plant
+        }
+    };
+    let freqs: Vec<f64> = modes.iter().map(|m| m.0).collect();
+    surround(&mut accel, &angle, fs, env, &freqs, rng);
+    let mut statics = train.op.torque0 / train.meshes[train.meshes.len() - 1].rb_drn;
+    let mut mean_force = vec![];
+    for (m, mean) in means.iter().enumerate().rev() {
+        mean_force.push((*mean, statics));
+        if m > 0 {
+            statics *= train.meshes[m].rb_drv / train.meshes[m - 1].rb_drn;
+        }
+    }
+    mean_force.reverse();
+    Recording { fs, accel, tacho: tacho(&angle), mean_force, gear_rms, angle }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// issue 30: a planetary stage
+
+/// A planetary stage: sun input, ring fixed, carrier output; planets at `planet_slots` x 360 / (sun + ring) deg
+/// of carrier rotation after planet 1 (the assembly condition for unequal spacing). Planet 1 is at the sensor
+/// when the carrier's tachometer pulses; planet i passes it `angle_deg(i)` degrees of carrier rotation later.
+#[derive(Clone, Debug)]
+pub struct Planetary {
+    pub sun: usize,
+    pub planet: usize,
+    pub ring: usize,
+    pub planet_slots: Vec<usize>,
+    pub sun_hz: f64,
+    pub fs: f64,
+    pub contact_ratio: f64,
+    pub seed: u64,
+}
+
+impl Planetary {
+    /// DESIGN.md's stage: sun 21, planets 31, ring 83; three planets at 0, 35 and 69 slots of 360/104 deg.
+    pub fn example() -> Self {
+        Planetary {
+            sun: 21,
+            planet: 31,
+            ring: 83,
+            planet_slots: vec![0, 35, 69],
+            sun_hz: 25.0,
+            fs: 25_600.0,
+            contact_ratio: 1.6,
+            seed: 2183,
+        }
+    }
+    /// Carrier speed (Hz): f_sun z_s / (z_s + z_r) with the ring fixed.
+    pub fn carrier_hz(&self) -> f64 {
+        self.sun_hz * self.sun as f64 / (self.sun + self.ring) as f64
+    }
+    /// Mesh frequency (Hz): z_r f_c.
+    pub fn mesh_hz(&self) -> f64 {
+        self.ring as f64 * self.carrier_hz()
+    }
+    /// Carrier angle (deg) at which planet `i` (1-based) is at the sensor.
+    pub fn angle_deg(&self, i: usize) -> f64 {
+        360.0 * self.planet_slots[i - 1] as f64 / (self.sun + self.ring) as f64
+    }
+}
+
+/// Which member of a planetary stage carries a fault.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Member {
+    Sun,
+    /// planet number, 1-based
+    Planet(usize),
+}
+
+/// A fault on a planetary stage: kind (local kinds only: crack, spall, broken) on a member's tooth.
+/// Planet tooth numbering: tooth n of planet i is centred in the ring mesh n - 1/2 mesh cycles after planet i
+/// passes the sensor (modulo the planet's teeth); its other flank meets the sun floor(z_p / 2) teeth later.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanetaryFault {
+    pub member: Member,
+    pub kind: FaultKind,
+    pub tooth: usize,
+}
+
+/// A 1-DOF mesh of a planetary stage (deflection q along its line of action), driven by its share of the load.
+struct PlanetMesh {
+    mesh: Mesh,
+    /// mesh position (cycles) = rate x carrier angle / (2 pi) + offset
+    offset: f64,
+    mass: f64,
+}
+
+/// One recording of a planetary stage: accelerometer on the ring (each planet's ring-mesh force reaches it
+/// weighted by ((1 + cos d) / 2)^3, d the planet's angle from the sensor; the sun meshes through the input
+/// bearing at 0.3), and a once-per-revolution carrier tachometer. `angle` is the carrier's.
+pub fn planetary(
+    p: &Planetary,
+    fault: Option<PlanetaryFault>,
+    seed: u64,
+    env: Option<&Environment>,
+    duration: f64,
+) -> Recording {
+    let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ p.seed);
+    let mut gear_rng = Rng::new(p.seed);
+    let mut fr = Rng::new(p.seed ^ 0xFA17);
+    let mut sun = GearBody::made(p.sun, &mut gear_rng);
+    let ring = GearBody::made(p.ring, &mut gear_rng);
+    let n = p.planet_slots.len();
+    let mut planets: Vec<GearBody> = (0..n).map(|_| GearBody::made(p.planet, &mut gear_rng)).collect();
+    if let Some(f) = fault {
+        match f.member {
+            Member::Sun => sun.apply(f.kind, f.tooth, &mut fr),
+            Member::Planet(i) => planets[i - 1].apply(f.kind, f.tooth, &mut fr),
+        }
+    }
+    let load_n = 2000.0; // per planet mesh
+    let k_max = 2.8e8;
+    let eps = p.contact_ratio;
+    let mut meshes = vec![];
+    let quiet = |mut g: GearBody| {
+        g.runout = (0.0, 0.0);
+        g
+    };
+    let half = p.planet / 2;
+    let slot = 2.0 * PI / (p.sun + p.ring) as f64;
+    for (i, planet) in planets.iter().enumerate() {
+        let psi = p.planet_slots[i] as f64 * slot;
+        let make = |drv: GearBody, drn: GearBody| Mesh {
+            drv: quiet(drv),
+            drn: quiet(drn),
+            contact_ratio: eps,
+            k_max,
+            relief: (0.5 * load_n / k_max, 0.5 * (eps - 1.0) / eps),
+            damping: 2.0 * 0.04 * (1.6 * k_max * 0.5).sqrt(),
+            contact_per_m: 0.0,
+            rb_drv: 1.0,
+            rb_drn: 1.0,
+        };
+        // ring mesh: the planet drives nothing here but rolls on the ring; pair j = planet tooth j, ring tooth j
+        let ring_mesh = make(planet.clone(), ring.clone());
+        // sun mesh: pair j = sun tooth j, planet tooth j + floor(z_p / 2) (the other side of the planet)
+        let mut turned = planet.clone();
+        turned.teeth.rotate_left(half);
+        let sun_mesh = make(sun.clone(), turned);
+        // ring mesh cycles: z_r (theta_c - psi) / 2 pi; sun mesh: z_s (theta_s - theta_c + psi) / 2 pi
+        // = z_r theta_c / 2 pi + z_s psi / 2 pi (ring fixed)
+        meshes.push(PlanetMesh { mesh: ring_mesh, offset: -(p.ring as f64) * psi / (2.0 * PI), mass: 0.5 });
+        meshes.push(PlanetMesh { mesh: sun_mesh, offset: p.sun as f64 * psi / (2.0 * PI), mass: 0.5 });
+    }
+    let op = Operating::new(p.sun_hz, duration, load_n, &mut rng);
+    let carrier_per_sun = p.sun as f64 / (p.sun + p.ring) as f64;
+    let r = ((60_000.0 / p.fs).ceil() as usize).max(2);
+    let rate = p.fs * r as f64;
+    let h = 1.0 / rate;
+    let fir = decimation_filter(r);
+    let fir_half = fir.len() / 2;
+    let warm = ((0.3 * rate) as usize).div_ceil(r) * r;
+    let samples = (duration * p.fs).round() as usize;
+    let total = warm + samples * r + fir_half + 1;
+    let mut house_rng = Rng::new(p.seed ^ 0x0B0D);
+    let modes = housing(p.fs, 1, &mut house_rng);
+    let mut sections: Vec<Mode> = modes.iter().map(|(f, z, g)| Mode::new(*f, *z, g[0], rate)).collect();
+    let nm = meshes.len();
+    // state: q and q' of every mesh, from the static deflection
+    let mut y: Vec<f64> = meshes.iter().flat_map(|m| [load_n / m.mesh.mean_stiffness(), 0.0]).collect();
+    let mut sensor = vec![0.0; total];
+    let mut angle = vec![0.0; samples];
+    let mut clock = Clock::new(&op, -(warm as f64) * h, 0.5 * h);
+    let eval = |clock: &Clock, y: &[f64], dy: &mut [f64], forces: &mut [f64]| {
+        let (mut a, mut load) = (clock.t + 0.5 * op.drift * clock.t * clock.t, 1.0);
+        for (k, &(amp, f, ph)) in op.speed.iter().enumerate() {
+            a += amp / (2.0 * PI * f) * (ph.cos() - clock.z[k].0);
+        }
+        for (k, &(amp, _, _)) in op.load.iter().enumerate() {
+            load += amp * clock.z[op.speed.len() + k].1;
+        }
+        let carrier = op.omega0 * a * carrier_per_sun;
+        for (k, m) in meshes.iter().enumerate() {
+            let u = p.ring as f64 * carrier / (2.0 * PI) + m.offset;
+            let (q, v) = (y[2 * k], y[2 * k + 1]);
+            let f = m.mesh.force_at(u, (0.0, eps), q, v);
+            forces[k] = f;
+            dy[2 * k] = v;
+            dy[2 * k + 1] = (op.torque0 * load - f) / m.mass;
+        }
+        carrier
+    };
+    let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
+        (vec![0.0; 2 * nm], vec![0.0; 2 * nm], vec![0.0; 2 * nm], vec![0.0; 2 * nm], vec![0.0; 2 * nm]);
+    let mut forces = vec![0.0; nm];
+    let psis: Vec<f64> = p.planet_slots.iter().map(|s| *s as f64 * slot).collect();
+    for i in 0..total {
+        let carrier = eval(&clock, &y, &mut k1, &mut forces);
+        let mut input = 0.0;
+        for (k, psi) in psis.iter().enumerate() {
+            let w = (0.5 + 0.5 * (carrier - psi).cos()).powi(3);
+            input += w * forces[2 * k] + 0.3 * forces[2 * k + 1];
+        }
+        sensor[i] = sections.iter_mut().map(|s| s.step(input)).sum();
+        if i >= warm && (i - warm).is_multiple_of(r) && (i - warm) / r < samples {
+            angle[(i - warm) / r] = carrier;
+        }
+        clock.advance(); // to the middle of the step
+        for j in 0..2 * nm {
+            tmp[j] = y[j] + 0.5 * h * k1[j];
+        }
+        eval(&clock, &tmp, &mut k2, &mut forces);
+        for j in 0..2 * nm {
+            tmp[j] = y[j] + 0.5 * h * k2[j];
+        }
+        eval(&clock, &tmp, &mut k3, &mut forces);
+        clock.advance();
+        for j in 0..2 * nm {
+            tmp[j] = y[j] + h * k3[j];
+        }
+        eval(&clock, &tmp, &mut k4, &mut forces);
+        for j in 0..2 * nm {
+            y[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+        }
+    }
+    let mut accel: Vec<f64> = (0..samples)
+        .map(|k| {
+            let c = warm + k * r;
+            fir.iter().enumerate().map(|(j, w)| w * sensor[c + j - fir_half]).sum()
+        })
+        .collect();
+    let gear_rms = rms(&accel);
+    let plant;
+    let env = match env {
+        Some(e) => e,
+        None => {
+            plant = Environment::plant(0, &mut rng);
+            &plant
+        }
+    };
+    let freqs: Vec<f64> = modes.iter().map(|m| m.0).collect();
+    surround(&mut accel, &angle, p.fs, env, &freqs, &mut rng);
+    Recording { fs: p.fs, accel, tacho: tacho(&angle), mean_force: vec![], gear_rms, angle }
 }
