@@ -220,6 +220,8 @@ enum Mode {
     Speed,
     /// `--tacho-channel 2` and the teeth
     Tacho,
+    /// the teeth only (the speed estimated; scorecard only)
+    Teeth,
 }
 
 impl Mode {
@@ -227,6 +229,7 @@ impl Mode {
         match self {
             Mode::Speed => "rpm",
             Mode::Tacho => "tacho",
+            Mode::Teeth => "teeth",
         }
     }
 }
@@ -250,6 +253,7 @@ fn diagnose(case: &Case, mode: Mode, baselines: &[&Case]) -> Outcome {
     match mode {
         Mode::Speed => args.extend(["--rpm", rpm.as_str()]),
         Mode::Tacho => args.extend(["--tacho-channel", "2"]),
+        Mode::Teeth => {}
     }
     let paths: Vec<String> = baselines.iter().map(|b| b.path().to_string_lossy().into_owned()).collect();
     for p in &paths {
@@ -397,7 +401,7 @@ fn scorecard() {
         ensure(&healthy.iter().chain(&faults).cloned().collect::<Vec<_>>());
         let all: Vec<&Case> = healthy.iter().chain(&faults).collect();
         for case in all {
-            for mode in [Mode::Speed, Mode::Tacho] {
+            for mode in [Mode::Speed, Mode::Tacho, Mode::Teeth] {
                 for with_base in [false, true] {
                     let base: Vec<&Case> = if !with_base {
                         vec![]
@@ -433,8 +437,15 @@ fn scorecard() {
                         Some(_) if with_base => "HEALTHY UNSCORED",
                         _ => note,
                     };
+                    // the shaft speed the diagnosis used, against the nominal one (the true one is within 2 %)
+                    let shaft = o.json["shaft_hz"]["pinion"].as_f64();
+                    let speed = match shaft {
+                        Some(f) if (f / m.shaft_hz - 1.0).abs() > 0.025 => format!("{f:.2} SPEED"),
+                        Some(f) => format!("{f:.2}"),
+                        None => "-".into(),
+                    };
                     rows.push(format!(
-                        "{:<20} {:<28} {:<14} {:<15} {:<10} {:<8} {:<6} {}{}",
+                        "{:<20} {:<22} {:<12} {:<15} {:<10} {:<7} {:<5} {:<12} {}{}",
                         m.name,
                         case.label(),
                         case.truth(),
@@ -442,6 +453,7 @@ fn scorecard() {
                         o.state,
                         o.gear,
                         o.tooth,
+                        speed,
                         note,
                         if o.code != 0 && o.code != 1 {
                             format!(" [exit {}: {}]", o.code, o.stderr)
@@ -454,8 +466,8 @@ fn scorecard() {
         }
     }
     println!(
-        "{:<20} {:<28} {:<14} {:<15} {:<10} {:<8} {:<6} note",
-        "machine", "case", "truth", "mode", "state", "gear", "tooth"
+        "{:<20} {:<22} {:<12} {:<15} {:<10} {:<7} {:<5} {:<12} note",
+        "machine", "case", "truth", "mode", "state", "gear", "tooth", "shaft Hz"
     );
     for r in &rows {
         println!("{r}");
