@@ -25,7 +25,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 /// Bumped whenever the generated samples change (cache keys include it).
-pub const GENERATOR_VERSION: u32 = 2;
+pub const GENERATOR_VERSION: u32 = 3;
 
 // ---------------------------------------------------------------------------------------------------------
 // random numbers
@@ -214,7 +214,8 @@ struct Mesh {
     contact_ratio: f64,
     /// Peak single-pair stiffness, N/m.
     k_max: f64,
-    /// Tip relief: depth m and length (fraction of the path) at each end.
+    /// Tip relief: depth m (the single-pair deflection under the mean load, so a pair takes its load
+    /// gradually) and length (fraction of the path: half the double-contact zone) at each end.
     relief: (f64, f64),
     /// Mesh damping N s/m.
     damping: f64,
@@ -922,7 +923,7 @@ fn serial_train(
             drn,
             contact_ratio: eps,
             k_max,
-            relief: (0.5 * single, 0.5 * (eps - 1.0) / eps),
+            relief: (single, 0.5 * (eps - 1.0) / eps),
             damping: 0.0,
             contact_per_m: contact_change(rb1, z1),
             rb_drv: rb1,
@@ -954,9 +955,21 @@ fn serial_train(
 /// Generates one recording of machine `m` with an optional fault; `seed` drives everything that differs
 /// between recordings (speed and load fluctuation, noise, shocks, tone phases).
 pub fn generate(m: &Machine, fault: Option<Fault>, seed: u64, env: Option<&Environment>, duration: f64) -> Recording {
+    generate_oversampled(m, fault, seed, env, duration, m.oversampling())
+}
+
+/// [`generate`] integrating at `r` times the output rate (r >= 2) instead of the machine's default.
+pub fn generate_oversampled(
+    m: &Machine,
+    fault: Option<Fault>,
+    seed: u64,
+    env: Option<&Environment>,
+    duration: f64,
+    r: usize,
+) -> Recording {
     let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ m.seed);
     let train = pair_train(m, fault, &mut rng, duration);
-    finish_train(&train, m.fs, m.oversampling(), m.seed, m.fan_blades, env, duration, &mut rng)
+    finish_train(&train, m.fs, r, m.seed, m.fan_blades, env, duration, &mut rng)
 }
 
 /// Writes a recording as a two-channel 32-bit float WAV (1: accelerometer m/s^2, 2: tachometer), atomically.
