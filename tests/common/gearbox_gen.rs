@@ -9,8 +9,11 @@
 //!   loss of contact when its deflection goes negative;
 //! - the nominal input angle is integrated from a fluctuating speed (0.5-2 %, plus a 100 ppm drift over the
 //!   recording); the load torque fluctuates by 3-8 %;
-//! - fixed-step RK4 at 2-4x the output rate, then a windowed-sinc low-pass and decimation;
-//! - the bearing forces reach the accelerometer through 2-3 housing resonances (bilinear second-order sections);
+//! - fixed-step RK4 at 2-4x the output rate (at least 60 kHz), then a windowed-sinc low-pass and decimation;
+//!   contact entry and loss are kinks the fixed step does not locate, so the signal is converged to a few % of
+//!   its RMS only (the `convergence` report in tests/unseen_machines.rs);
+//! - the bearing forces reach the accelerometer through three housing resonances (2.2, 3.7, 6.1 kHz at 20 kHz,
+//!   scaled with the sample rate; 2-5 % damping; bilinear second-order sections);
 //!   measurement noise at 0.35-0.7 of the signal RMS, random shocks, a fan tone (blades x input shaft), mains hum;
 //! - an optional once-per-revolution tachometer (high for the first 5 % of each true input-shaft revolution).
 //!
@@ -624,7 +627,8 @@ pub struct Recording {
     pub mean_force: Vec<(f64, f64)>,
     /// Signal RMS before noise, shocks and tones.
     pub gear_rms: f64,
-    /// True input-shaft angle at each sample (rad).
+    /// True angle (rad) at each sample of the tachometer's shaft: the input shaft, the carrier for a planetary
+    /// stage.
     pub angle: Vec<f64>,
 }
 
@@ -953,7 +957,8 @@ fn serial_train(
 }
 
 /// Generates one recording of machine `m` with an optional fault; `seed` drives everything that differs
-/// between recordings (speed and load fluctuation, noise, shocks, tone phases).
+/// between recordings (speed and load fluctuation, noise, shocks, tone phases). `env`: `None` for the plant's
+/// surroundings drawn from the seed ([`Environment::plant`]), `Some(&Environment::quiet())` for the gears alone.
 pub fn generate(m: &Machine, fault: Option<Fault>, seed: u64, env: Option<&Environment>, duration: f64) -> Recording {
     generate_oversampled(m, fault, seed, env, duration, m.oversampling())
 }
