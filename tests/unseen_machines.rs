@@ -316,7 +316,7 @@ fn faults_flagged(m: &Machine, mode: Mode) {
         let truth = case.fault.unwrap().gear.name();
         let flagged = o.state == "suspect" || o.state == "faulty";
         if !flagged || o.gear != truth {
-            wrong.push(format!("{} {}: {} on {} ({})", m.name, case.label(), o.state, o.gear, o.stderr));
+            wrong.push(format!("{} {}: {} on {} {}", m.name, case.label(), o.state, o.gear, o.stderr));
         }
         if let Some(w) = unscored_healthy(&o) {
             wrong.push(format!("{} {}: {w}", m.name, case.label()));
