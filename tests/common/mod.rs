@@ -2,6 +2,8 @@
 #![allow(dead_code)]
 #![allow(clippy::needless_range_loop)] // matrix maths reads best with indices
 
+pub mod gearbox_gen;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

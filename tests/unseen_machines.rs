@@ -1,0 +1,549 @@
+//! `gearvib diagnose` on recordings of machines it has never seen (issue 26, "Tests").
+//!
+//! The recordings come from `common::gearbox_gen`, a physics gearvib's engine does not simulate (a multi-DOF pair
+//! with per-tooth-pair contact, bearings, a housing with three resonances, speed and load fluctuation, noise,
+//! shocks, a fan tone, mains hum). The generator's own invariants are checked here first (not ignored); the
+//! diagnosis tests and the scorecard are `#[ignore]`d while the diagnosis is being fixed against them:
+//!
+//! ```text
+//! cargo test --release --test unseen_machines -- --ignored            # the acceptance tests
+//! cargo test --release --test unseen_machines scorecard -- --ignored --nocapture
+//! ```
+
+mod common;
+use common::gearbox_gen::*;
+use common::*;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------------------------------------------------
+// the generator's own invariants (independent of gearvib: closed forms and physics)
+
+/// Pairs in contact: one or two, and two for the fraction eps - 1 of every mesh cycle (the definition of the
+/// contact ratio), so the mean count is eps.
+#[test]
+fn contact_ratio_sets_the_pairs_in_contact() {
+    for eps in [1.45, 1.55, 1.65, 1.75] {
+        let n = 100_000;
+        let counts: Vec<usize> = (0..n).map(|i| pairs_in_contact(eps, 3.0 + i as f64 / n as f64)).collect();
+        assert!(counts.iter().all(|c| *c == 1 || *c == 2), "eps {eps}");
+        let mean = counts.iter().sum::<usize>() as f64 / n as f64;
+        // a grid of 1e5 points places each of the two switching instants within 1e-5 of a cycle
+        assert!((mean - eps).abs() < 3e-5, "eps {eps}: mean {mean}");
+    }
+}
+
+fn quiet(m: &Machine, fault: Option<Fault>, seed: u64, seconds: f64) -> Recording {
+    generate(m, fault, seed, Some(&Environment::quiet()), seconds)
+}
+
+/// Torque balance: over a whole recording the wheel's mean acceleration is nil, so the mean mesh force equals
+/// the mean load torque over the wheel's base radius; the tachometer rises once per true revolution, at angle 0.
+#[test]
+fn generator_keeps_torque_balance_and_its_tachometer_is_true() {
+    let m = &machines()[0];
+    let rec = quiet(m, None, 5, 2.0);
+    for (mean, statics) in &rec.mean_force {
+        // the load's sinusoids (>= 0.3 Hz, <= 8 % in all) average to at most 0.08 / (pi 0.3 2 s) = 4 % of the
+        // static force over 2 s; the torsional modes' share of the mean is far smaller
+        assert!((mean - statics).abs() < 0.045 * statics, "mean mesh force {mean} N against {statics} N");
+    }
+    let rises: Vec<usize> = (1..rec.tacho.len()).filter(|&k| rec.tacho[k] > 0.5 && rec.tacho[k - 1] < 0.5).collect();
+    // whole revolutions crossed after the first sample (the pinion starts twisted a little behind angle 0)
+    let turns = |a: f64| (a / (2.0 * PI)).floor() as i64;
+    let revs = turns(*rec.angle.last().unwrap()) - turns(rec.angle[0]);
+    assert_eq!(rises.len() as i64, revs, "one pulse per revolution");
+    for &k in &rises {
+        // the edge is the first sample at or past a whole revolution: within one sample's angle of it
+        let frac = (rec.angle[k] / (2.0 * PI)).rem_euclid(1.0);
+        let step = (rec.angle[k] - rec.angle[k - 1]) / (2.0 * PI);
+        assert!(frac <= step + 1e-12, "rising edge {frac} rev past the origin (one sample: {step})");
+    }
+    // the speed fluctuates by 0.5-2 % (sum of the components' amplitudes) plus 100 ppm: each revolution's mean
+    // speed from the pulses stays within 2 %, plus two samples of edge quantisation (0.25 % at 800 samples a
+    // revolution) and the pinion's torsional twist at the two edges (well under 0.1 %)
+    for w in rises.windows(2) {
+        let speed = m.fs / ((w[1] - w[0]) as f64 * m.shaft_hz);
+        assert!((speed - 1.0).abs() < 0.0235, "revolution speed ratio {speed}");
+    }
+}
+
+/// Angle-domain average of `x` over revolutions of a shaft turning `ratio` times the input (linear interpolation).
+fn average(x: &[f64], angle: &[f64], per_rev: usize, ratio: f64) -> Vec<f64> {
+    let revs = ((angle[angle.len() - 1] - angle[0]) * ratio / (2.0 * PI)).floor() as usize - 1;
+    let mut avg = vec![0.0; per_rev];
+    let mut k = 0;
+    let first = (angle[0] * ratio / (2.0 * PI)).ceil();
+    for r in 0..revs {
+        for (j, a) in avg.iter_mut().enumerate() {
+            let target = 2.0 * PI * (first + r as f64 + j as f64 / per_rev as f64);
+            while k + 2 < angle.len() && angle[k + 1] * ratio < target {
+                k += 1;
+            }
+            let f = (target - angle[k] * ratio) / ((angle[k + 1] - angle[k]) * ratio);
+            *a += x[k] * (1.0 - f) + x[k + 1] * f;
+        }
+    }
+    avg.iter_mut().for_each(|v| *v /= revs as f64);
+    avg
+}
+
+/// The tooth convention: the change a cracked tooth makes (same seed, so same speed and load) lies where that tooth
+/// meshes, tooth n centred at (n - 1/2) / z of a revolution: its energy-weighted centre, in pitches, falls within
+/// the tooth's contact (eps pitches wide) plus the housing's ringing after it.
+#[test]
+fn a_cracked_tooth_acts_where_that_tooth_meshes() {
+    let m = &machines()[0];
+    for (gear, tooth, z, ratio) in [(Gear::Pinion, 5, m.zp, 1.0), (Gear::Wheel, 11, m.zw, m.zp as f64 / m.zw as f64)] {
+        let fault = Fault { kind: FaultKind::Crack(0.5), gear, tooth };
+        let (h, c) = (quiet(m, None, 9, 2.0), quiet(m, Some(fault), 9, 2.0));
+        let per = 64 * z;
+        let (ah, ac) = (average(&h.accel, &h.angle, per, ratio), average(&c.accel, &c.angle, per, ratio));
+        let energy: Vec<f64> = ah.iter().zip(&ac).map(|(a, b)| (a - b) * (a - b)).collect();
+        // circular centre of the energy around the revolution, in pitches
+        let (mut re, mut im) = (0.0, 0.0);
+        for (j, e) in energy.iter().enumerate() {
+            let phi = 2.0 * PI * j as f64 / per as f64;
+            re += e * phi.cos();
+            im += e * phi.sin();
+        }
+        let centre = (im.atan2(re) / (2.0 * PI)).rem_euclid(1.0) * z as f64;
+        let expected = tooth as f64 - 0.5;
+        // the crack acts most in single-tooth contact, the middle 2 - eps pitches of its contact; the housing's
+        // ringing (decay time 1 / (zeta w), about one pitch) can only delay the centre: (-0.5, 1.0) pitch, which
+        // an off-by-one tooth number (1 pitch either way) falls out of
+        let d = centre - expected;
+        assert!(d > -0.5 && d < 1.0, "{gear:?} tooth {tooth}: centre at {centre:.2} pitches");
+        // and the crack's change is local: most of its energy within 4 pitches of the tooth
+        let near: f64 = energy
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| {
+                let p = *j as f64 / 64.0 - expected;
+                let p = p - z as f64 * (p / z as f64).round();
+                (-1.5..2.5).contains(&p)
+            })
+            .map(|(_, e)| e)
+            .sum();
+        assert!(near > 0.5 * energy.iter().sum::<f64>(), "{gear:?}: the change is not local");
+    }
+}
+
+/// The recording's surroundings are at the levels asked: noise 0.35-0.7 of the gear signal's RMS (with shocks, fan
+/// and hum the total RMS grows by at most sqrt(1 + 0.7^2 + ...)).
+#[test]
+fn surroundings_are_at_the_stated_levels() {
+    let m = &machines()[3];
+    let rec = generate(m, None, 4, None, 2.0);
+    let total = (rec.accel.iter().map(|v| v * v).sum::<f64>() / rec.accel.len() as f64).sqrt();
+    let ratio = total / rec.gear_rms;
+    // noise alone: sqrt(1 + 0.35^2) = 1.06 .. sqrt(1 + 0.7^2) = 1.22; tones add 0.16^2 + 3 x 0.1^2 at most and
+    // about one shock of energy (2-5 RMS, decaying over 6 time constants) per 3 s: below 1.5
+    assert!(ratio > 1.05 && ratio < 1.5, "total/gear RMS {ratio}");
+    // mains hum at 50 Hz stands out of a quiet recording's spectrum at 50 Hz by construction
+    let q = quiet(m, None, 4, 2.0);
+    let hum = dft_amplitude(&rec.accel, m.fs, 50.0);
+    let none = dft_amplitude(&q.accel, m.fs, 50.0);
+    assert!(hum > 0.05 * rec.gear_rms && none < 0.01 * rec.gear_rms, "hum {hum}, quiet {none}");
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// the test set: recordings cached in CARGO_TARGET_TMPDIR
+
+/// One recording of the test set.
+#[derive(Clone)]
+struct Case {
+    machine: Machine,
+    fault: Option<Fault>,
+    seed: u64,
+}
+
+impl Case {
+    fn label(&self) -> String {
+        match self.fault {
+            None => format!("healthy-s{}", self.seed),
+            Some(f) if f.kind.is_local() => format!("{}-{}-t{}", f.gear.name(), f.kind.label(), f.tooth),
+            Some(f) => format!("{}-{}", f.gear.name(), f.kind.label()),
+        }
+    }
+    fn truth(&self) -> String {
+        match self.fault {
+            None => "healthy".into(),
+            Some(f) if f.kind.is_local() => format!("{} t{}", f.gear.name(), f.tooth),
+            Some(f) => f.gear.name().into(),
+        }
+    }
+    fn path(&self) -> PathBuf {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("unseen-machines-v{GENERATOR_VERSION}"));
+        match self.fault {
+            None => dir.join(format!("{}-{}.wav", self.machine.name, self.label())),
+            Some(_) => dir.join(format!("{}-{}-s{}.wav", self.machine.name, self.label(), self.seed)),
+        }
+    }
+}
+
+/// The three healthy recordings and the fourteen faults (seven kinds on each gear) of a machine.
+fn test_set(m: &Machine) -> (Vec<Case>, Vec<Case>) {
+    let healthy = (1..=3).map(|seed| Case { machine: m.clone(), fault: None, seed }).collect();
+    let mut faults = vec![];
+    for (g, gear) in [Gear::Pinion, Gear::Wheel].into_iter().enumerate() {
+        let z = if gear == Gear::Pinion { m.zp } else { m.zw };
+        for (i, kind) in FaultKind::all().into_iter().enumerate() {
+            let idx = g * 7 + i;
+            let tooth = 1 + (idx * 7 + 3) % z;
+            faults.push(Case { machine: m.clone(), fault: Some(Fault { kind, gear, tooth }), seed: 100 + idx as u64 });
+        }
+    }
+    (healthy, faults)
+}
+
+/// Writes every case not yet on disk (two threads).
+fn ensure(cases: &[Case]) {
+    let missing: Vec<&Case> = cases.iter().filter(|c| !c.path().exists()).collect();
+    if missing.is_empty() {
+        return;
+    }
+    std::fs::create_dir_all(missing[0].path().parent().unwrap()).unwrap();
+    std::thread::scope(|s| {
+        for part in missing.chunks(missing.len().div_ceil(2)) {
+            s.spawn(move || {
+                for c in part {
+                    let rec = generate(&c.machine, c.fault, c.seed, None, c.machine.duration_s);
+                    write_wav(&c.path(), &rec);
+                }
+            });
+        }
+    });
+}
+
+/// How the speed reaches the diagnosis.
+#[derive(Clone, Copy, PartialEq)]
+enum Mode {
+    /// `--rpm` (the nominal speed) and the teeth
+    Speed,
+    /// `--tacho-channel 2` and the teeth
+    Tacho,
+    /// the teeth only (the speed estimated; scorecard only)
+    Teeth,
+}
+
+impl Mode {
+    fn name(self) -> &'static str {
+        match self {
+            Mode::Speed => "rpm",
+            Mode::Tacho => "tacho",
+            Mode::Teeth => "teeth",
+        }
+    }
+}
+
+/// What `diagnose --json` said.
+struct Outcome {
+    code: i32,
+    state: String,
+    gear: String,
+    tooth: String,
+    json: serde_json::Value,
+    stderr: String,
+}
+
+fn diagnose(case: &Case, mode: Mode, baselines: &[&Case]) -> Outcome {
+    let m = &case.machine;
+    let rec = case.path().to_string_lossy().into_owned();
+    let teeth = format!("{},{}", m.zp, m.zw);
+    let rpm = format!("{}", m.rpm());
+    let mut args = vec!["diagnose", rec.as_str(), "--json", "--channel", "1", "--teeth", teeth.as_str()];
+    match mode {
+        Mode::Speed => args.extend(["--rpm", rpm.as_str()]),
+        Mode::Tacho => args.extend(["--tacho-channel", "2"]),
+        Mode::Teeth => {}
+    }
+    let paths: Vec<String> = baselines.iter().map(|b| b.path().to_string_lossy().into_owned()).collect();
+    for p in &paths {
+        args.extend(["--baseline", p.as_str()]);
+    }
+    let run = gearvib(&args);
+    let json: serde_json::Value =
+        run.stdout.lines().next().and_then(|l| serde_json::from_str(l).ok()).unwrap_or_default();
+    let text = |v: &serde_json::Value| match v {
+        serde_json::Value::Null => "-".to_string(),
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    };
+    let state = if run.code == 0 || !json.is_null() { text(&json["verdict"]["state"]) } else { "error".into() };
+    Outcome {
+        code: run.code,
+        gear: text(&json["verdict"]["gear"]),
+        tooth: text(&json["verdict"]["tooth"]),
+        state,
+        json,
+        stderr: run.stderr.lines().next().unwrap_or("").to_string(),
+    }
+}
+
+/// A healthy verdict must rest on scores: every score finite with blocks on both sides, and no "inf" in a reason.
+/// Returns what is wrong, if anything.
+fn unscored_healthy(o: &Outcome) -> Option<String> {
+    if o.state != "healthy" {
+        return None;
+    }
+    let reasons = o.json["verdict"]["reasons"].to_string().to_lowercase();
+    if reasons.contains("inf") && !reasons.contains("info") || reasons.contains("nan") {
+        return Some(format!("healthy from non-finite numbers: {reasons}"));
+    }
+    let scores = o.json["scores"].as_array().cloned().unwrap_or_default();
+    if scores.is_empty() {
+        return Some("healthy with no score at all".into());
+    }
+    for s in &scores {
+        let finite = s["spreads"].as_f64().is_some_and(f64::is_finite);
+        let blocks = s["blocks"].as_u64().unwrap_or(0) > 0 && s["baseline_blocks"].as_u64().unwrap_or(0) > 0;
+        if !finite || !blocks {
+            return Some(format!("healthy with an unscored {}: {}", s["indicator"], s));
+        }
+    }
+    None
+}
+
+/// Every fault of the machine against two healthy siblings: flagged (suspect or faulty) on its gear.
+fn faults_flagged(m: &Machine, mode: Mode) {
+    let (healthy, faults) = test_set(m);
+    ensure(&healthy.iter().chain(&faults).cloned().collect::<Vec<_>>());
+    let base = [&healthy[0], &healthy[1]];
+    let mut wrong = vec![];
+    for case in &faults {
+        let o = diagnose(case, mode, &base);
+        let truth = case.fault.unwrap().gear.name();
+        let flagged = o.state == "suspect" || o.state == "faulty";
+        if !flagged || o.gear != truth {
+            wrong.push(format!("{} {}: {} on {} {}", m.name, case.label(), o.state, o.gear, o.stderr));
+        }
+        if let Some(w) = unscored_healthy(&o) {
+            wrong.push(format!("{} {}: {w}", m.name, case.label()));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} of {} faults missed ({}):\n{}",
+        wrong.len(),
+        faults.len(),
+        mode.name(),
+        wrong.join("\n")
+    );
+}
+
+/// Each healthy recording against its two siblings, with the speed and with the tachometer: never faulty, and
+/// never healthy without scores.
+fn healthy_kept(m: &Machine) {
+    let (healthy, _) = test_set(m);
+    ensure(&healthy);
+    let mut wrong = vec![];
+    for i in 0..3 {
+        let others: Vec<&Case> = (0..3).filter(|&j| j != i).map(|j| &healthy[j]).collect();
+        for mode in [Mode::Speed, Mode::Tacho] {
+            let o = diagnose(&healthy[i], mode, &others);
+            if o.state == "faulty" || o.code != 0 {
+                wrong.push(format!(
+                    "{} {} ({}): {} on {} {}",
+                    m.name,
+                    healthy[i].label(),
+                    mode.name(),
+                    o.state,
+                    o.gear,
+                    o.stderr
+                ));
+            }
+            if let Some(w) = unscored_healthy(&o) {
+                wrong.push(format!("{} {} ({}): {w}", m.name, healthy[i].label(), mode.name()));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+fn machine(name: &str) -> Machine {
+    machines().into_iter().find(|m| m.name == name).unwrap()
+}
+
+macro_rules! machine_tests {
+    ($($speed:ident, $tacho:ident, $healthy:ident, $name:literal;)*) => {$(
+        #[test]
+        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
+        fn $speed() {
+            faults_flagged(&machine($name), Mode::Speed);
+        }
+        #[test]
+        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
+        fn $tacho() {
+            faults_flagged(&machine($name), Mode::Tacho);
+        }
+        #[test]
+        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
+        fn $healthy() {
+            healthy_kept(&machine($name));
+        }
+    )*};
+}
+
+machine_tests! {
+    z17z29_faults_with_speed, z17z29_faults_with_tacho, z17z29_healthy_siblings, "z17z29-25Hz-fs20k";
+    z23z41_faults_with_speed, z23z41_faults_with_tacho, z23z41_healthy_siblings, "z23z41-18Hz-fs25k6";
+    z31z47_faults_with_speed, z31z47_faults_with_tacho, z31z47_healthy_siblings, "z31z47-12Hz-fs51k2";
+    z19z37_faults_with_speed, z19z37_faults_with_tacho, z19z37_healthy_siblings, "z19z37-25Hz-fs25k6";
+}
+
+/// The scorecard: every recording diagnosed with the speed, with the tachometer, each with and without the
+/// sibling baseline; a table on stdout and counts at the end. Never fails (it reports).
+#[test]
+#[ignore = "scorecard: prints a table; run with --ignored --nocapture"]
+fn scorecard() {
+    let mut rows = vec![];
+    let mut counts = std::collections::BTreeMap::<String, (usize, usize, usize)>::new();
+    for m in machines() {
+        let (healthy, faults) = test_set(&m);
+        ensure(&healthy.iter().chain(&faults).cloned().collect::<Vec<_>>());
+        let all: Vec<&Case> = healthy.iter().chain(&faults).collect();
+        for case in all {
+            for mode in [Mode::Speed, Mode::Tacho, Mode::Teeth] {
+                for with_base in [false, true] {
+                    let base: Vec<&Case> = if !with_base {
+                        vec![]
+                    } else if case.fault.is_none() {
+                        healthy.iter().filter(|h| h.seed != case.seed).collect()
+                    } else {
+                        vec![&healthy[0], &healthy[1]]
+                    };
+                    let o = diagnose(case, mode, &base);
+                    let key = format!("{}{}", mode.name(), if with_base { "+baseline" } else { "" });
+                    let entry = counts.entry(key.clone()).or_default();
+                    let flagged = o.state == "suspect" || o.state == "faulty";
+                    let note = match case.fault {
+                        Some(f) => {
+                            entry.0 += 1;
+                            if flagged {
+                                entry.1 += 1;
+                                if o.gear == f.gear.name() {
+                                    entry.2 += 1;
+                                    "ok"
+                                } else {
+                                    "WRONG GEAR"
+                                }
+                            } else {
+                                "MISSED"
+                            }
+                        }
+                        None if o.state == "faulty" => "FALSE ALARM",
+                        None if o.state == "error" => "ERROR",
+                        None => "ok",
+                    };
+                    // without a baseline a healthy verdict rests on absolute limits, not on scores
+                    let note = match unscored_healthy(&o) {
+                        Some(_) if with_base => "HEALTHY UNSCORED",
+                        _ => note,
+                    };
+                    // the shaft speed the diagnosis used, against the nominal one (the true one is within 2 %)
+                    let shaft = o.json["shaft_hz"]["pinion"].as_f64();
+                    let speed = match shaft {
+                        Some(f) if (f / m.shaft_hz - 1.0).abs() > 0.025 => format!("{f:.2} SPEED"),
+                        Some(f) => format!("{f:.2}"),
+                        None => "-".into(),
+                    };
+                    rows.push(format!(
+                        "{:<20} {:<22} {:<12} {:<15} {:<10} {:<7} {:<5} {:<12} {}{}",
+                        m.name,
+                        case.label(),
+                        case.truth(),
+                        key,
+                        o.state,
+                        o.gear,
+                        o.tooth,
+                        speed,
+                        note,
+                        if o.code != 0 && o.code != 1 {
+                            format!(" [exit {}: {}]", o.code, o.stderr)
+                        } else {
+                            String::new()
+                        }
+                    ));
+                }
+            }
+        }
+    }
+    println!(
+        "{:<20} {:<22} {:<12} {:<15} {:<10} {:<7} {:<5} {:<12} note",
+        "machine", "case", "truth", "mode", "state", "gear", "tooth", "shaft Hz"
+    );
+    for r in &rows {
+        println!("{r}");
+    }
+    for (k, (n, flagged, right)) in counts {
+        let alarms = rows.iter().filter(|r| r.contains(&format!(" {k} ")) && r.contains("FALSE ALARM")).count();
+        println!("{k}: {flagged} of {n} faults flagged, {right} on the right gear; {alarms} healthy called faulty");
+    }
+}
+
+/// How far each fault moves the synchronous average of each gear, by this file's own naive angle-domain average
+/// on the true angle, in units of the distance of the third healthy recording from the mean of the first two: a
+/// yardstick of what is separable in principle (a fault at x1 is lost in the healthy recordings' variation).
+/// Also over the worst window of three pitches of each gear ("3p"). `PROBE_KIND=crack` (any part of a case
+/// label) restricts it. Prints; never fails.
+#[test]
+#[ignore = "report: prints each fault's separability; run with --ignored --nocapture"]
+fn separability() {
+    let only = std::env::var("PROBE_KIND").unwrap_or_default();
+    let dist =
+        |a: &[f64], b: &[f64]| (a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / a.len() as f64).sqrt();
+    for m in machines() {
+        let (healthy, faults) = test_set(&m);
+        let ratio_w = m.zp as f64 / m.zw as f64;
+        let per = 4096;
+        let make = |c: &Case| generate(&c.machine, c.fault, c.seed, None, c.machine.duration_s);
+        let avgs = |r: &Recording| (average(&r.accel, &r.angle, per, 1.0), average(&r.accel, &r.angle, per, ratio_w));
+        let ha: Vec<(Vec<f64>, Vec<f64>)> = healthy.iter().map(|c| avgs(&make(c))).collect();
+        let mean = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect() };
+        let (refp, refw) = (mean(&ha[0].0, &ha[1].0), mean(&ha[0].1, &ha[1].1));
+        let (h3p, h3w) = (dist(&ha[2].0, &refp), dist(&ha[2].1, &refw));
+        // the same over the worst window of three pitches (a local fault is diluted by a whole revolution)
+        let local = |a: &[f64], b: &[f64], z: usize| {
+            let w = 3 * per / z;
+            (0..per)
+                .map(|s| {
+                    let e: f64 = (0..w).map(|j| (a[(s + j) % per] - b[(s + j) % per]).powi(2)).sum();
+                    (e / w as f64).sqrt()
+                })
+                .fold(0.0, f64::max)
+        };
+        let (l3p, l3w) = (local(&ha[2].0, &refp, m.zp), local(&ha[2].1, &refw, m.zw));
+        println!("{}: healthy 3 from the mean of 1, 2: pinion {h3p:.4}, wheel {h3w:.4} m/s^2", m.name);
+        println!("  {:<24} {:>8} {:>8} {:>11} {:>11}", "case", "pinion", "wheel", "pinion 3p", "wheel 3p");
+        for c in faults.iter().filter(|c| c.label().contains(&only)) {
+            let (p, w) = avgs(&make(c));
+            println!(
+                "  {:<24} {:>8} {:>8} {:>11} {:>11}",
+                c.label(),
+                format!("x{:.1}", dist(&p, &refp) / h3p),
+                format!("x{:.1}", dist(&w, &refw) / h3w),
+                format!("x{:.1}", local(&p, &refp, m.zp) / l3p),
+                format!("x{:.1}", local(&w, &refw, m.zw) / l3w)
+            );
+        }
+    }
+}
+/// How far the generator's signal is from converged at its integration step: quiet 1 s recordings integrated at
+/// the default rate r x fs, at 2 r and at 4 r, as relative RMS differences from the 4 r one (contact entry and
+/// loss are kinks the fixed step does not locate, so the order is about one). Prints; never fails.
+#[test]
+#[ignore = "report: prints the generator's discretisation error; run with --ignored --nocapture"]
+fn convergence() {
+    for m in machines() {
+        let r0 = ((60_000.0 / m.fs).ceil() as usize).max(2);
+        let env = Environment::quiet();
+        let run = |r: usize| generate_oversampled(&m, None, 1, Some(&env), 1.0, r).accel;
+        let (a, b, c) = (run(r0), run(2 * r0), run(4 * r0));
+        let d = |x: &[f64], y: &[f64]| {
+            let e: f64 = x.iter().zip(y).map(|(p, q)| (p - q) * (p - q)).sum();
+            (e / y.iter().map(|q| q * q).sum::<f64>()).sqrt()
+        };
+        println!("{}: r = {r0}: {:.4} from 4r; 2r: {:.4} from 4r", m.name, d(&a, &c), d(&b, &c));
+    }
+}
