@@ -71,7 +71,7 @@ pub(super) fn nominal_speed(
     // mesh line's own angle, which holds under speed fluctuation where the raw autocorrelation smears
     let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
     if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
-        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth) {
+        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth, o.teeth.map(|t| t.1)) {
             Ok(Some(found)) => return Ok(found.nominal(n, warnings)),
             Ok(None) => {
                 return Err(bad(
@@ -172,6 +172,48 @@ fn given_on_mesh_comb(
     }
 }
 
+/// Standing lines a teeth-comb candidate needs to be taken (a mesh line and a few sidebands).
+const MIN_STANDING_LINES: usize = 5;
+/// Score margin of the best teeth-comb candidate over the next below which the choice is said to be close.
+const CLOSE_CANDIDATES: f64 = 0.8;
+
+/// Without a speed but with the teeth: which harmonic of the pinion's mesh the tracked line is. On the
+/// record resampled on the line's angle (`y`, [`MESH_CYCLE_POINTS`] points per tracked cycle of `cycle`
+/// samples) the line is sharp whatever the speed did, and each harmonic h = 1..=8 predicts its own mesh
+/// lines and sidebands ([`speed::teeth_candidates_from`]); the pinion revolution is zp h tracked cycles
+/// for the best. The candidates and their evidence go into the note, and a close second is said to be
+/// close with what would decide. `None` when no candidate has [`MIN_STANDING_LINES`] standing lines.
+fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, zw: usize) -> Option<MeshShaft> {
+    let p = MESH_CYCLE_POINTS as f64;
+    let best = speed::teeth_candidates_from(fft, y, zp, zw, Some(1.0 / p)).ok()?;
+    let top = best.first()?;
+    if top.standing < MIN_STANDING_LINES || top.score <= 0.0 {
+        return None;
+    }
+    let listed: Vec<String> = best
+        .iter()
+        .take(4)
+        .map(|c| format!("mesh harmonic {} ({} of {} lines stand)", c.harmonic, c.standing, c.predicted))
+        .collect();
+    let mut note = format!(
+        "pinion speed from the teeth: the tracked line ({cycle:.3} samples per cycle) is taken as {}; candidates by their evidence: {}; give the speed or a tachometer channel when known",
+        listed[0],
+        listed.join(", ")
+    );
+    if let Some(second) = best.get(1).filter(|c| c.score > CLOSE_CANDIDATES * top.score) {
+        note.push_str(&format!(
+            "; the second candidate (mesh harmonic {}) is close: a tachometer or the nameplate speed would decide",
+            second.harmonic
+        ));
+    }
+    Some(MeshShaft {
+        period_samples: (zp * top.harmonic) as f64 * cycle,
+        mesh_order: None,
+        confidence: top.standing as f64 / top.predicted as f64,
+        note,
+    })
+}
+
 /// Points per mesh cycle when a record is resampled on the mesh line's angle to find its shaft.
 const MESH_CYCLE_POINTS: usize = 32;
 
@@ -234,7 +276,7 @@ fn shaft_near(
     if (lag / near - 1.0).abs() > MAX_SPEED_DIFFERENCE {
         return None;
     }
-    let found = shaft_through_mesh(fft, full, lag, min_revs, Some(mesh_order)).ok()??;
+    let found = shaft_through_mesh(fft, full, lag, min_revs, Some(mesh_order), None).ok()??;
     ((found.period_samples / period - 1.0).abs() <= MAX_SPEED_DIFFERENCE).then_some(found)
 }
 
@@ -256,6 +298,7 @@ fn shaft_through_mesh(
     mesh_lag: f64,
     min_revs: usize,
     pinion_teeth: Option<usize>,
+    wheel_teeth: Option<usize>,
 ) -> Result<Option<MeshShaft>, crate::signal::SignalError> {
     let p = MESH_CYCLE_POINTS;
     let mut last = None;
@@ -280,6 +323,11 @@ fn shaft_through_mesh(
     let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
     let mut y = vec![0.0; points];
     tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
+    if let (Some(zp), Some(zw)) = (pinion_teeth, wheel_teeth) {
+        if let Some(found) = shaft_from_teeth(fft, &y, cycle, zp, zw) {
+            return Ok(Some(found));
+        }
+    }
     let cycles_max = (points / p / min_revs.max(2)).min(1 << 14);
     let r = crate::signal::spectrum::autocorrelation(fft, &y, cycles_max * p);
     let c: Vec<f64> = r.iter().step_by(p).copied().collect();
@@ -403,6 +451,26 @@ const CLEAR_LINE_DB: f64 = 20.0;
 /// Line-to-band ratio below which a tracked mesh line is too weak to trust, dB.
 const MIN_TRACKING_SNR_DB: f64 = 6.0;
 
+/// `map` with its origin moved to the tachometer's: the circular mean, over the pulses of `tacho`, of
+/// the angle `map` gives each pulse (revolutions, fraction of one) is taken as `map`'s angle 0.
+fn align_origin(map: &AngleMap, tacho: &AngleMap) -> AngleMap {
+    let starts = map.starts();
+    let (mut c, mut s) = (0.0, 0.0);
+    for &p in tacho.starts() {
+        let k = starts.partition_point(|&x| x <= p);
+        if k == 0 || k >= starts.len() {
+            continue;
+        }
+        let frac = (p - starts[k - 1]) / (starts[k] - starts[k - 1]);
+        let phi = std::f64::consts::TAU * frac;
+        c += phi.cos();
+        s += phi.sin();
+    }
+    let delta = s.atan2(c).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+    let aligned: Vec<f64> = (0..map.revolutions()).map(|k| map.sample_at(delta + k as f64)).collect();
+    AngleMap::from_pulses(&aligned, 1)
+}
+
 /// Follows the shaft angle through the recording. With a tachometer its pulses are the angle. Otherwise the
 /// phase of the first mesh harmonic is tracked on each analysed channel (the mesh order from the teeth, the
 /// baseline, or the harmonic family of a constant-speed TSA) and the channel where the line stands out
@@ -417,7 +485,35 @@ pub(super) fn track(
     warnings: &mut Vec<String>,
 ) -> Result<(AngleMap, Tracking, Option<f64>, Option<usize>), Error> {
     if o.tacho_channel.is_some() {
-        return Ok((nominal, Tracking::Tachometer, None, None));
+        // one angle source for every recording of a machine: the mesh line's phase when the teeth are known
+        // and the line can be followed (it follows the speed within a revolution, where a once-per-revolution
+        // pulse train only interpolates), the tachometer fixing its origin; the tachometer's own angle
+        // otherwise
+        let Some(z) = known_z else { return Ok((nominal, Tracking::Tachometer, None, None)) };
+        let mut quiet = Vec::new();
+        let tracked = track(
+            path,
+            rec,
+            channels,
+            &Options { tacho_channel: None, ..o.clone() },
+            Some(z),
+            nominal.clone(),
+            &mut quiet,
+        )?;
+        return Ok(match tracked {
+            // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip
+            // a cycle in noise, which a pulse train never does)
+            (map, Tracking::MeshPhase, Some(snr), z)
+                if snr >= CLEAR_LINE_DB && map.revolutions() >= nominal.revolutions().saturating_sub(2) =>
+            {
+                let snr = Some(snr);
+                (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
+            }
+            _ => {
+                warnings.extend(quiet.into_iter().map(|w| format!("the tachometer's angle is used: {w}")));
+                (nominal, Tracking::Tachometer, None, None)
+            }
+        });
     }
     let period = nominal.mean_period_samples();
     // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent

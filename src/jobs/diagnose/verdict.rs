@@ -90,7 +90,14 @@ struct Trigger {
     state: VerdictState,
     ratio: f64,
     text: String,
+    /// A measure of one impulse in the gear's own average (FM4, M6A of the difference signal): a local
+    /// fault keeps it whole in its own gear's average and smears it in the other's, where it raises the
+    /// energy measures (ER, FM0, NA4*, spectral change) instead.
+    local: bool,
 }
+
+/// Indicators that measure an impulse within the gear's own average (see [`Trigger::local`]).
+const LOCAL_INDICATORS: [&str; 2] = ["fm4", "m6a"];
 
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
     if !value.is_finite() || value < limits.suspect {
@@ -126,6 +133,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
         };
         out.push(Trigger {
             state,
+            local: LOCAL_INDICATORS.contains(&sc.indicator.as_str()),
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}",
@@ -173,6 +181,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
         if let Some(state) = level(now, limits) {
             out.push(Trigger {
                 state,
+                local: name != "NA4",
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {now:.3}: {why}", g.gear, g.channel),
             });
@@ -255,8 +264,17 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     }
     // the gear: the worst state, and among equal states the one whose residual grew most (with a baseline)
     // or whose strongest indicator is furthest beyond its limit (without)
+    // the gear: the worst state; among equal states the one whose own average holds an impulse (FM4, M6A:
+    // a local fault is whole in its own gear's average, smeared in the other's), then the one whose
+    // strongest indicator moved furthest (spreads against a baseline, times its healthy value without)
+    let key = |g: &(Shaft, usize, Vec<Trigger>, f64)| {
+        let local = g.2.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
+        let strongest = g.2.iter().map(|x| x.ratio).fold(0.0, f64::max);
+        (gear_state(&g.2, t), local, strongest)
+    };
     let worst = per_gear.iter().max_by(|a, b| {
-        (gear_state(&a.2, t), a.3).partial_cmp(&(gear_state(&b.2, t), b.3)).unwrap_or(std::cmp::Ordering::Equal)
+        let (ka, kb) = (key(a), key(b));
+        ka.0.cmp(&kb.0).then((ka.1 > 0.0).cmp(&(kb.1 > 0.0))).then(ka.2.total_cmp(&kb.2))
     });
     let mut reasons = Vec::new();
     let mut cross_talk = Vec::new();
@@ -357,7 +375,7 @@ fn place_tooth(d: &mut Diagnosis) {
     };
     if let Some(tooth) = impulse_tooth(signal, g.mesh_order) {
         d.verdict.tooth = Some(tooth);
-        d.verdict.tooth_origin = Some(if d.speed_profile.tracking == crate::report::summary::Tracking::Tachometer {
+        d.verdict.tooth_origin = Some(if d.speed_profile.tracking.tachometer_origin() {
             ToothOrigin::Tachometer
         } else {
             ToothOrigin::Arbitrary

@@ -14,9 +14,10 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
     let ch = d.channels[0];
     // angle axis in teeth of the gear (tooth k between k - 1 and k), the origin at the tachometer pulse or,
     // with mesh-phase tracking, arbitrary
-    let origin = match d.speed_profile.tracking {
-        crate::report::summary::Tracking::Tachometer => "origin: tachometer pulse",
-        _ => "origin arbitrary (no tachometer)",
+    let origin = if d.speed_profile.tracking.tachometer_origin() {
+        "origin: tachometer pulse"
+    } else {
+        "origin arbitrary (no tachometer)"
     };
     let tsas: Vec<Chart> = d
         .tsas()
@@ -35,9 +36,10 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                 .find(|b| b.0 == ch && b.1.baseline_key() == g.gear.baseline_key() && b.2.len() == t.len())
             {
                 // without a tachometer both origins are arbitrary: the baseline is turned to fit best
-                let (b, how) = match d.speed_profile.tracking {
-                    crate::report::summary::Tracking::Tachometer => (b.clone(), "tachometer-aligned"),
-                    _ => (aligned(b, t), "turned to the best fit"),
+                let (b, how) = if d.speed_profile.tracking.tachometer_origin() {
+                    (b.clone(), "tachometer-aligned")
+                } else {
+                    (aligned(b, t), "turned to the best fit")
                 };
                 tsa_series.push(Series {
                     name: format!("healthy baseline TSA ({how})"),

@@ -120,15 +120,24 @@ pub enum Tracking {
     /// Constant speed assumed (tracking was not possible; see the warnings).
     #[serde(rename = "constant speed")]
     Constant,
+    /// Angle from the mesh harmonic's phase, its origin (angle 0) at the tachometer's pulses.
+    #[serde(rename = "mesh phase, tachometer origin")]
+    MeshPhaseTachometerOrigin,
 }
 
 impl Tracking {
+    /// Whether angle 0 is at the tachometer's pulse (else the origin is arbitrary).
+    pub fn tachometer_origin(self) -> bool {
+        matches!(self, Self::Tachometer | Self::MeshPhaseTachometerOrigin)
+    }
+
     /// Name shown to people and in the JSON.
     pub fn name(self) -> &'static str {
         match self {
             Self::Tachometer => "tachometer",
             Self::MeshPhase => "mesh phase",
             Self::Constant => "constant speed",
+            Self::MeshPhaseTachometerOrigin => "mesh phase, tachometer origin",
         }
     }
 }
