@@ -6,7 +6,7 @@ pub mod args;
 pub mod print;
 pub mod progress;
 
-pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, parse_args};
+pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, one_line, parse_args, parse_from};
 
 use crate::Error;
 use crate::jobs::{self, ChannelRole, JobError};
@@ -226,7 +226,12 @@ fn positive(flag: &str, v: f64) -> Result<f64, Error> {
 }
 
 /// The diagnose job the flags describe.
-fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>, Error> {
+/// The diagnosis job that `diagnose` runs for these arguments (flags checked and turned into the job's
+/// types), for callers that run it through the library (the report tests).
+///
+/// # Errors
+/// A flag's value is invalid (the message names the flag).
+pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>, Error> {
     if a.fs.is_some() && a.fs_unknown {
         return Err(CliError::flag("--fs", "conflicts with --fs-unknown: give the sample rate or say it is unknown"));
     }
@@ -407,7 +412,13 @@ fn identify(out: &mut dyn Write, a: &IdentifyArgs) -> Result<u8, Error> {
         quantity: a.quantity,
         report: a.report.clone().map(PathBuf::from),
     };
-    let result = with_spinner("identifying", || jobs::identify::run(&job))?;
+    // identify takes no --fs-unknown: a file without a sample rate needs --fs
+    let result = with_spinner("identifying", || jobs::identify::run(&job)).map_err(|e| match e {
+        Error::Job(JobError::NoSampleRate { file, .. }) => {
+            CliError::flag("--fs", format!("{file} has no sample rate (no time column); give it with --fs HZ"))
+        }
+        other => other,
+    })?;
     if a.json {
         json_line(out, &result)?;
         warn_all(&result.warnings);

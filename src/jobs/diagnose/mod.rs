@@ -106,15 +106,9 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         }
         if done.len() >= 2 && reference {
             let files = trend::write(dir, &done)?;
-            sections.insert(
-                0,
-                crate::report::html::Section {
-                    heading: format!("Trend over {} recordings (time order as given)", done.len()),
-                    facts: vec!["Every scored indicator in spreads from the baseline's centre; the table is in trend.csv and trend.jsonl.".into()],
-                    images: files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect(),
-                    ..Default::default()
-                },
-            );
+            let images: Vec<PathBuf> =
+                files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
+            sections.insert(0, crate::report::html::trend_section(&done, &images));
             report_files.extend(files);
         }
         report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);

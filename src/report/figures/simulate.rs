@@ -29,7 +29,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         ..Default::default()
     };
     let p = dir.join("waveform.png");
-    render_png(&p, 1400, 600, &[wave])?;
+    render_png(&p, PAGE_WIDTH_PX, 520, &[wave])?;
     out.push(p);
     // spectrum with mesh harmonics and sidebands
     let peak = sim.orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
@@ -77,7 +77,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         }
     };
     let p = dir.join("spectrum.png");
-    render_png(&p, 1400, 700, &[spectrum])?;
+    render_png(&p, PAGE_WIDTH_PX, 620, &[spectrum])?;
     out.push(p);
     // zooms around the first three mesh harmonics (like the paper's Fig 13)
     if let Some((z1, _)) = teeth {
@@ -118,7 +118,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         }
         if !charts.is_empty() {
             let p = dir.join("zoom-mesh.png");
-            render_png(&p, 1400, 420 * charts.len() as u32, &charts)?;
+            render_png(&p, PAGE_WIDTH_PX, 420 * charts.len() as u32, &charts)?;
             out.push(p);
         }
     }
@@ -161,9 +161,9 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
             series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
             ..Default::default()
         };
-        render_png_grid(&p, 1500, 760, 2, &[chart, zoom])?;
+        render_png_grid(&p, PAGE_WIDTH_PX, 600, 2, &[chart, zoom])?;
     } else {
-        render_png(&p, 800, 800, &[chart])?;
+        render_png(&p, 800, 820, &[chart])?;
     }
     Ok(p)
 }
@@ -214,6 +214,6 @@ pub(super) fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Resu
         });
     }
     let p = dir.join("press-q1-q2.png");
-    render_png(&p, 1400, 1600, &charts)?;
+    render_png(&p, PAGE_WIDTH_PX, 1500, &charts)?;
     Ok(p)
 }

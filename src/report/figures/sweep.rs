@@ -123,7 +123,7 @@ pub fn stability_map(
             ..Default::default()
         });
     }
-    render_png(path, 1400, 500 * charts.len() as u32, &charts)
+    render_png(path, PAGE_WIDTH_PX, 480 * charts.len() as u32, &charts)
 }
 
 /// Work-precision chart of one scene's results (log-log error against time).
@@ -173,5 +173,5 @@ pub(super) fn bench_chart(scene: &str, results: &[BenchResult]) -> Chart {
 /// # Errors
 /// Empty data or a failed write.
 pub fn bench(png: &Path, scene: &str, results: &[BenchResult]) -> Result<(), ReportError> {
-    render_png(png, 1200, 800, &[bench_chart(scene, results)])
+    render_png(png, PAGE_WIDTH_PX, 720, &[bench_chart(scene, results)])
 }
