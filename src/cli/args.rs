@@ -158,6 +158,10 @@ pub struct DiagnoseArgs {
     /// by it.
     #[arg(long, value_parser = positive_f64, allow_negative_numbers = true)]
     pub sensitivity: Option<f64>,
+    /// Machine class for the ISO 10816-3 zones of the overall velocity (RMS, 10-1000 Hz, mm/s): group 1
+    /// is 300 kW to 50 MW, group 2 15 to 300 kW, on rigid or flexible supports.
+    #[arg(long, value_parser = ["group1-rigid", "group1-flexible", "group2-rigid", "group2-flexible"])]
+    pub iso_class: Option<String>,
     /// Exit with code 1 when any recording is at least this bad.
     #[arg(long, value_enum)]
     pub fail_on: Option<FailOn>,

@@ -289,6 +289,7 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
         scene: a.scene.as_ref().map(PathBuf::from),
         report: a.report.as_ref().map(PathBuf::from),
         in_memory: Vec::new(),
+        iso_class: a.iso_class.as_deref().and_then(crate::signal::velocity::MachineClass::from_name),
     })
 }
 
@@ -313,7 +314,7 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
         if a.json {
             json_line(out, d)?;
         } else {
-            print::diagnosis(out, d).map_err(CliError::from)?;
+            print::diagnosis(out, d, job.iso_class).map_err(CliError::from)?;
         }
     }
     let worst = done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy);

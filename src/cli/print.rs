@@ -47,7 +47,11 @@ fn channels(c: &[usize]) -> String {
 }
 
 /// The text form of one diagnosis.
-pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
+pub fn diagnosis(
+    w: &mut dyn Write,
+    d: &Diagnosis,
+    iso_class: Option<crate::signal::velocity::MachineClass>,
+) -> io::Result<()> {
     writeln!(w, "file             {}", d.file)?;
     match d.sample_rate_hz {
         Some(fs) => {
@@ -147,6 +151,7 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             writeln!(w, "  model overpredicts {m}")?;
         }
     }
+    writeln!(w, "velocity         {}", crate::report::html::velocity_words(d, iso_class))?;
     for warning in &d.warnings {
         writeln!(w, "warning          {warning}")?;
     }

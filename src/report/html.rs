@@ -331,7 +331,11 @@ fn channel_list(c: &[usize]) -> String {
 
 /// The section of one diagnosis: verdict and reasons, speed and tracking, warnings, the indicator table
 /// against the baseline's band (or the indicators without one), the images.
-pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
+pub fn diagnosis_section(
+    d: &Diagnosis,
+    images: &[PathBuf],
+    iso_class: Option<crate::signal::velocity::MachineClass>,
+) -> Section {
     let unit = super::figures::unit_or(&d.unit);
     let mut facts = vec![match d.sample_rate_hz {
         Some(fs) => format!(
@@ -369,6 +373,7 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         cell(p.change_percent)
     ));
     facts.push(format!("Mesh: order {} of the reference shaft (teeth {}).", d.mesh_order, d.teeth_source));
+    facts.push(velocity_words(d, iso_class));
     if let Some(g) = &d.other_gear {
         facts.push(format!(
             "Meshing gear: {} teeth (estimated from its sidebands, confidence {}).",
@@ -434,6 +439,49 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         tables,
         images: images.to_vec(),
     }
+}
+
+/// Lower edge, upper edge of the overall-velocity band, Hz (ISO 10816-3 for machines above 600 rpm).
+const VELOCITY_BAND_HZ: (f64, f64) = (10.0, 1000.0);
+
+/// The overall velocity RMS of the deciding channel over 10-1000 Hz in mm/s, and with a machine class its
+/// ISO 10816-3 zone and boundaries; or why it could not be computed.
+pub fn velocity_words(d: &Diagnosis, iso_class: Option<crate::signal::velocity::MachineClass>) -> String {
+    use crate::signal::velocity::{measured_from_unit, velocity_rms_mm_s};
+    let (lo, hi) = VELOCITY_BAND_HZ;
+    let why_not = |why: String| format!("Overall velocity RMS over {lo}-{hi} Hz not computed: {why}.");
+    let Some((ch, spectrum)) = d.spectra().first() else {
+        return why_not("the sample rate is unknown".into());
+    };
+    let Some(measured) = measured_from_unit(&d.unit) else {
+        return why_not(if d.unit.is_empty() {
+            "the file names no unit (give --unit m/s, mm/s, m/s^2 or g)".into()
+        } else {
+            format!("the unit {} is neither a velocity nor an acceleration", d.unit)
+        });
+    };
+    let Some(v) = velocity_rms_mm_s(spectrum, measured, VELOCITY_BAND_HZ) else {
+        return why_not(format!("the sample rate does not reach {hi} Hz"));
+    };
+    let integrated = match measured {
+        crate::signal::velocity::Measured::Acceleration(_) => ", integrated from the acceleration",
+        crate::signal::velocity::Measured::Velocity(_) => "",
+    };
+    let mut s =
+        format!("Overall velocity RMS over {lo}-{hi} Hz: {} mm/s (channel {ch}{integrated})", super::format::sig(v, 3));
+    match iso_class {
+        Some(c) => {
+            let [ab, bc, cd] = c.boundaries_mm_s();
+            let _ = write!(
+                s,
+                "; ISO 10816-3 / 20816-3 {}: {} (boundaries A/B {ab}, B/C {bc}, C/D {cd} mm/s, as publicly quoted, not checked against the standard's text).",
+                c.name(),
+                c.zone(v).words()
+            );
+        }
+        None => s.push_str("; give --iso-class for its ISO 10816-3 / 20816-3 zone."),
+    }
+    s
 }
 
 fn speed_words(s: super::summary::SpeedSource) -> &'static str {

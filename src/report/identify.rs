@@ -57,7 +57,7 @@ fn lines_chart(out: &Identification, stem: &str) -> Chart {
     }
     Chart {
         title: format!("{stem}: measured lines against the fitted gear model ({} mesh harmonics)", out.mesh_harmonics),
-        x_label: "pinion order".into(),
+        x_label: "pinion order [-]".into(),
         y_label: format!("amplitude [{}]", out.unit),
         y_log: true,
         series,
@@ -74,7 +74,7 @@ fn residual_chart(out: &Identification, stem: &str) -> Chart {
     noise.sort_by(|a, b| a.0.total_cmp(&b.0));
     Chart {
         title: format!("{stem}: what the fitted model leaves (|measured - model| per line)"),
-        x_label: "pinion order".into(),
+        x_label: "pinion order [-]".into(),
         y_label: format!("residual amplitude [{}]", out.unit),
         y_log: true,
         series: vec![
@@ -127,7 +127,7 @@ fn teeth_chart(out: &Identification, stem: &str, gear: &str, dev: &PerTooth, std
         .collect();
     Chart {
         title: format!("{stem}: {gear} profile deviation at each tooth's mesh position"),
-        x_label: format!("{gear} tooth ({origin})"),
+        x_label: format!("{gear} tooth [-] ({origin})"),
         y_label: "deviation e [um]".into(),
         series: vec![
             Series { name: "fitted deviation".into(), points: bars, style: Style::Bars, color: 0 },

@@ -203,9 +203,9 @@ impl PixelRect {
     pub fn intersects(&self, o: &PixelRect) -> bool {
         self.left < o.right && o.left < self.right && self.top < o.bottom && o.top < self.bottom
     }
-    /// Whether the pixel (x, y) is inside.
+    /// Whether the pixel (x, y) is inside or on the edge (an axis maps its ends onto the edges).
     pub fn contains(&self, (x, y): (i32, i32)) -> bool {
-        x >= self.left && x < self.right && y >= self.top && y < self.bottom
+        x >= self.left && x <= self.right && y >= self.top && y <= self.bottom
     }
 }
 

@@ -71,6 +71,8 @@ pub struct DiagnoseJob<'a> {
     /// apply alike). Their samples may be lent (`Cow::Borrowed`): they are read in place, never copied
     /// unless `--sensitivity` must scale them.
     pub in_memory: Vec<(PathBuf, Recording<'a>)>,
+    /// Machine class whose ISO 10816-3 velocity zones the report states (none: the velocity alone).
+    pub iso_class: Option<crate::signal::velocity::MachineClass>,
 }
 
 /// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
@@ -101,7 +103,7 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             let files = write_report(d, dir)?;
             let images: Vec<PathBuf> =
                 files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
-            sections.push(crate::report::html::diagnosis_section(d, &images));
+            sections.push(crate::report::html::diagnosis_section(d, &images, job.iso_class));
             report_files.extend(files);
         }
         if done.len() >= 2 && reference {

@@ -723,6 +723,19 @@ pub fn short_names(files: &[String]) -> Vec<String> {
 /// # Errors
 /// Nothing scored (no baseline), or the image cannot be written.
 pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
+    let charts = trend_charts(done)?;
+    let h = TREND_PANEL_PX * charts.len() as u32;
+    render_png(png, PAGE_WIDTH_PX, h, &charts)
+}
+
+/// Height of one trend panel, px.
+pub const TREND_PANEL_PX: u32 = 470;
+
+/// The panels of [`trend`].
+///
+/// # Errors
+/// Nothing scored (no baseline).
+pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
     let Some(ch) = done.first().and_then(|d| d.channels.first().copied()) else {
         return Err(ReportError::BadData { what: "trend".into(), why: "no recording".into() });
     };
@@ -807,8 +820,7 @@ pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
             why: "no indicator was scored against a baseline".into(),
         });
     }
-    let h = 470 * charts.len() as u32;
-    render_png(png, PAGE_WIDTH_PX, h, &charts)
+    Ok(charts)
 }
 
 /// The (frequency in Hz, value) points of `s` above 0 Hz and up to `max_f` Hz.

@@ -14,7 +14,8 @@ mod simulate;
 mod sweep;
 
 pub use diagnose::{
-    Figure, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names, sideband_words, trend,
+    Figure, TREND_PANEL_PX, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names,
+    sideband_words, trend, trend_charts,
 };
 pub use simulate::{multipliers, simulation};
 pub use sweep::{bench, parameter_label, stability_map};

@@ -9,7 +9,7 @@ use super::*;
 pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut out = Vec::new();
     let q = &scene.output.quantity;
-    let unit = if q.unit().is_empty() { String::new() } else { format!(" [{}]", q.unit()) };
+    let unit = if q.unit().is_empty() { " [units of the model]".to_string() } else { format!(" [{}]", q.unit()) };
     let period = sim.steady.period_s;
     // waveform over (up to) three base revolutions, or three periods when the period is shorter
     let revs = (period * scene.output.base_hz).max(1e-12);
@@ -66,7 +66,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
                     scene.output.base_name,
                     scene.output.base_hz
                 ),
-                x_label: format!("order of the {}", scene.output.base_name),
+                x_label: format!("order of the {} [-]", scene.output.base_name),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
                 x_range: Some((0.0, max_order + 1.0)),
@@ -139,8 +139,8 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
     let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
     let chart = Chart {
         title: format!("{}: multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
-        x_label: "Re rho".into(),
-        y_label: "Im rho".into(),
+        x_label: "Re rho [-]".into(),
+        y_label: "Im rho [-]".into(),
         x_range: Some((-r, r)),
         y_range: Some((-r, r)),
         unit_circle: true,
@@ -204,7 +204,7 @@ pub(super) fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Resu
                 "spectrum of {name} by order of the input speed W (Fig {})",
                 if idx == 0 { "3b" } else { "4b" }
             ),
-            x_label: "order of W".into(),
+            x_label: "order of W [-]".into(),
             y_label: format!("amplitude [{unit}]"),
             y_log: true,
             x_range: Some((0.0, 25.0)),
