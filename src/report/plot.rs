@@ -859,8 +859,8 @@ mod tests {
         let line: Vec<(f64, f64)> =
             (0..2000).map(|i| (f64::from(i), 1.0 + (f64::from(i) * 0.37).sin().abs() * 100.0)).collect();
         Chart {
-            title: "a long title that has to be wrapped onto a second line because it is far wider than the image"
-                .into(),
+            title: "a long title that has to be wrapped onto a second line because it is far wider than the image: "
+                .repeat(2),
             x_label: "frequency [Hz]".into(),
             y_label: "amplitude [m/s]".into(),
             y_log: true,
@@ -902,7 +902,7 @@ mod tests {
         }
         assert_eq!(g.marker_x.len(), 9);
         assert_eq!(g.hidden_marker_labels, 0);
-        assert_eq!(g.title.len(), 2, "the long title is wrapped");
+        assert_eq!(g.title.len(), 2, "the long title is wrapped: {:?}", g.title);
         assert!(g.smallest_text_px >= MIN_TEXT_PX);
     }
 
