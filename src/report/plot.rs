@@ -601,7 +601,11 @@ where
     // the title, line by line
     for (i, line) in frame.title.iter().enumerate() {
         let (tw, th) = text_size(area, line, TITLE_PX);
-        let x = (geo.plot.left + geo.plot.right) / 2 - tw / 2 - base.0;
+        // centred over the plot when it fits there, else over the whole image (a wrapped line is at most
+        // the image's width less the margins)
+        let (w, _) = area.dim_in_pixel();
+        let over_plot = (geo.plot.left + geo.plot.right) / 2 - tw / 2 - base.0;
+        let x = if over_plot + tw <= w as i32 - MARGIN { over_plot } else { (w as i32 - tw) / 2 };
         let y = MARGIN + i as i32 * TITLE_ROW;
         area.draw_text(line, &font(TITLE_PX), (x.max(0), y))?;
         geo.title.push(PixelRect {

@@ -50,7 +50,11 @@ pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
             let along = |v: &[f64]| -> Vec<(f64, f64)> {
                 v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
             };
-            let x_label = format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order);
+            let x_label = if g.gear == Shaft::Estimated {
+                format!("mesh cycle [cycle k spans k-1 to k of {}; {origin}]", g.mesh_order)
+            } else {
+                format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order)
+            };
             let mut tsa_series = Vec::new();
             // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
             if let Some((_, _, b)) = d

@@ -138,7 +138,7 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
     let r = steady.floquet.rho_max.max(1.0) * 1.15;
     let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
     let chart = Chart {
-        title: format!("{}: multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
+        title: format!("{}: multipliers, |rho|max = {} ({verdict})", scene.name, num(steady.floquet.rho_max)),
         x_label: "Re rho [-]".into(),
         y_label: "Im rho [-]".into(),
         x_range: Some((-r, r)),
@@ -153,9 +153,9 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
     if rho > 0.0 && rho < 0.3 {
         let z = rho * 1.3;
         let zoom = Chart {
-            title: format!("zoomed to |rho| <= {z:.2e} (the unit circle is off this panel)"),
-            x_label: "Re rho".into(),
-            y_label: "Im rho".into(),
+            title: format!("zoomed to |rho| <= {} (the unit circle is off this panel)", num(z)),
+            x_label: "Re rho [-]".into(),
+            y_label: "Im rho [-]".into(),
             x_range: Some((-z, z)),
             y_range: Some((-z, z)),
             series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
