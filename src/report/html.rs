@@ -81,7 +81,7 @@ h1{font-size:16pt;border-bottom:2px solid #444;padding-bottom:.2em}h2{font-size:
 .healthy{background:#2e7d32}.suspect{background:#ef6c00}.faulty{background:#c62828}.not_judged{background:#616161}\
 ul.reasons li{margin:.2em 0}.facts{color:#444;font-size:10pt}.facts p{margin:.15em 0}\
 table{border-collapse:collapse;margin:.8em 0;font-size:9.5pt}caption{text-align:left;font-weight:bold;padding:.3em 0}\
-th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child{text-align:left}\
+th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child,td.t{text-align:left}\
 tr.hit td{background:#fde0dc;font-weight:bold}figure{margin:1em 0;page-break-inside:avoid;break-inside:avoid}img{display:block;max-width:100%;height:auto;border:1px solid #ddd}\
 dl.glossary{font-size:9.5pt}dl.glossary dt{font-weight:bold;margin-top:.4em}dl.glossary dd{margin-left:1.5em}\
 footer{margin-top:2em;font-size:9pt;color:#555}@page{size:A4;margin:14mm}\
@@ -289,7 +289,10 @@ fn table(page: &mut String, t: &Table) {
     for (row, hit) in &t.rows {
         page.push_str(if *hit { "<tr class=\"hit\">" } else { "<tr>" });
         for c in row {
-            let _ = write!(page, "<td>{}</td>", escape(c));
+            // words read from the left, numbers line up on the right
+            let numeric = c.starts_with(|ch: char| ch.is_ascii_digit() || ch == '-' || ch == '+' || ch == '.');
+            let class = if numeric { "" } else { " class=\"t\"" };
+            let _ = write!(page, "<td{class}>{}</td>", escape(c));
         }
         page.push_str("</tr>\n");
     }

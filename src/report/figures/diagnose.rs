@@ -792,13 +792,13 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
             };
             let (suspect, faulty) = (limit(|s| s.suspect_at), limit(|s| s.faulty_at));
             series.push(Series {
-                name: format!("suspect limit ({} spreads)", num(suspect)),
+                name: format!("suspect limit ({} spreads)", sig(suspect, 3)),
                 points: vec![(0.6, suspect), (last + 0.4, suspect)],
                 style: Style::Line,
                 color: 3,
             });
             series.push(Series {
-                name: format!("faulty limit ({} spreads)", num(faulty)),
+                name: format!("faulty limit ({} spreads)", sig(faulty, 3)),
                 points: vec![(0.6, faulty), (last + 0.4, faulty)],
                 style: Style::Line,
                 color: 1,

@@ -1,7 +1,7 @@
 //! The report images: which data, which axes, which labels. Drawing itself is in [`super::plot`].
 
 use super::ReportError;
-use super::format::num;
+use super::format::{num, sig};
 use super::plot::{
     BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
 };
