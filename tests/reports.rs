@@ -2,7 +2,10 @@
 
 mod common;
 use common::*;
-use gearvib::report::plot::{Chart, Series, Style, render_png};
+use gearvib::report::plot::{Chart, PAGE_WIDTH_PX, Series, Style, render_png};
+
+/// Every report image is drawn for the page width (its text then prints at 9 pt or more on A4).
+const W: u32 = PAGE_WIDTH_PX;
 
 /// Width and height from a PNG's IHDR chunk, after checking the signature.
 fn png_size(path: &std::path::Path) -> (u32, u32) {
@@ -19,11 +22,11 @@ fn simulate_report_writes_png_images_of_the_stated_size() {
     let run = gearvib(&["simulate", &repo("data/scenes/paper-gear-fig8a.json"), "--report", &out]);
     assert_eq!(run.code, 0, "{}", run.stderr);
     for (name, w, h) in [
-        ("waveform.png", 1400, 600),
-        ("spectrum.png", 1400, 700),
-        ("zoom-mesh.png", 1400, 1260),
+        ("waveform.png", W, 520),
+        ("spectrum.png", W, 620),
+        ("zoom-mesh.png", W, 1260),
         // fig8a's multipliers lie within 0.013 of the origin: the unit circle and a zoomed panel side by side
-        ("multipliers.png", 1500, 760),
+        ("multipliers.png", W, 600),
     ] {
         assert_eq!(png_size(&dir.join(name)), (w, h), "{name}");
     }
@@ -32,7 +35,7 @@ fn simulate_report_writes_png_images_of_the_stated_size() {
     // the press adds Figs 3-4
     let run = gearvib(&["simulate", &repo("data/scenes/paper-press-case1.json"), "--report", &out]);
     assert_eq!(run.code, 0);
-    assert_eq!(png_size(&dir.join("press-q1-q2.png")), (1400, 1600));
+    assert_eq!(png_size(&dir.join("press-q1-q2.png")), (W, 1500));
 }
 
 #[test]
@@ -54,15 +57,15 @@ fn diagnose_report_writes_images() {
     ]);
     assert_eq!(run.code, 0, "{}", run.stderr);
     let stem = "gear-z14z39-fs10kHz-pitted-pinion-tooth3";
-    assert_eq!(png_size(&dir.join(format!("{stem}-spectrum.png"))), (1400, 700));
+    assert_eq!(png_size(&dir.join(format!("{stem}-spectrum.png"))), (W, 600));
     // TSA and residual of each of the two gears
-    assert_eq!(png_size(&dir.join(format!("{stem}-tsa.png"))), (1400, 4 * 380));
-    assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (1400, 600));
-    assert_eq!(png_size(&dir.join(format!("{stem}-envelope.png"))), (1400, 600));
-    assert_eq!(png_size(&dir.join(format!("{stem}-cepstrum.png"))), (1400, 550));
-    assert_eq!(png_size(&dir.join(format!("{stem}-kurtogram.png"))), (1400, 550));
+    assert_eq!(png_size(&dir.join(format!("{stem}-tsa.png"))), (W, 4 * 420));
+    assert_eq!(png_size(&dir.join(format!("{stem}-vs-model.png"))), (W, 560));
+    assert_eq!(png_size(&dir.join(format!("{stem}-envelope.png"))), (W, 560));
+    assert_eq!(png_size(&dir.join(format!("{stem}-cepstrum.png"))), (W, 520));
+    assert_eq!(png_size(&dir.join(format!("{stem}-kurtogram.png"))), (W, 560));
     // zooms around the first three mesh harmonics
-    assert_eq!(png_size(&dir.join(format!("{stem}-zoom.png"))), (1400, 3 * 420));
+    assert_eq!(png_size(&dir.join(format!("{stem}-zoom.png"))), (W, 3 * 440));
     assert!(dir.join(format!("{stem}-diagnosis.json")).exists());
     assert!(dir.join("index.html").exists());
 }
@@ -125,7 +128,31 @@ fn speed_sweep_finds_the_principal_parametric_resonance() {
     assert!(lo < rpm && rpm < hi, "zone {lo}..{hi} must contain {rpm}");
     // the zone is narrow: its width follows k1/k0 ~ 4 %, far below the swept 900 rpm
     assert!(hi - lo < 0.05 * rpm);
-    assert_eq!(png_size(std::path::Path::new(&png)), (1400, 1000));
+    // the unstable ranges of the JSON: one run holds the resonance, and the runs hold exactly the unstable
+    // points (the same zone read two ways)
+    let ranges = v["unstable_ranges"].as_array().unwrap();
+    let holds = |r: &serde_json::Value| r["from"].as_f64().unwrap() <= rpm && rpm <= r["to"].as_f64().unwrap();
+    assert_eq!(ranges.iter().filter(|r| holds(r)).count(), 1, "{ranges:?}");
+    let counted: u64 = ranges.iter().map(|r| r["points"].as_u64().unwrap()).sum();
+    assert_eq!(counted as usize, unstable.len());
+    assert_eq!(png_size(std::path::Path::new(&png)), (W, 960));
+    // the text says the same ranges, and that it thinned its rows
+    let text = gearvib(&[
+        "sweep",
+        &repo("data/scenes/hard-gear-light-damping.json"),
+        "--param",
+        "speed",
+        "--from",
+        "7000",
+        "--to",
+        "7900",
+        "--steps",
+        "121",
+    ]);
+    assert_eq!(text.code, 0, "{}", text.stderr);
+    assert!(text.stdout.contains("UNSTABLE at ") && text.stdout.contains(" of 121 points"), "{}", text.stdout);
+    // 121 rows are more than the 40 or so the text shows
+    assert!(text.stdout.contains("rows thinned"), "{}", text.stdout);
     let bad = gearvib(&[
         "sweep",
         &repo("data/scenes/hard-gear-light-damping.json"),

@@ -173,8 +173,12 @@ pub struct DiagnoseArgs {
     pub unit: Option<String>,
     /// Sensitivity: recorded value per physical unit (e.g. 0.1 for 100 mV per g); the samples are divided
     /// by it.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_parser = positive_f64, allow_negative_numbers = true)]
     pub sensitivity: Option<f64>,
+    /// Machine class for the ISO 10816-3 zones of the overall velocity (RMS, 10-1000 Hz, mm/s): group 1
+    /// is 300 kW to 50 MW, group 2 15 to 300 kW, on rigid or flexible supports.
+    #[arg(long, value_parser = ["group1-rigid", "group1-flexible", "group2-rigid", "group2-flexible"])]
+    pub iso_class: Option<String>,
     /// Exit with code 1 when any recording is at least this bad.
     #[arg(long, value_enum)]
     pub fail_on: Option<FailOn>,
@@ -253,7 +257,8 @@ pub enum FailOn {
     Suspect,
 }
 
-/// Parses the process arguments (clap prints usage errors itself and exits with code 2).
+/// Parses the process arguments: help and version as clap prints them; any other error as one line on
+/// stderr (see [`one_line`]) and exit code 2.
 pub fn parse_args() -> Cli {
     match Cli::try_parse() {
         Ok(cli) => cli,
@@ -267,16 +272,53 @@ pub fn parse_args() -> Cli {
             ) {
                 e.exit();
             }
-            // one line, as every other error: clap's first line without its "error: " prefix
-            let text = e.render().to_string();
-            let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-            let first = lines.next().unwrap_or("invalid arguments").trim_start_matches("error: ");
-            // "the following required arguments were not provided:" names them on the next line
-            let rest = if first.ends_with(':') { lines.next().unwrap_or("") } else { "" };
-            eprintln!("gearvib: error: {}", format!("{first} {rest}").trim_end());
+            eprintln!("gearvib: error: {}", one_line(&e.render().to_string()));
             std::process::exit(2);
         }
     }
+}
+
+/// Parses `args` (the program name first) as the command line would be.
+///
+/// # Errors
+/// The one-line message of [`parse_args`] (help and version requests come back as their text).
+pub fn parse_from<I, T>(args: I) -> Result<Cli, String>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    Cli::try_parse_from(args).map_err(|e| one_line(&e.render().to_string()))
+}
+
+/// clap's error text in one line with every hint it gives kept: the error, the names it lists on the
+/// next lines, its tips ("a similar argument exists: '--tacho-channel'"), the possible values, and the
+/// pointer to `--help`; only the usage block, which repeats the help, is left out.
+pub fn one_line(rendered: &str) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut in_usage = false;
+    for line in rendered.lines().map(str::trim) {
+        if line.is_empty() {
+            in_usage = false;
+            continue;
+        }
+        if line.starts_with("Usage:") {
+            in_usage = true;
+            continue;
+        }
+        if in_usage {
+            continue;
+        }
+        let line = line.trim_start_matches("error: ");
+        // a list under "...:" (the missing arguments) joins its heading
+        match parts.last_mut() {
+            Some(last) if last.ends_with(':') || line.starts_with('[') => {
+                last.push(' ');
+                last.push_str(line);
+            }
+            _ => parts.push(line.to_string()),
+        }
+    }
+    if parts.is_empty() { "invalid arguments; try 'gearvib --help'".into() } else { parts.join("; ") }
 }
 
 /// A finite number above zero (for factors such as `--sensitivity`).
@@ -285,5 +327,36 @@ fn positive_f64(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         Ok(v) => Err(format!("must be a finite number above 0, got {v}")),
         Err(_) => Err(format!("{s:?} is not a number")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error_of(args: &[&str]) -> String {
+        match parse_from(std::iter::once("gearvib").chain(args.iter().copied())) {
+            Ok(_) => panic!("{args:?} parsed"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn one_line_keeps_clap_hints() {
+        // the values clap lists, its did-you-mean, and the pointer to --help, all on one line
+        let e = error_of(&["diagnose", "x.wav", "--fail-on", "bad"]);
+        assert!(e.contains("[possible values: faulty, suspect]"), "{e}");
+        assert!(e.contains("--help"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        let e = error_of(&["diagnose", "x.wav", "--tacho-chanel", "2"]);
+        assert!(e.contains("'--tacho-channel'"), "{e}");
+        let e = error_of(&["diagnose"]);
+        assert!(e.contains("<RECORDINGS>"), "{e}");
+        // a flag of another command is not suggested (clap offers identify's own --fs)
+        let e = error_of(&["identify", "x.wav", "--scene", "s.json", "--fs-unknown"]);
+        assert!(e.contains("unexpected argument '--fs-unknown'"), "{e}");
+        assert!(!e.contains("exists: '--fs-unknown'"), "{e}");
+        let e = error_of(&["diagnose", "x.wav", "--sensitivity", "-1"]);
+        assert!(e.contains("above 0"), "{e}");
     }
 }

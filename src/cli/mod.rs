@@ -6,7 +6,7 @@ pub mod args;
 pub mod print;
 pub mod progress;
 
-pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, LearnArgs, parse_args};
+pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, LearnArgs, one_line, parse_args, parse_from};
 
 use crate::Error;
 use crate::jobs::{self, ChannelRole, JobError};
@@ -231,7 +231,12 @@ fn positive(flag: &str, v: f64) -> Result<f64, Error> {
 }
 
 /// The diagnose job the flags describe.
-fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>, Error> {
+/// The diagnosis job that `diagnose` runs for these arguments (flags checked and turned into the job's
+/// types), for callers that run it through the library (the report tests).
+///
+/// # Errors
+/// A flag's value is invalid (the message names the flag).
+pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>, Error> {
     if a.fs.is_some() && a.fs_unknown {
         return Err(CliError::flag("--fs", "conflicts with --fs-unknown: give the sample rate or say it is unknown"));
     }
@@ -300,6 +305,7 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>
         scene: a.scene.as_ref().map(PathBuf::from),
         report: a.report.as_ref().map(PathBuf::from),
         in_memory: Vec::new(),
+        iso_class: a.iso_class.as_deref().and_then(crate::signal::velocity::MachineClass::from_name),
     })
 }
 
@@ -379,7 +385,7 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
         if a.json {
             json_line(out, d)?;
         } else {
-            print::diagnosis(out, d).map_err(CliError::from)?;
+            print::diagnosis(out, d, job.iso_class).map_err(CliError::from)?;
         }
     }
     let worst = done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy);
@@ -481,7 +487,13 @@ fn identify(out: &mut dyn Write, a: &IdentifyArgs) -> Result<u8, Error> {
         quantity: a.quantity,
         report: a.report.clone().map(PathBuf::from),
     };
-    let result = with_spinner("identifying", || jobs::identify::run(&job))?;
+    // identify takes no --fs-unknown: a file without a sample rate needs --fs
+    let result = with_spinner("identifying", || jobs::identify::run(&job)).map_err(|e| match e {
+        Error::Job(JobError::NoSampleRate { file, .. }) => {
+            CliError::flag("--fs", format!("{file} has no sample rate (no time column); give it with --fs HZ"))
+        }
+        other => other,
+    })?;
     if a.json {
         json_line(out, &result)?;
         warn_all(&result.warnings);

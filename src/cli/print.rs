@@ -1,6 +1,9 @@
 //! Text output of every command (the JSON forms are `report::summary`). Writes to any `Write`, so a
 //! closed pipe comes back as an `io::Error` of kind `BrokenPipe` instead of a panic.
 
+use crate::report::figures::stands_out;
+use crate::report::format::num;
+use crate::report::identify::fault_size;
 use crate::report::summary::{
     BenchReport, Diagnosis, ErrorHarmonic, Identification, PhaseOrigin, SimulateSummary, StabilitySummary, SweepSummary,
 };
@@ -38,22 +41,39 @@ pub fn stability(w: &mut dyn Write, s: &StabilitySummary) -> io::Result<()> {
     Ok(())
 }
 
+/// Channel numbers as a list: "1, 2".
+fn channels(c: &[usize]) -> String {
+    c.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
+}
+
 /// The text form of one diagnosis.
-pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
+pub fn diagnosis(
+    w: &mut dyn Write,
+    d: &Diagnosis,
+    iso_class: Option<crate::signal::velocity::MachineClass>,
+) -> io::Result<()> {
     writeln!(w, "file             {}", d.file)?;
     match d.sample_rate_hz {
-        Some(fs) => writeln!(w, "sample rate      {fs} Hz, {} samples, channels {:?}", d.samples, d.channels)?,
-        None => {
-            writeln!(w, "sample rate      unknown (orders only), {} samples, channels {:?}", d.samples, d.channels)?
+        Some(fs) => {
+            writeln!(w, "sample rate      {fs} Hz, {} samples, channel(s) {}", d.samples, channels(&d.channels))?
         }
+        None => writeln!(
+            w,
+            "sample rate      unknown (orders only), {} samples, channel(s) {}",
+            d.samples,
+            channels(&d.channels)
+        )?,
     }
     let shafts: Vec<String> = d
         .shaft_hz
         .entries()
         .into_iter()
-        .map(|(k, v)| match v {
-            Some(f) => format!("{k} {f:.4} Hz"),
-            None => format!("{k} period {:.3} samples", d.shaft_period_samples),
+        .map(|(k, v)| {
+            let k = if k == "estimated_shaft" { "shaft of the estimated period" } else { k };
+            match v {
+                Some(f) => format!("{k} {} Hz", num(f)),
+                None => format!("{k}: one revolution every {} samples", num(d.shaft_period_samples)),
+            }
         })
         .collect();
     match (d.speed_given_hz, d.speed_deviation_percent) {
@@ -110,16 +130,7 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             .collect();
         writeln!(w, "  {:<name_width$} {:>3}{vals}", g.gear.name(), g.channel)?;
     }
-    let unit = if d.unit.is_empty() { "unit of the file" } else { d.unit.as_str() };
-    writeln!(w, "mesh harmonics (channel {}, amplitudes in {unit}):", d.channels[0])?;
-    for h in &d.mesh_harmonics {
-        let f = h.frequency_hz.map_or("-".into(), |f| format!("{f:.2} Hz"));
-        let mut sb = h.sidebands.iter().filter(|s| s.resolved).cloned().collect::<Vec<_>>();
-        sb.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
-        let top: Vec<String> =
-            sb.iter().take(4).map(|s| format!("{:+} {} {:.3e}", s.offset, s.shaft, s.amplitude)).collect();
-        writeln!(w, "  {}x mesh  {f:>12}  {:.4e}   strongest sidebands: {}", h.k, h.amplitude, top.join("; "))?;
-    }
+    mesh_harmonics(w, d)?;
     if let Some(e) = &d.envelope {
         let lines: Vec<String> = e
             .lines
@@ -154,10 +165,37 @@ pub fn diagnosis(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
             writeln!(w, "  model overpredicts {m}")?;
         }
     }
+    writeln!(w, "velocity         {}", crate::report::html::velocity_words(d, iso_class))?;
     for warning in &d.warnings {
         writeln!(w, "warning          {warning}")?;
     }
     writeln!(w)?;
+    Ok(())
+}
+
+/// The mesh harmonics and, in the words of the images, the sidebands that stand out 12 dB over the local
+/// floor; at a changing speed (a run-up) a spectrum in Hz smears every line, so only the order spectrum
+/// image is pointed to.
+fn mesh_harmonics(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
+    let unit = crate::report::figures::unit_or(&d.unit);
+    if d.order_map.is_some() {
+        return writeln!(
+            w,
+            "mesh harmonics   the speed changed {} % over the recording: lines in Hz are smeared, no sideband table (the report's order spectrum and rpm-order map show them in orders)",
+            num(d.speed_profile.change_percent)
+        );
+    }
+    let spectrum = d.spectra().iter().find(|s| s.0 == d.channels[0]).map(|s| &s.1);
+    writeln!(w, "mesh harmonics (channel {}, amplitudes in {unit}):", d.channels[0])?;
+    for h in &d.mesh_harmonics {
+        let f = h.frequency_hz.map_or("-".into(), |f| format!("{} Hz", num(f)));
+        let mut sb: Vec<_> =
+            h.sidebands.iter().filter(|s| spectrum.map_or(s.resolved, |sp| stands_out(sp, s))).collect();
+        sb.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
+        let top: Vec<String> = sb.iter().map(|s| format!("{:+} {} {}", s.offset, s.shaft, num(s.amplitude))).collect();
+        let top = if top.is_empty() { "none".to_string() } else { top.join("; ") };
+        writeln!(w, "  {}x mesh  {f:>10}  {}   sidebands 12 dB over the local floor: {top}", h.k, num(h.amplitude))?;
+    }
     Ok(())
 }
 
@@ -192,19 +230,55 @@ pub fn bench(w: &mut dyn Write, all: &BenchReport) -> io::Result<()> {
     Ok(())
 }
 
-/// The text form of `sweep` (at most about 40 rows).
+/// The text form of `sweep`: the unstable ranges first, then at most about 40 rows (every point when
+/// there are fewer; otherwise every n-th and every unstable or failed point, and a line saying so).
 pub fn sweep(w: &mut dyn Write, s: &SweepSummary) -> io::Result<()> {
-    writeln!(w, "{:>14} {:>14} {:>8} {:>8}  lines", s.param, "|rho|max", "stable", "trusted")?;
+    let unstable: usize = s.unstable_ranges.iter().map(|r| r.points).sum();
+    if s.unstable_ranges.is_empty() {
+        writeln!(w, "stable at all {} points", s.points.len())?;
+    } else {
+        writeln!(w, "UNSTABLE at {unstable} of {} points, in {} range(s):", s.points.len(), s.unstable_ranges.len())?;
+        for r in &s.unstable_ranges {
+            writeln!(
+                w,
+                "  {} from {} to {} ({} points, |rho|max up to {})",
+                s.param,
+                num(r.from),
+                num(r.to),
+                r.points,
+                num(r.rho_max)
+            )?;
+        }
+    }
     let stride = (s.points.len() / 40).max(1);
-    for p in s.points.iter().step_by(stride) {
+    let shown: Vec<_> = s
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(i, p)| {
+            let edge = s.unstable_ranges.iter().any(|r| p.value == r.from || p.value == r.to);
+            i % stride == 0 || i + 1 == s.points.len() || edge || !p.trusted || p.error.is_some()
+        })
+        .map(|(_, p)| p)
+        .collect();
+    if shown.len() < s.points.len() {
+        writeln!(
+            w,
+            "rows thinned: {} of {} points shown (every {stride}th, the ends of each unstable range, every untrusted or failed one; all in --json)",
+            shown.len(),
+            s.points.len()
+        )?;
+    }
+    writeln!(w, "{:>14} {:>14} {:>8} {:>8}  lines", s.param, "|rho|max", "stable", "trusted")?;
+    for p in shown {
         match (p.rho_max, &p.error) {
             (Some(r), _) => {
-                let lines: Vec<String> = p.lines.iter().map(|l| format!("{}={:.3e}", l.0, l.1)).collect();
+                let lines: Vec<String> = p.lines.iter().map(|l| format!("{}={}", l.0, num(l.1))).collect();
                 let trusted = if p.trusted { "yes" } else { "NO" };
-                let stable = p.stable.unwrap_or(false);
-                writeln!(w, "{:>14.6} {:>14.6e} {:>8} {:>8}  {}", p.value, r, stable, trusted, lines.join(" "))?;
+                let stable = if p.stable == Some(true) { "yes" } else { "NO" };
+                writeln!(w, "{:>14} {:>14} {:>8} {:>8}  {}", num(p.value), num(r), stable, trusted, lines.join(" "))?;
             }
-            (None, e) => writeln!(w, "{:>14.6} failed: {}", p.value, e.clone().unwrap_or_default())?,
+            (None, e) => writeln!(w, "{:>14} failed: {}", num(p.value), e.clone().unwrap_or_default())?,
         }
     }
     Ok(())
@@ -293,28 +367,28 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
     match &r.local_fault {
         Some(f) => writeln!(
             w,
-            "LOCAL FAULT      {} on {} tooth {}: depth {:.4e} {} (removes {:.1} % of the residual, significance {:.2e})",
+            "LOCAL FAULT      {} on {} tooth {}: {} (removes {} % of the residual, significance {})",
             f.kind.name(),
             f.gear.name(),
             f.tooth,
-            f.depth,
-            f.depth_unit,
-            100.0 * f.improvement,
-            f.significance
+            fault_size(f.kind, f.depth),
+            num(100.0 * f.improvement),
+            num(f.significance)
         )?,
         None if r.fault_candidates.is_empty() => writeln!(w, "local fault      not searched (--faults crack,pit)")?,
-        None => writeln!(w, "local fault      none fits better than none beyond the noise")?,
+        None => {
+            writeln!(w, "local fault      none: no pit or crack on any tooth explains the lines beyond their noise")?
+        }
     }
     for c in &r.fault_candidates {
         writeln!(
             w,
-            "  candidate      {} on {} tooth {}: depth {:.4e} {}, significance {:.3e} (reported above 25)",
+            "  candidate      {} on {} tooth {}: {}, significance {} (reported above 25)",
             c.kind.name(),
             c.gear.name(),
             c.tooth,
-            c.depth,
-            c.depth_unit,
-            c.significance
+            fault_size(c.kind, c.depth),
+            num(c.significance)
         )?;
     }
     for n in &r.warnings {

@@ -86,7 +86,8 @@ pub fn summarize(scene: &Scene, field: &str, points: Vec<SweepPoint>) -> Result<
         }
         .into());
     }
-    Ok(SweepSummary { param: field.to_string(), points, scene: scene.name.clone() })
+    let unstable_ranges = crate::report::summary::unstable_ranges(&points);
+    Ok(SweepSummary { param: field.to_string(), points, scene: scene.name.clone(), unstable_ranges })
 }
 
 /// Dotted JSON path of a parameter: an alias (`speed`, `damping`, `load`) or any numeric field of the scene

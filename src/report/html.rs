@@ -61,6 +61,7 @@ pub fn write(dir: &Path, title: &str, sections: &[Section]) -> Result<PathBuf, R
     for s in sections {
         section(&mut page, s)?;
     }
+    glossary(&mut page);
     page.push_str("<footer>gearvib ");
     page.push_str(env!("CARGO_PKG_VERSION"));
     page.push_str(" &middot; images are also in this directory as PNG files</footer>\n</body></html>\n");
@@ -71,15 +72,168 @@ pub fn write(dir: &Path, title: &str, sections: &[Section]) -> Result<PathBuf, R
     Ok(path)
 }
 
-const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;max-width:60em;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.4}\
-h1{font-size:1.5em;border-bottom:2px solid #444;padding-bottom:.2em}h2{font-size:1.25em;margin-top:1.6em;border-bottom:1px solid #aaa}\
-.verdict{font-size:1.15em;margin:.6em 0}.badge{display:inline-block;padding:.15em .6em;border-radius:.3em;color:#fff;font-weight:bold;margin-right:.5em}\
-.healthy{background:#2e7d32}.suspect{background:#ef6c00}.faulty{background:#c62828}\
-ul.reasons li{margin:.2em 0}.facts{color:#444;font-size:.92em}.facts p{margin:.15em 0}\
-table{border-collapse:collapse;margin:.8em 0;font-size:.85em}caption{text-align:left;font-weight:bold;padding:.3em 0}\
-th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child{text-align:left}\
-tr.hit td{background:#fde0dc;font-weight:bold}figure{margin:1em 0;page-break-inside:avoid;break-inside:avoid}img{max-width:100%;height:auto;border:1px solid #ddd}\
-footer{margin-top:2em;font-size:.8em;color:#777}@page{size:A4;margin:14mm}@media print{body{max-width:none;margin:0}h2{page-break-after:avoid}table{page-break-inside:avoid}}";
+/// The page's style. Sizes in points so that the printed page keeps them: the smallest text (tables,
+/// notes, footer) is 9 pt; images span the text width, which on A4 is 182 mm, the width the images are
+/// drawn for (see `plot::PAGE_WIDTH_PX`).
+const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;font-size:11pt;max-width:60em;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.4}\
+h1{font-size:16pt;border-bottom:2px solid #444;padding-bottom:.2em}h2{font-size:13.5pt;margin-top:1.6em;border-bottom:1px solid #aaa}\
+.verdict{font-size:12.5pt;margin:.6em 0}.badge{display:inline-block;padding:.15em .6em;border-radius:.3em;color:#fff;font-weight:bold;margin-right:.5em}\
+.healthy{background:#2e7d32}.suspect{background:#ef6c00}.faulty{background:#c62828}.not_judged{background:#616161}\
+ul.reasons li{margin:.2em 0}.facts{color:#444;font-size:10pt}.facts p{margin:.15em 0}\
+table{border-collapse:collapse;margin:.8em 0;font-size:9.5pt}caption{text-align:left;font-weight:bold;padding:.3em 0}\
+th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child,td.t{text-align:left}\
+tr.hit td{background:#fde0dc;font-weight:bold}figure{margin:1em 0;page-break-inside:avoid;break-inside:avoid}img{display:block;max-width:100%;height:auto;border:1px solid #ddd}\
+dl.glossary{font-size:9.5pt}dl.glossary dt{font-weight:bold;margin-top:.4em}dl.glossary dd{margin-left:1.5em}\
+footer{margin-top:2em;font-size:9pt;color:#555}@page{size:A4;margin:14mm}\
+@media print{body{max-width:none;margin:0;padding:0;font-size:10.5pt}img{width:100%;max-width:100%}h2{page-break-after:avoid;break-after:avoid}table{page-break-inside:avoid}}";
+
+/// The terms a page may use, each explained once in the glossary at its end: (term as shown, the words
+/// that reveal it on the page, explanation). Definitions as in `signal::indicators` (after Lebold et al.
+/// 2000, Decker 2002, Zakrajsek et al. 1993; see the project's diagnostics reference).
+const GLOSSARY: &[(&str, &[&str], &str)] = &[
+    (
+        "TSA (time-synchronous average)",
+        &["TSA", "time-synchronous"],
+        "the signal resampled on the tracked angle of one shaft and averaged over its revolutions: what does not repeat with that shaft (noise, the other gear) averages out.",
+    ),
+    (
+        "residual signal",
+        &["residual"],
+        "the TSA without the shaft orders 1-2 and the mesh harmonics: what is left shows a local fault on one tooth.",
+    ),
+    (
+        "difference signal",
+        &["difference"],
+        "the residual also without the first-order sidebands of the mesh harmonics; FM4, M6A and M8A are computed on it.",
+    ),
+    (
+        "FM0",
+        &["FM0"],
+        "peak-to-peak of the TSA divided by the sum of the mesh-harmonic amplitudes: rises with a broken tooth or heavy wear.",
+    ),
+    (
+        "FM4",
+        &["FM4"],
+        "kurtosis (normalised 4th moment) of the difference signal: about 3 for a healthy gear, above 3 when one or a few teeth are damaged.",
+    ),
+    (
+        "M6A, M8A",
+        &["M6A", "M8A"],
+        "6th and 8th normalised moments of the difference signal (15 and 105 for Gaussian noise): more sensitive to single peaks than FM4.",
+    ),
+    (
+        "NA4",
+        &["NA4"],
+        "kurtosis of the residual signal normalised by the mean variance of the residuals of all recordings so far in time order: about 3 when healthy, and it keeps growing as damage spreads.",
+    ),
+    (
+        "NA4*",
+        &["NA4*"],
+        "NA4 normalised by the residual variance of the healthy baseline only (Decker): a different number from NA4 when a baseline is given.",
+    ),
+    (
+        "ER (energy ratio)",
+        &["ER "],
+        "RMS of the difference signal over RMS of the regular (mesh) signal: rises with wear spread over many teeth.",
+    ),
+    (
+        "SI, SLF, SER",
+        &["SI", "SLF", "SER"],
+        "sideband indicators around the first mesh harmonic: SI the mean of the first sideband pair, SLF that pair over the TSA RMS, SER the six sideband pairs over the mesh line (above 1: the sidebands outweigh the mesh).",
+    ),
+    (
+        "kurtosis, crest factor, RMS",
+        &["kurtosis", "crest", "RMS"],
+        "4th normalised moment (3 for Gaussian noise), peak over RMS, and root mean square of the signal named.",
+    ),
+    ("spectral change", &["spectral change"], "the distance in dB of a block's order spectrum from the baseline's."),
+    (
+        "spreads",
+        &["spreads"],
+        "how far an indicator lies from the healthy baseline's centre, in units of the baseline's spread (1.4826 times the median absolute deviation of its blocks, on a logarithmic scale for ratio indicators): a robust z-score.",
+    ),
+    (
+        "suspect and faulty limits",
+        &["suspect at", "suspect limit", "faulty at", "faulty limit"],
+        "Student-t prediction limits in spreads for a false-alarm rate of 1e-3 (suspect) and 1e-6 (faulty) per indicator, given the number of baseline blocks.",
+    ),
+    (
+        "baseline",
+        &["baseline"],
+        "healthy recordings of the same machine, cut into blocks of whole revolutions; their indicators' spread sets the limits.",
+    ),
+    (
+        "mesh harmonic, order",
+        &["mesh", "order"],
+        "the tooth-mesh frequency (teeth times shaft speed) and its multiples; an order is a multiple of a shaft's rotation, so lines stay at the same order when the speed changes.",
+    ),
+    (
+        "sideband",
+        &["sideband"],
+        "a line beside a mesh harmonic at a multiple of a shaft's speed: modulation by that shaft (eccentricity, a cracked or pitted tooth). Marked only when 12 dB over the local noise floor.",
+    ),
+    (
+        "kurtogram, spectral kurtosis",
+        &["kurtogram", "spectral kurtosis"],
+        "the kurtosis of the signal filtered in bands of halving widths (levels): impulsive bands (a fault's impacts) stand out; 0 for Gaussian noise.",
+    ),
+    (
+        "envelope spectrum",
+        &["envelope"],
+        "the spectrum of the squared envelope of one band, in orders of the tracked shaft: a local fault gives a line at its shaft's order.",
+    ),
+    (
+        "cepstrum, rahmonic",
+        &["cepstrum"],
+        "the inverse transform of the log power spectrum; a family of equally spaced lines (one shaft's sidebands) becomes one peak and its rahmonics at the shaft's period.",
+    ),
+    (
+        "rpm-order map",
+        &["order map", "rpm-order"],
+        "order spectra of successive groups of revolutions against their speed: lines of the machine stay vertical, a resonance crosses them.",
+    ),
+    (
+        "Floquet multipliers, |rho|max",
+        &["multiplier"],
+        "eigenvalues of the monodromy matrix of the periodic system; stable when all lie inside the unit circle (|rho|max < 1).",
+    ),
+    (
+        "chi2/dof",
+        &["chi2"],
+        "the fit's weighted squared residual per degree of freedom: about 1 when the model explains the lines to their noise.",
+    ),
+    (
+        "velocity RMS, ISO zones",
+        &["velocity RMS"],
+        "the RMS vibration velocity over 10-1000 Hz in mm/s; the zones A (new), B (long-term), C (limited time), D (damaging) of ISO 10816-3 / 20816-3 for the machine class given.",
+    ),
+];
+
+/// Whether `needle` occurs in `text` as a whole word (acronyms must not match inside other words).
+fn has_word(text: &str, needle: &str) -> bool {
+    let word = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric());
+    text.match_indices(needle).any(|(i, _)| {
+        let before = text[..i].chars().next_back();
+        let after = text[i + needle.len()..].chars().next();
+        // lower-case words may take an ending ("sidebands"); acronyms may not ("SI" is not in "SIDE")
+        !word(before) && (!word(after) || needle.chars().any(char::is_lowercase))
+    })
+}
+
+/// The glossary of the terms `page` uses, appended to it.
+fn glossary(page: &mut String) {
+    // the page's words, without the embedded images
+    let text: String = page.split("data:image/png;base64,").map(|p| p.split_once('"').map_or(p, |x| x.1)).collect();
+    let used: Vec<_> = GLOSSARY.iter().filter(|(_, needles, _)| needles.iter().any(|n| has_word(&text, n))).collect();
+    if used.is_empty() {
+        return;
+    }
+    page.push_str("<section><h2>Glossary</h2><dl class=\"glossary\">");
+    for (term, _, meaning) in used {
+        let _ = write!(page, "<dt>{}</dt><dd>{}</dd>", escape(term), escape(meaning));
+    }
+    page.push_str("</dl></section>\n");
+}
 
 fn section(page: &mut String, s: &Section) -> Result<(), ReportError> {
     let _ = writeln!(page, "<section><h2>{}</h2>", escape(&s.heading));
@@ -135,7 +289,10 @@ fn table(page: &mut String, t: &Table) {
     for (row, hit) in &t.rows {
         page.push_str(if *hit { "<tr class=\"hit\">" } else { "<tr>" });
         for c in row {
-            let _ = write!(page, "<td>{}</td>", escape(c));
+            // words read from the left, numbers line up on the right
+            let numeric = c.starts_with(|ch: char| ch.is_ascii_digit() || ch == '-' || ch == '+' || ch == '.');
+            let class = if numeric { "" } else { " class=\"t\"" };
+            let _ = write!(page, "<td{class}>{}</td>", escape(c));
         }
         page.push_str("</tr>\n");
     }
@@ -165,54 +322,72 @@ pub fn base64(bytes: &[u8]) -> String {
     out
 }
 
-/// A number for a table cell: four significant digits, scientific notation when very small or large.
+/// A number for a table cell: four significant digits ([`super::format::num`]).
 pub fn cell(v: f64) -> String {
-    if !v.is_finite() {
-        "-".into()
-    } else if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
-        format!("{v:.3e}")
-    } else {
-        format!("{v:.4}")
-    }
+    super::format::num(v)
+}
+
+/// Channel numbers as a list: "1, 2".
+fn channel_list(c: &[usize]) -> String {
+    c.iter().map(usize::to_string).collect::<Vec<_>>().join(", ")
 }
 
 /// The section of one diagnosis: verdict and reasons, speed and tracking, warnings, the indicator table
 /// against the baseline's band (or the indicators without one), the images.
-pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
-    let unit = if d.unit.is_empty() { "unit of the file" } else { d.unit.as_str() };
+pub fn diagnosis_section(
+    d: &Diagnosis,
+    images: &[PathBuf],
+    iso_class: Option<crate::signal::velocity::MachineClass>,
+) -> Section {
+    let unit = super::figures::unit_or(&d.unit);
     let mut facts = vec![match d.sample_rate_hz {
-        Some(fs) => format!("{} samples at {fs} Hz, channels {:?}, amplitudes in {unit}", d.samples, d.channels),
-        None => format!("{} samples, sample rate unknown (orders only), channels {:?}", d.samples, d.channels),
+        Some(fs) => format!(
+            "{} samples at {} Hz, channel(s) {}; amplitudes in {unit}.",
+            d.samples,
+            cell(fs),
+            channel_list(&d.channels)
+        ),
+        None => format!(
+            "{} samples, sample rate unknown: everything in orders of the shaft, no value in Hz; channel(s) {}.",
+            d.samples,
+            channel_list(&d.channels)
+        ),
     }];
     let shafts: Vec<String> = d
         .shaft_hz
         .entries()
         .into_iter()
         .map(|(k, v)| {
-            v.map_or(format!("{k}: period {:.2} samples", d.shaft_period_samples), |f| format!("{k} {f:.4} Hz"))
+            let k = if k == "estimated_shaft" { "shaft of the estimated period" } else { k };
+            v.map_or(format!("{k}: one revolution every {} samples", cell(d.shaft_period_samples)), |f| {
+                format!("{k} {} Hz ({} rpm)", cell(f), cell(60.0 * f))
+            })
         })
         .collect();
     facts.push(match (d.speed_given_hz, d.speed_deviation_percent) {
-        (Some(g), Some(off)) => {
-            format!("Speed: {} (measured; the given {g:.4} Hz is {off:+.2} % from it).", shafts.join(", "))
-        }
-        _ => format!("Speed: {} ({}).", shafts.join(", "), d.speed_source),
+        (Some(g), Some(off)) => format!(
+            "Speed: {} (measured on the recording; the given {g:.4} Hz is {off:+.2} % from it).",
+            shafts.join(", ")
+        ),
+        _ => format!("Speed: {}; {}.", shafts.join(", "), speed_words(d.speed_source)),
     });
     let p = &d.speed_profile;
     facts.push(format!(
-        "Tracking: {}{}; change over the recording {:+.3} %.",
+        "Shaft angle tracked by {}{}; speed change over the recording {} %.",
         p.tracking,
         match (p.min_hz, p.max_hz) {
-            (Some(lo), Some(hi)) => format!(", revolutions from {lo:.4} to {hi:.4} Hz"),
+            (Some(lo), Some(hi)) => format!(", revolutions from {} to {} Hz", cell(lo), cell(hi)),
             _ => String::new(),
         },
-        p.change_percent
+        cell(p.change_percent)
     ));
-    facts.push(format!("Mesh: order {} ({}).", d.mesh_order, d.teeth_source));
+    facts.push(format!("Mesh: order {} of the reference shaft (teeth {}).", d.mesh_order, d.teeth_source));
+    facts.push(velocity_words(d, iso_class));
     if let Some(g) = &d.other_gear {
         facts.push(format!(
-            "Meshing gear: {} teeth (estimated from its sidebands, confidence {:.2}).",
-            g.teeth, g.confidence
+            "Meshing gear: {} teeth (estimated from its sidebands, confidence {}).",
+            g.teeth,
+            super::format::sig(g.confidence, 2)
         ));
     }
     facts.extend(d.warnings.iter().map(|w| format!("Warning: {w}")));
@@ -221,7 +396,10 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         let keys = ["fm0", "fm4", "m6a", "na4", "er", "si", "ser", "kurtosis", "crest_factor"];
         let mut t = Table {
             caption: "Condition indicators (no baseline: absolute limits FM4 4.5/6, M6A 40/80, NA4 4.5/6)".into(),
-            header: ["gear", "ch"].iter().chain(keys.iter()).map(|s| s.to_uppercase()).collect(),
+            header: ["gear".to_string(), "channel".to_string()]
+                .into_iter()
+                .chain(keys.iter().map(|k| super::figures::indicator_label(k)))
+                .collect(),
             rows: Vec::new(),
         };
         for g in &d.gears {
@@ -233,7 +411,7 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
     } else {
         let mut t = Table {
             caption: "Indicators against the statistical baseline (median of this recording's blocks; spreads from the baseline's centre; limits for false-alarm rates 1e-3 and 1e-6)".into(),
-            header: ["gear", "ch", "indicator", "value", "baseline centre", "baseline range", "spreads", "suspect at", "faulty at"]
+            header: ["gear", "channel", "indicator", "value", "baseline centre", "baseline range", "spreads", "suspect at", "faulty at"]
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
@@ -245,13 +423,13 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
                 vec![
                     s.gear.name().to_string(),
                     s.channel.to_string(),
-                    indicator_name(&s.indicator),
+                    super::figures::indicator_label(&s.indicator),
                     cell(s.value),
                     cell(s.baseline_centre),
-                    format!("{} .. {}", cell(s.baseline_range[0]), cell(s.baseline_range[1])),
-                    if s.decides { format!("{:.1}", s.spreads) } else { "near zero".into() },
-                    format!("{:.1}", s.suspect_at),
-                    format!("{:.1}", s.faulty_at),
+                    format!("{} to {}", cell(s.baseline_range[0]), cell(s.baseline_range[1])),
+                    if s.decides { super::format::sig(s.spreads, 3) } else { "near zero".into() },
+                    super::format::sig(s.suspect_at, 3),
+                    super::format::sig(s.faulty_at, 3),
                 ],
                 hit,
             ));
@@ -262,7 +440,7 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
         heading: Path::new(&d.file).file_name().and_then(|n| n.to_str()).unwrap_or(&d.file).to_string(),
         verdict: Some(Badge {
             state: d.verdict.state,
-            word: d.verdict.state.name().to_uppercase(),
+            word: d.verdict.state.name().replace('_', " ").to_uppercase(),
             line: format!("gear: {}", d.verdict.place()),
         }),
         reasons: d
@@ -278,12 +456,95 @@ pub fn diagnosis_section(d: &Diagnosis, images: &[PathBuf]) -> Section {
     }
 }
 
-/// How an indicator key reads in a table: `na4_star` is NA4*, `spectral_change` "spectral change".
-fn indicator_name(key: &str) -> String {
-    match key {
-        "na4_star" => "NA4*".into(),
-        "spectral_change" => "spectral change".into(),
-        k => k.to_uppercase(),
+/// Lower edge, upper edge of the overall-velocity band, Hz (ISO 10816-3 for machines above 600 rpm).
+const VELOCITY_BAND_HZ: (f64, f64) = (10.0, 1000.0);
+
+/// The overall velocity RMS of the deciding channel over 10-1000 Hz in mm/s, and with a machine class its
+/// ISO 10816-3 zone and boundaries; or why it could not be computed.
+pub fn velocity_words(d: &Diagnosis, iso_class: Option<crate::signal::velocity::MachineClass>) -> String {
+    use crate::signal::velocity::{measured_from_unit, velocity_rms_mm_s};
+    let (lo, hi) = VELOCITY_BAND_HZ;
+    let why_not = |why: String| format!("Overall velocity RMS over {lo}-{hi} Hz not computed: {why}.");
+    let Some((ch, spectrum)) = d.spectra().first() else {
+        return why_not("the sample rate is unknown".into());
+    };
+    let Some(measured) = measured_from_unit(&d.unit) else {
+        return why_not(if d.unit.is_empty() {
+            "the file names no unit (give --unit m/s, mm/s, m/s^2 or g)".into()
+        } else {
+            format!("the unit {} is neither a velocity nor an acceleration", d.unit)
+        });
+    };
+    let Some(v) = velocity_rms_mm_s(spectrum, measured, VELOCITY_BAND_HZ) else {
+        return why_not(format!("the sample rate does not reach {hi} Hz"));
+    };
+    let integrated = match measured {
+        crate::signal::velocity::Measured::Acceleration(_) => ", integrated from the acceleration",
+        crate::signal::velocity::Measured::Velocity(_) => "",
+    };
+    let mut s =
+        format!("Overall velocity RMS over {lo}-{hi} Hz: {} mm/s (channel {ch}{integrated})", super::format::sig(v, 3));
+    match iso_class {
+        Some(c) => {
+            let [ab, bc, cd] = c.boundaries_mm_s();
+            let _ = write!(
+                s,
+                "; ISO 10816-3 / 20816-3 {}: {} (boundaries A/B {ab}, B/C {bc}, C/D {cd} mm/s, as publicly quoted, not checked against the standard's text).",
+                c.name(),
+                c.zone(v).words()
+            );
+        }
+        None => s.push_str("; give --iso-class for its ISO 10816-3 / 20816-3 zone."),
+    }
+    s
+}
+
+fn speed_words(s: super::summary::SpeedSource) -> &'static str {
+    match s {
+        super::summary::SpeedSource::Given => "given on the command line",
+        super::summary::SpeedSource::Tachometer => "from the tachometer",
+        super::summary::SpeedSource::Estimated => "estimated from the signal",
+    }
+}
+
+/// The section that opens a trend page: the trend images and one row per recording with its verdict, gear
+/// and first reason, in time order as given.
+pub fn trend_section(done: &[Diagnosis], images: &[PathBuf]) -> Section {
+    let names = super::figures::short_names(&done.iter().map(|d| d.file.clone()).collect::<Vec<_>>());
+    let rows = done
+        .iter()
+        .zip(&names)
+        .map(|(d, short)| {
+            let file = Path::new(&d.file).file_name().and_then(|n| n.to_str()).unwrap_or(&d.file).to_string();
+            let worst = d.scores.iter().filter(|s| s.decides).map(|s| s.spreads).fold(f64::NAN, f64::max);
+            (
+                vec![
+                    short.split(' ').next().unwrap_or("").to_string(),
+                    file,
+                    d.verdict.state.name().replace('_', " "),
+                    d.verdict.gear.name().to_string(),
+                    super::format::sig(worst, 3),
+                    d.verdict.reasons.first().cloned().unwrap_or_default(),
+                ],
+                d.verdict.state != VerdictState::Healthy,
+            )
+        })
+        .collect();
+    Section {
+        heading: format!("Trend over {} recordings (time order as given)", done.len()),
+        facts: vec![
+            "Every scored indicator in spreads from the baseline's centre, one panel per gear and indicator family, with the suspect and faulty limits; the numbers are in trend.csv and trend.jsonl.".into(),
+        ],
+        tables: vec![Table {
+            caption: "Verdict of each recording (rows not healthy highlighted)".into(),
+            header: ["#", "recording", "verdict", "gear", "largest spreads", "first reason"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            rows,
+        }],
+        images: images.to_vec(),
+        ..Default::default()
     }
 }
 
@@ -346,7 +607,7 @@ pub fn sweep_section(s: &SweepSummary, images: &[PathBuf]) -> Section {
     let count = |f: &dyn Fn(&super::summary::SweepPoint) -> bool| s.points.iter().filter(|p| f(p)).count();
     let unstable = count(&|p| p.stable == Some(false));
     Section {
-        heading: format!("{}: sweep of {}", s.scene, s.param),
+        heading: format!("{}: sweep of {}", s.scene, super::figures::parameter_label(&s.param)),
         verdict: Some(Badge {
             state: if unstable > 0 { VerdictState::Suspect } else { VerdictState::Healthy },
             word: if unstable > 0 { "UNSTABLE POINTS" } else { "ALL STABLE" }.into(),
@@ -359,7 +620,22 @@ pub fn sweep_section(s: &SweepSummary, images: &[PathBuf]) -> Section {
             count(&|p| !p.trusted && p.error.is_none()),
             count(&|p| p.error.is_some())
         )],
-        tables: Vec::new(),
+        tables: if s.unstable_ranges.is_empty() {
+            Vec::new()
+        } else {
+            vec![Table {
+                caption: format!(
+                    "Unstable ranges of {} (runs of consecutive unstable points)",
+                    super::figures::parameter_label(&s.param)
+                ),
+                header: ["from", "to", "points", "largest |rho|max"].iter().map(|h| h.to_string()).collect(),
+                rows: s
+                    .unstable_ranges
+                    .iter()
+                    .map(|r| (vec![cell(r.from), cell(r.to), r.points.to_string(), cell(r.rho_max)], true))
+                    .collect(),
+            }]
+        },
         images: images.to_vec(),
     }
 }

@@ -2,8 +2,9 @@
 //! profile deviation with its uncertainty, and the residual against the noise.
 
 use super::ReportError;
+use super::format::{num, percent, sig};
 use super::html::{Badge, Section, Table, cell};
-use super::plot::{Chart, Marker, Series, Style, render_png};
+use super::plot::{Chart, Marker, PAGE_WIDTH_PX, Series, Style, render_png};
 use super::summary::{Identification, PerTooth, PhaseOrigin, VerdictState};
 use std::path::{Path, PathBuf};
 
@@ -19,14 +20,14 @@ pub fn figures(out: &Identification, dir: &Path) -> Result<Vec<PathBuf>, ReportE
     let stem = stem(out);
     let mut files = Vec::new();
     let lines = dir.join(format!("{stem}-identify-lines.png"));
-    render_png(&lines, 1500, 620, &[lines_chart(out, &stem)])?;
+    render_png(&lines, PAGE_WIDTH_PX, 600, &[lines_chart(out, &stem)])?;
     files.push(lines);
     let teeth = dir.join(format!("{stem}-identify-teeth.png"));
     let charts = teeth_charts(out, &stem);
-    render_png(&teeth, 1500, 480 * charts.len() as u32, &charts)?;
+    render_png(&teeth, PAGE_WIDTH_PX, 460 * charts.len() as u32, &charts)?;
     files.push(teeth);
     let residual = dir.join(format!("{stem}-identify-residual.png"));
-    render_png(&residual, 1500, 560, &[residual_chart(out, &stem)])?;
+    render_png(&residual, PAGE_WIDTH_PX, 560, &[residual_chart(out, &stem)])?;
     files.push(residual);
     Ok(files)
 }
@@ -56,7 +57,7 @@ fn lines_chart(out: &Identification, stem: &str) -> Chart {
     }
     Chart {
         title: format!("{stem}: measured lines against the fitted gear model ({} mesh harmonics)", out.mesh_harmonics),
-        x_label: "pinion order".into(),
+        x_label: "pinion order [-]".into(),
         y_label: format!("amplitude [{}]", out.unit),
         y_log: true,
         series,
@@ -73,7 +74,7 @@ fn residual_chart(out: &Identification, stem: &str) -> Chart {
     noise.sort_by(|a, b| a.0.total_cmp(&b.0));
     Chart {
         title: format!("{stem}: what the fitted model leaves (|measured - model| per line)"),
-        x_label: "pinion order".into(),
+        x_label: "pinion order [-]".into(),
         y_label: format!("residual amplitude [{}]", out.unit),
         y_log: true,
         series: vec![
@@ -120,13 +121,13 @@ fn teeth_chart(out: &Identification, stem: &str, gear: &str, dev: &PerTooth, std
         .filter(|f| f.gear == gear_of)
         .map(|f| Marker {
             x: f.tooth as f64,
-            label: format!("{} {} {}", f.kind.name(), cell(f.depth), if f.depth_unit == "m" { "m" } else { "loss" }),
+            label: format!("{}: {}", f.kind.name(), fault_size(f.kind, f.depth)),
             color: 1,
         })
         .collect();
     Chart {
         title: format!("{stem}: {gear} profile deviation at each tooth's mesh position"),
-        x_label: format!("{gear} tooth ({origin})"),
+        x_label: format!("{gear} tooth [-] ({origin})"),
         y_label: "deviation e [um]".into(),
         series: vec![
             Series { name: "fitted deviation".into(), points: bars, style: Style::Bars, color: 0 },
@@ -138,6 +139,19 @@ fn teeth_chart(out: &Identification, stem: &str, gear: &str, dev: &PerTooth, std
     }
 }
 
+/// The size of a local fault in words: a crack as the share of the tooth's mesh stiffness it removes
+/// ("29.9 % stiffness loss"), a pit as its depth in micrometres; a negative pit depth is material added,
+/// not a pit, and said so.
+pub fn fault_size(kind: super::summary::FaultKind, depth: f64) -> String {
+    match kind {
+        super::summary::FaultKind::Crack => format!("{} stiffness loss", percent(depth)),
+        super::summary::FaultKind::Pit if depth >= 0.0 => format!("{} um deep", sig(depth * 1e6, 3)),
+        super::summary::FaultKind::Pit => {
+            format!("no pit: the fit adds {} um of material (a bump, not a pit)", sig(-depth * 1e6, 3))
+        }
+    }
+}
+
 /// The section of `index.html`: the local fault (or none) as the badge, the error harmonics and gains.
 pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
     let badge = match &out.local_fault {
@@ -145,14 +159,13 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             state: VerdictState::Faulty,
             word: "LOCAL FAULT".into(),
             line: format!(
-                "{} on {} tooth {}: depth {} {} (explains {:.0} % of the residual; significance {:.2e}, reported above 25)",
+                "{} on {} tooth {}: {} (explains {} of the residual; significance {}, reported above 25)",
                 f.kind.name(),
                 f.gear.name(),
                 f.tooth,
-                cell(f.depth),
-                f.depth_unit,
-                100.0 * f.improvement,
-                f.significance
+                fault_size(f.kind, f.depth),
+                percent(f.improvement),
+                num(f.significance)
             ),
         },
         None => Badge {
@@ -161,7 +174,7 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             line: if out.fault_candidates.is_empty() {
                 "no local-fault search asked (--faults crack,pit)".into()
             } else {
-                "no pit or crack fits better than none beyond the noise".into()
+                "no local fault: no pit or crack on any tooth explains the lines beyond their noise".into()
             },
         },
     };
@@ -208,7 +221,7 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
                 "kind".into(),
                 "gear".into(),
                 "tooth".into(),
-                "depth".into(),
+                "size".into(),
                 "explains".into(),
                 "significance".into(),
             ],
@@ -225,9 +238,9 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
                             c.kind.name().into(),
                             c.gear.name().into(),
                             c.tooth.to_string(),
-                            format!("{} {}", cell(c.depth), c.depth_unit),
-                            format!("{:.1} %", 100.0 * c.improvement),
-                            format!("{:.3e}", c.significance),
+                            fault_size(c.kind, c.depth),
+                            percent(c.improvement),
+                            num(c.significance),
                         ],
                         reported,
                     )

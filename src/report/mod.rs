@@ -1,6 +1,7 @@
 //! Reports: JSON summaries (serde), PNG images (plotters) and one HTML page per report directory.
 
 pub mod figures;
+pub mod format;
 pub mod html;
 pub mod identify;
 pub mod plot;

@@ -9,6 +9,7 @@ pub mod order_map;
 pub mod spectrum;
 pub mod speed;
 pub mod tsa;
+pub mod velocity;
 
 /// Errors of the signal layer.
 #[derive(Debug, thiserror::Error)]

@@ -76,6 +76,8 @@ pub struct DiagnoseJob<'a> {
     /// apply alike). Their samples may be lent (`Cow::Borrowed`): they are read in place, never copied
     /// unless `--sensitivity` must scale them.
     pub in_memory: Vec<(PathBuf, Recording<'a>)>,
+    /// Machine class whose ISO 10816-3 velocity zones the report states (none: the velocity alone).
+    pub iso_class: Option<crate::signal::velocity::MachineClass>,
 }
 
 /// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
@@ -106,20 +108,14 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             let files = write_report(d, dir)?;
             let images: Vec<PathBuf> =
                 files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
-            sections.push(crate::report::html::diagnosis_section(d, &images));
+            sections.push(crate::report::html::diagnosis_section(d, &images, job.iso_class));
             report_files.extend(files);
         }
         if done.len() >= 2 && reference {
             let files = trend::write(dir, &done)?;
-            sections.insert(
-                0,
-                crate::report::html::Section {
-                    heading: format!("Trend over {} recordings (time order as given)", done.len()),
-                    facts: vec!["Every scored indicator in spreads from the baseline's centre; the table is in trend.csv and trend.jsonl.".into()],
-                    images: files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect(),
-                    ..Default::default()
-                },
-            );
+            let images: Vec<PathBuf> =
+                files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
+            sections.insert(0, crate::report::html::trend_section(&done, &images));
             report_files.extend(files);
         }
         report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);

@@ -8,16 +8,40 @@ use super::*;
 /// # Errors
 /// Non-finite data or write failures.
 pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
-    let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
     let mut out = Vec::new();
-    // TSA of each gear (first channel)
-    let ch = d.channels[0];
+    for f in diagnosis_figures(d) {
+        let p = dir.join(&f.file);
+        render_png(&p, f.width, f.height, &f.charts)?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// One image of a report: its file name, size in pixels and charts (stacked).
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// File name (no directory).
+    pub file: String,
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+    /// The charts, top to bottom.
+    pub charts: Vec<Chart>,
+}
+
+/// The images of one diagnosis, as [`diagnosis`] writes them (file names start with the recording's stem).
+pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
+    let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
+    let mut figures = Vec::new();
+    // TSA of each gear on the channel that decided the verdict
+    let ch = deciding_channel(d);
     // angle axis in teeth of the gear (tooth k between k - 1 and k), the origin at the tachometer pulse or,
     // with mesh-phase tracking, arbitrary
     let origin = if d.speed_profile.tracking.tachometer_origin() {
-        "origin: tachometer pulse"
+        "origin at the tachometer pulse"
     } else {
-        "origin arbitrary (no tachometer)"
+        "origin arbitrary: no tachometer"
     };
     let tsas: Vec<Chart> = d
         .tsas()
@@ -27,8 +51,12 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
             let along = |v: &[f64]| -> Vec<(f64, f64)> {
                 v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
             };
-            let x_label = format!("{} tooth in mesh (tooth k spans k-1 .. k of {}; {origin})", g.gear, g.mesh_order);
-            let mut tsa_series = vec![Series { name: "TSA".into(), points: along(t), style: Style::Line, color: 0 }];
+            let x_label = if g.gear == Shaft::Estimated {
+                format!("mesh cycle [cycle k spans k-1 to k of {}; {origin}]", g.mesh_order)
+            } else {
+                format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order)
+            };
+            let mut tsa_series = Vec::new();
             // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
             if let Some((_, _, b)) = d
                 .baseline_tsas
@@ -45,13 +73,15 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                     name: format!("healthy baseline TSA ({how})"),
                     points: along(&b),
                     style: Style::Line,
-                    color: 8,
+                    color: BASELINE_GREY,
                 });
             }
+            // the recording over its baseline
+            tsa_series.push(Series { name: "TSA of this recording".into(), points: along(t), style: Style::Line, color: 0 });
             [
                 Chart {
                     title: format!(
-                        "{stem}: time-synchronous average, {} (channel {ch}, {} revolutions)",
+                        "Time-synchronous average of the {} (channel {ch}, {} revolutions)",
                         g.gear, g.revolutions
                     ),
                     x_label: x_label.clone(),
@@ -62,11 +92,11 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
                 },
                 Chart {
                     title: format!(
-                        "{stem}: residual (TSA without shaft orders 1-2 and mesh harmonics) and difference, {}",
+                        "Residual (TSA without shaft orders 1-2 and the mesh harmonics) and difference signal of the {}",
                         g.gear
                     ),
                     x_label,
-                    y_label: format!("residual, difference [{}]", unit_or(&d.unit)),
+                    y_label: format!("signal [{}]", unit_or(&d.unit)),
                     series: vec![
                         Series { name: "residual".into(), points: along(&g.residual), style: Style::Line, color: 1 },
                         Series {
@@ -83,102 +113,79 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         })
         .collect();
     if !tsas.is_empty() {
-        let p = dir.join(format!("{stem}-tsa.png"));
-        render_png(&p, 1400, 380 * tsas.len() as u32, &tsas)?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-tsa.png"),
+            width: PAGE_WIDTH_PX,
+            height: 420 * tsas.len() as u32,
+            charts: titled(&stem, tsas),
+        });
     }
-    // spectrum with mesh harmonics and sidebands (when the sample rate is known)
-    if let Some((_, amp)) = d.spectra().iter().find(|s| s.0 == ch) {
-        let fm = d.mesh_hz.unwrap_or(0.0);
-        let max_f = (3.6 * fm).min(*amp.freqs_hz.last().unwrap_or(&1.0));
-        let pts = in_band(amp, max_f);
-        let peak = pts.iter().map(|p| p.1).fold(0.0, f64::max);
-        let mut series = vec![Series {
-            name: "amplitude spectrum (Hann, averaged)".into(),
-            points: pts,
-            style: Style::Line,
-            color: 4,
-        }];
-        // the healthy baseline on top, in black: where this recording's lines grew they stand out above it
-        if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
-            let base = in_band(b, max_f);
-            series.push(Series { name: "baseline (healthy)".into(), points: base, style: Style::Line, color: 8 });
-        }
-        // unresolved sidebands (another shaft's line within the main lobe) are not drawn as measured, and
-        // neither are sidebands under 3x the local noise floor: a marker on the floor would read as a detection
-        let side = |shaft: Shaft| -> Vec<(f64, f64)> {
-            d.mesh_harmonics
-                .iter()
-                .flat_map(|h| h.sidebands.iter())
-                .filter(|s| s.shaft == shaft && s.resolved)
-                .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
-                .filter(|&(f, a)| a > DETECTION_OVER_FLOOR * noise_floor(amp, f))
-                .collect()
-        };
-        let shafts = match d.shaft_hz {
-            ShaftHz::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
-            ShaftHz::Pinion { .. } => vec![Shaft::Pinion],
-            ShaftHz::Estimated { .. } => vec![Shaft::Estimated],
-        };
-        for (i, shaft) in shafts.into_iter().enumerate() {
-            let pts = side(shaft);
-            if !pts.is_empty() {
-                series.push(Series {
-                    name: format!("{shaft} sidebands +-1..3 (detected)"),
-                    points: pts,
-                    style: Style::Points,
-                    color: 1 + i,
-                });
-            }
-        }
-        let mesh_pts: Vec<(f64, f64)> =
-            d.mesh_harmonics.iter().filter_map(|h| h.frequency_hz.map(|f| (f, h.amplitude))).collect();
-        series.push(Series { name: "mesh harmonics".into(), points: mesh_pts, style: Style::Points, color: 0 });
-        let markers = d
-            .mesh_harmonics
-            .iter()
-            .filter_map(|h| h.frequency_hz.map(|f| Marker { x: f, label: format!("{}x mesh", h.k), color: 0 }))
-            .collect();
-        let chart = Chart {
-            title: format!("{stem}: spectrum, channel {ch}; verdict {} ({})", d.verdict.state, d.verdict.gear),
-            x_label: "frequency [Hz]".into(),
-            y_label: format!("amplitude [{}]", unit_or(&d.unit)),
-            y_log: true,
-            x_range: Some((0.0, max_f)),
-            y_range: Some((peak * 1e-5, peak * 10.0)),
-            series,
-            markers,
-            ..Default::default()
-        };
-        let p = dir.join(format!("{stem}-spectrum.png"));
-        render_png(&p, 1400, 700, &[chart])?;
-        out.push(p);
+    // the spectrum: in orders of the tracked angle when the speed changed, else in Hz with the mesh
+    // harmonics and the sidebands that stand out
+    if let Some(m) = &d.order_map {
+        figures.push(Figure {
+            file: format!("{stem}-order-spectrum.png"),
+            width: PAGE_WIDTH_PX,
+            height: 560,
+            charts: titled(&stem, vec![order_spectrum_chart(d, m)]),
+        });
+    } else if let Some((_, amp)) = d.spectra().iter().find(|s| s.0 == ch) {
+        figures.push(Figure {
+            file: format!("{stem}-spectrum.png"),
+            width: PAGE_WIDTH_PX,
+            height: 600,
+            charts: titled(&stem, vec![spectrum_chart(d, ch, amp)]),
+        });
+    } else if let Some(chart) = tsa_order_spectrum_chart(d, ch) {
+        // no sample rate: the order spectrum of the deciding gear's TSA stands in for the spectrum in Hz
+        figures.push(Figure {
+            file: format!("{stem}-order-spectrum.png"),
+            width: PAGE_WIDTH_PX,
+            height: 560,
+            charts: titled(&stem, vec![chart]),
+        });
     }
-    let zooms = mesh_zooms(&stem, d, ch);
+    // zooms in Hz only at a steady speed: a run-up smears every line over the speed range
+    let zooms = if d.order_map.is_none() { mesh_zooms(&stem, d, ch) } else { Vec::new() };
     if !zooms.is_empty() {
-        let p = dir.join(format!("{stem}-zoom.png"));
-        render_png(&p, 1400, 420 * zooms.len() as u32, &zooms)?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-zoom.png"),
+            width: PAGE_WIDTH_PX,
+            height: 440 * zooms.len() as u32,
+            charts: titled(&stem, zooms),
+        });
     }
     if let Some(e) = &d.envelope {
-        let p = dir.join(format!("{stem}-envelope.png"));
-        render_png(&p, 1400, 600, &[envelope_chart(&stem, d, e)])?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-envelope.png"),
+            width: PAGE_WIDTH_PX,
+            height: 560,
+            charts: titled(&stem, vec![envelope_chart(&stem, d, e)]),
+        });
         if let Some(fs) = d.sample_rate_hz {
-            let p = dir.join(format!("{stem}-kurtogram.png"));
-            render_png(&p, 1400, 550, &[kurtogram_chart(&stem, e, fs)])?;
-            out.push(p);
+            figures.push(Figure {
+                file: format!("{stem}-kurtogram.png"),
+                width: PAGE_WIDTH_PX,
+                height: 560,
+                charts: titled(&stem, vec![kurtogram_chart(d, e, fs)]),
+            });
         }
     }
     if let Some(c) = &d.cepstrum {
-        let p = dir.join(format!("{stem}-cepstrum.png"));
-        render_png(&p, 1400, 550, &[cepstrum_chart(&stem, c)])?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-cepstrum.png"),
+            width: PAGE_WIDTH_PX,
+            height: 520,
+            charts: titled(&stem, vec![cepstrum_chart(&stem, c)]),
+        });
     }
     if let (Some(m), Some(fs)) = (&d.order_map, d.sample_rate_hz) {
-        let p = dir.join(format!("{stem}-order-map.png"));
-        render_png(&p, 1400, 800, &[order_map_chart(&stem, d, m, fs)])?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-order-map.png"),
+            width: PAGE_WIDTH_PX,
+            height: 700,
+            charts: titled(&stem, vec![order_map_chart(&stem, d, m, fs)]),
+        });
     }
     if let Some(c) = &d.comparison {
         // one overlay: measured and model bars side by side at each order, the lines the model misses
@@ -191,7 +198,7 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         let hi = c.lines.iter().map(|l| l.measured_db.max(l.model_db)).fold(0.0, f64::max) + 8.0;
         let mut series = vec![
             Series { name: "measured".into(), points: meas, style: Style::Stems, color: 0 },
-            Series { name: format!("model ({})", c.scene), points: model, style: Style::Stems, color: 2 },
+            Series { name: "model".into(), points: model, style: Style::Stems, color: 2 },
         ];
         if !missed.is_empty() {
             series.push(Series {
@@ -203,26 +210,196 @@ pub fn diagnosis(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, ReportError>
         }
         let chart = Chart {
             title: format!(
-                "{stem}: measured against model, levels relative to each one's first mesh line (distance {:.1} dB)",
-                c.distance_db
+                "Measured against model ({}), levels relative to each one's first mesh line; distance {} dB",
+                c.scene,
+                num(c.distance_db)
             ),
-            x_label: "order of the pinion rotation".into(),
+            x_label: "order of the pinion rotation [-]".into(),
             y_label: "level [dB re 1x mesh]".into(),
             y_range: Some((lo, hi)),
             series,
             ..Default::default()
         };
-        let p = dir.join(format!("{stem}-vs-model.png"));
-        render_png(&p, 1400, 600, &[chart])?;
-        out.push(p);
+        figures.push(Figure {
+            file: format!("{stem}-vs-model.png"),
+            width: PAGE_WIDTH_PX,
+            height: 560,
+            charts: titled(&stem, vec![chart]),
+        });
     }
-    Ok(out)
+    figures
 }
 
-/// Zooms centred on each of the first mesh harmonics (+-4.5 reference-shaft orders), the baseline overlaid,
-/// sidebands of each shaft marked where detected (10 dB over the local floor), and sidebands that another
-/// shaft's line lies too close to be told apart marked as unresolved.
-pub(super) fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
+/// The channel whose analysis decided the verdict: the one whose spectrum the diagnosis kept, else the
+/// one whose gear indicators are the diagnosis's own, else the first analysed.
+pub fn deciding_channel(d: &Diagnosis) -> usize {
+    d.spectra()
+        .first()
+        .map(|s| s.0)
+        .or_else(|| d.gears.iter().find(|g| g.indicators == d.indicators).map(|g| g.channel))
+        .unwrap_or(d.channels[0])
+}
+
+/// The order spectrum of the TSA of the gear that decided (its own shaft's orders), mesh orders marked:
+/// the spectrum of a recording without a sample rate.
+fn tsa_order_spectrum_chart(d: &Diagnosis, ch: usize) -> Option<Chart> {
+    let g = d
+        .gears
+        .iter()
+        .filter(|g| g.channel == ch)
+        .find(|g| g.indicators == d.indicators)
+        .or_else(|| d.gears.iter().find(|g| g.channel == ch))?;
+    let pts: Vec<(f64, f64)> =
+        g.tsa_amplitudes.iter().enumerate().skip(1).map(|(k, a)| (k as f64, *a)).filter(|p| p.1 > 0.0).collect();
+    if pts.is_empty() {
+        return None;
+    }
+    let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+    let top = (3.6 * g.mesh_order as f64).min(pts.len() as f64);
+    let z = g.mesh_order as f64;
+    let markers = (1..)
+        .map(|k| k as f64 * z)
+        .take_while(|o| *o <= top)
+        .enumerate()
+        .map(|(i, o)| Marker { x: o, label: format!("{}x mesh", i + 1), color: 0 })
+        .collect();
+    Some(Chart {
+        title: format!("order spectrum of the TSA of the {}, channel {ch} (sample rate unknown: orders only)", g.gear),
+        x_label: format!("order of the {} [-]", g.gear),
+        y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+        y_log: true,
+        x_range: Some((0.0, top)),
+        y_range: Some((peak * 1e-3, peak * 3.0)),
+        series: vec![Series { name: "TSA order spectrum".into(), points: pts, style: Style::Stems, color: 4 }],
+        markers,
+        ..Default::default()
+    })
+}
+
+/// The first chart's title starts with the recording's name (an image pasted alone still says which
+/// recording it shows).
+fn titled(stem: &str, mut charts: Vec<Chart>) -> Vec<Chart> {
+    if let Some(c) = charts.first_mut() {
+        c.title = format!("{stem}: {}", c.title);
+    }
+    charts
+}
+
+/// The sidebands of `shaft` around the mesh harmonics that stand out (see [`stands_out`]), as (Hz, amplitude).
+fn standing_out(d: &Diagnosis, amp: &crate::signal::Spectrum, shaft: Shaft, k: Option<usize>) -> Vec<(f64, f64)> {
+    d.mesh_harmonics
+        .iter()
+        .filter(|h| k.is_none_or(|k| h.k == k))
+        .flat_map(|h| h.sidebands.iter())
+        .filter(|s| s.shaft == shaft && stands_out(amp, s))
+        .filter_map(|s| s.frequency_hz.map(|f| (f, drawn_peak(amp, f))))
+        .collect()
+}
+
+/// The shafts whose sidebands a diagnosis labels.
+fn shafts(d: &Diagnosis) -> Vec<Shaft> {
+    match d.shaft_hz {
+        ShaftHz::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
+        ShaftHz::Pinion { .. } => vec![Shaft::Pinion],
+        ShaftHz::Estimated { .. } => vec![Shaft::Estimated],
+    }
+}
+
+/// The amplitude spectrum up to 3.6 mesh frequencies: the healthy baseline light grey behind, this
+/// recording over it, the mesh harmonics marked, and dots only on the sidebands that stand out.
+fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Chart {
+    let fm = d.mesh_hz.unwrap_or(0.0);
+    let max_f = if fm > 0.0 { 3.6 * fm } else { f64::INFINITY }.min(*amp.freqs_hz.last().unwrap_or(&1.0));
+    let pts = in_band(amp, max_f);
+    let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+    let mut series = Vec::new();
+    if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
+        series.push(Series {
+            name: "healthy baseline".into(),
+            points: in_band(b, max_f),
+            style: Style::Line,
+            color: BASELINE_GREY,
+        });
+    }
+    series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+    for (i, shaft) in shafts(d).into_iter().enumerate() {
+        let pts = standing_out(d, amp, shaft, None);
+        if !pts.is_empty() {
+            series.push(Series { name: sideband_words(shaft), points: pts, style: Style::Points, color: 1 + i });
+        }
+    }
+    let markers = d
+        .mesh_harmonics
+        .iter()
+        .filter_map(|h| h.frequency_hz.map(|f| Marker { x: f, label: format!("{}x mesh", h.k), color: 0 }))
+        .collect();
+    Chart {
+        title: format!("amplitude spectrum, channel {ch} (Hann window, averaged)"),
+        x_label: "frequency [Hz]".into(),
+        y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+        y_log: true,
+        x_range: Some((0.0, max_f)),
+        y_range: Some((peak * 1e-5, peak * 3.0)),
+        series,
+        markers,
+        ..Default::default()
+    }
+}
+
+/// The legend words for the sidebands of `shaft` that stand out, as the text says them.
+pub fn sideband_words(shaft: Shaft) -> String {
+    format!("{shaft} sidebands 12 dB over the local floor")
+}
+
+/// The order spectrum on the tracked angle (the mean of the order map's rows): a run-up's lines stay
+/// sharp at their orders where a spectrum in Hz smears them over the speed range.
+fn order_spectrum_chart(d: &Diagnosis, m: &crate::signal::order_map::OrderMap) -> Chart {
+    let rows = m.amplitudes.len().max(1) as f64;
+    let pts: Vec<(f64, f64)> = m
+        .orders
+        .iter()
+        .enumerate()
+        .map(|(i, o)| (*o, m.amplitudes.iter().map(|r| r.get(i).copied().unwrap_or(0.0)).sum::<f64>() / rows))
+        .filter(|(o, a)| *o > 0.0 && *a > 0.0)
+        .collect();
+    let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+    let top = m.orders.last().copied().unwrap_or(1.0);
+    let z = d.mesh_order as f64;
+    let markers = (1..)
+        .map(|k| k as f64 * z)
+        .take_while(|o| *o <= top)
+        .enumerate()
+        .map(|(i, o)| Marker { x: o, label: format!("{}x mesh", i + 1), color: 0 })
+        .collect();
+    let reference = reference_shaft(d);
+    Chart {
+        title: format!(
+            "order spectrum on the tracked angle, channel {} (the speed changed {} % over the recording)",
+            d.channels[0],
+            num(d.speed_profile.change_percent)
+        ),
+        x_label: format!("order of the {reference} [-]"),
+        y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+        y_log: true,
+        x_range: Some((0.0, top)),
+        y_range: Some((peak * 1e-5, peak * 3.0)),
+        series: vec![Series { name: "mean over the speed range".into(), points: pts, style: Style::Line, color: 4 }],
+        markers,
+        ..Default::default()
+    }
+}
+
+fn reference_shaft(d: &Diagnosis) -> &'static str {
+    match d.shaft_hz {
+        ShaftHz::Pair { .. } | ShaftHz::Pinion { .. } => "pinion",
+        ShaftHz::Estimated { .. } => "shaft of the estimated period",
+    }
+}
+
+/// Zooms centred on each of the first mesh harmonics (+-4.5 reference-shaft orders): the baseline light
+/// grey behind the recording, dots on the sidebands that stand out 12 dB over the local floor, and
+/// hatched squares on sidebands that another shaft's line lies too close to be told apart.
+pub(super) fn mesh_zooms(_stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
     let (Some((_, amp)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
         return Vec::new();
     };
@@ -236,27 +413,21 @@ pub(super) fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
             let (lo, hi) = (fk - 4.5 * f1, fk + 4.5 * f1);
             let pts = cut(amp, lo, hi);
             let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
-            let mut series =
-                vec![Series { name: "amplitude spectrum".into(), points: pts, style: Style::Line, color: 4 }];
+            let mut series = Vec::new();
             if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
                 series.push(Series {
-                    name: "baseline (healthy)".into(),
+                    name: "healthy baseline".into(),
                     points: cut(b, lo, hi),
                     style: Style::Line,
-                    color: 8,
+                    color: BASELINE_GREY,
                 });
             }
-            for (i, shaft) in [Shaft::Pinion, Shaft::Wheel, Shaft::Estimated].into_iter().enumerate() {
-                let detected: Vec<(f64, f64)> = h
-                    .sidebands
-                    .iter()
-                    .filter(|s| s.shaft == shaft && s.resolved)
-                    .filter_map(|s| s.frequency_hz.map(|f| (f, s.amplitude)))
-                    .filter(|&(f, a)| a > DETECTION_OVER_FLOOR * noise_floor(amp, f))
-                    .collect();
+            series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+            for (i, shaft) in shafts(d).into_iter().enumerate() {
+                let detected = standing_out(d, amp, shaft, Some(h.k));
                 if !detected.is_empty() {
                     series.push(Series {
-                        name: format!("{shaft} sidebands (detected)"),
+                        name: sideband_words(shaft),
                         points: detected,
                         style: Style::Points,
                         color: 1 + i,
@@ -271,19 +442,19 @@ pub(super) fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
                 .collect();
             if !unresolved.is_empty() {
                 series.push(Series {
-                    name: "unresolved (lines of both shafts within 3 bins)".into(),
+                    name: "unresolved: lines of both shafts within 3 bins".into(),
                     points: unresolved,
                     style: Style::Hatched,
                     color: 6,
                 });
             }
             Some(Chart {
-                title: format!("{stem}: zoom around {} x mesh = {fk:.1} Hz (channel {ch})", h.k),
+                title: format!("zoom around {}x mesh = {} Hz, channel {ch}", h.k, num(fk)),
                 x_label: "frequency [Hz]".into(),
                 y_label: format!("amplitude [{}]", unit_or(&d.unit)),
                 y_log: true,
                 x_range: Some((lo, hi)),
-                y_range: Some((peak * 1e-4, peak * 10.0)),
+                y_range: Some((peak * 1e-4, peak * 3.0)),
                 series,
                 markers: vec![Marker { x: fk, label: format!("{}x mesh", h.k), color: 0 }],
                 ..Default::default()
@@ -292,50 +463,93 @@ pub(super) fn mesh_zooms(stem: &str, d: &Diagnosis, ch: usize) -> Vec<Chart> {
         .collect()
 }
 
-/// The kurtogram as one line per level: spectral kurtosis of each band at its centre frequency (level l has
-/// 2^l bands of width fs / 2^(l+1)), the chosen band shaded.
-pub(super) fn kurtogram_chart(stem: &str, e: &crate::report::summary::Envelope, fs: f64) -> Chart {
-    let series = e
+/// Whether the kurtogram's own best cell (largest spectral kurtosis at or above the lowest frequency of
+/// the chosen band's search, 1.5 mesh frequencies) is the chosen band: when not, the band came from
+/// elsewhere (the baseline's band, or `--envelope-band`).
+fn band_is_own_best(e: &crate::report::summary::Envelope, fs: f64, from_hz: f64) -> bool {
+    let mut best = (f64::NEG_INFINITY, 0.0, 0.0);
+    for row in &e.kurtogram {
+        let bw = fs / 2.0 / row.len().max(1) as f64;
+        for (b, k) in row.iter().enumerate() {
+            let lo = b as f64 * bw;
+            if k.is_finite() && lo >= from_hz - 1e-9 && *k > best.0 {
+                best = (*k, lo, lo + bw);
+            }
+        }
+    }
+    (best.1 - e.band_hz[0]).abs() < 1e-6 * fs && (best.2 - e.band_hz[1]).abs() < 1e-6 * fs
+}
+
+/// The fast kurtogram as a colour map: level up (level l has 2^l bands of width fs / 2^(l+1)), frequency
+/// across, colour the spectral kurtosis; the envelope band outlined. The title says where the band came
+/// from when it is not this recording's own most impulsive band.
+pub(super) fn kurtogram_chart(d: &Diagnosis, e: &crate::report::summary::Envelope, fs: f64) -> Chart {
+    // one column per band of the finest level (at most 1024: coarser columns take the largest value)
+    let finest = e.kurtogram.iter().map(Vec::len).max().unwrap_or(1).clamp(1, 1024);
+    let x_edges: Vec<f64> = (0..=finest).map(|i| fs / 2.0 * i as f64 / finest as f64).collect();
+    // bands below the search's lowest frequency are left out of the colour scale (grey): there the shafts'
+    // and the mesh's own lines beat into a peaky envelope that says nothing of a fault
+    let from = 1.5 * d.mesh_hz.unwrap_or(0.0);
+    let values: Vec<Vec<f64>> = e
         .kurtogram
         .iter()
-        .enumerate()
-        .map(|(i, row)| {
-            let bw = fs / 2.0 / row.len() as f64;
-            Series {
-                name: format!("level {} (bands of {:.0} Hz)", i + 1, bw),
-                points: row.iter().enumerate().map(|(b, k)| ((b as f64 + 0.5) * bw, *k)).collect(),
-                style: Style::LinePoints,
-                color: i,
-            }
+        .map(|row| {
+            let bw = fs / 2.0 / row.len().max(1) as f64;
+            (0..finest)
+                .map(|i| {
+                    let centre = (i as f64 + 0.5) / finest as f64;
+                    let b = ((centre * row.len() as f64) as usize).min(row.len().saturating_sub(1));
+                    let searched = b as f64 * bw >= from - 1e-9;
+                    row.get(b).copied().filter(|v| v.is_finite() && searched).unwrap_or(f64::NAN)
+                })
+                .collect()
         })
         .collect();
+    let levels = values.len();
+    let y_edges: Vec<f64> = (0..=levels).map(|l| l as f64 + 0.5).collect();
+    let top = values.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max).max(1.0);
+    let bw = e.band_hz[1] - e.band_hz[0];
+    let row = e.kurtogram.iter().position(|r| ((fs / 2.0 / r.len().max(1) as f64) - bw).abs() < 1e-6 * fs);
+    let outline = row.map(|r| ((e.band_hz[0], r as f64 + 0.5), (e.band_hz[1], r as f64 + 1.5)));
+    let origin = if band_is_own_best(e, fs, from) {
+        "this recording's most impulsive band".to_string()
+    } else if !d.baseline_spectra.is_empty() {
+        "the band chosen on the healthy baseline, not this recording's most impulsive one".to_string()
+    } else {
+        "the band given on the command line".to_string()
+    };
     Chart {
         title: format!(
-            "{stem}: fast kurtogram; envelope band {:.0}..{:.0} Hz (shaded; bands from 1.5 mesh frequencies up)",
-            e.band_hz[0], e.band_hz[1]
+            "fast kurtogram; envelope band {}-{} Hz outlined: {origin} (searched from {} Hz, 1.5 mesh frequencies; grey below)",
+            num(e.band_hz[0]),
+            num(e.band_hz[1]),
+            num(from)
         ),
-        x_label: "band centre frequency [Hz]".into(),
-        y_label: "spectral kurtosis [-] (0 for Gaussian noise)".into(),
-        series,
-        bands: vec![Band { from: e.band_hz[0], to: e.band_hz[1] }],
-        x_range: Some((0.0, fs / 2.0)),
+        x_label: "frequency [Hz]".into(),
+        y_label: "level [-] (bands fs / 2^(level+1) wide)".into(),
+        y_whole: true,
+        heatmap: Some(Heatmap {
+            x_edges,
+            y_edges,
+            values,
+            range: (0.0, top),
+            label: "spectral kurtosis [-]".into(),
+            outline,
+        }),
         ..Default::default()
     }
 }
 
-/// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, with the first orders of
-/// each shaft marked; a shaft order is drawn as detected only 10 dB above the envelope spectrum around it.
-pub(super) fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelope) -> Chart {
+/// The squared envelope's order spectrum up to 3.5 orders of the reference shaft, the first orders of each
+/// shaft marked by name, dots only on the orders that stand 10 dB above the envelope spectrum around them.
+pub(super) fn envelope_chart(_stem: &str, d: &Diagnosis, e: &crate::report::summary::Envelope) -> Chart {
     let top = 3.5;
     let pts: Vec<(f64, f64)> =
         e.orders.iter().zip(&e.amplitudes).filter(|(o, _)| **o > 0.05 && **o <= top).map(|(o, a)| (*o, *a)).collect();
     let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
     let mut series =
         vec![Series { name: "squared-envelope order spectrum".into(), points: pts, style: Style::Line, color: 4 }];
-    let reference = match d.shaft_hz {
-        ShaftHz::Pair { .. } | ShaftHz::Pinion { .. } => "pinion",
-        ShaftHz::Estimated { .. } => "estimated shaft",
-    };
+    let reference = reference_shaft(d);
     let mut markers = Vec::new();
     for (i, shaft) in [Shaft::Pinion, Shaft::Wheel, Shaft::Estimated].into_iter().enumerate() {
         let lines: Vec<_> = e.lines.iter().filter(|l| l.shaft == shaft).collect();
@@ -343,12 +557,12 @@ pub(super) fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summa
             lines.iter().filter(|l| l.over_floor_db >= 10.0).map(|l| (l.reference_order, l.amplitude)).collect();
         markers.extend(lines.iter().map(|l| Marker {
             x: l.reference_order,
-            label: format!("{}x {}", l.order, shaft.name().split(' ').next().unwrap_or("shaft")),
+            label: format!("{}x {}", l.order, if shaft == Shaft::Estimated { "shaft" } else { shaft.name() }),
             color: 1 + i,
         }));
         if !detected.is_empty() {
             series.push(Series {
-                name: format!("{shaft} orders, 10 dB above the envelope spectrum around"),
+                name: format!("{shaft} orders 10 dB over the envelope spectrum around them"),
                 points: detected,
                 style: Style::Points,
                 color: 1 + i,
@@ -357,24 +571,23 @@ pub(super) fn envelope_chart(stem: &str, d: &Diagnosis, e: &crate::report::summa
     }
     Chart {
         title: format!(
-            "{stem}: envelope spectrum, band {:.0}..{:.0} Hz (spectral kurtosis {:.1}){}",
-            e.band_hz[0],
-            e.band_hz[1],
-            e.spectral_kurtosis,
+            "envelope spectrum of the band {}-{} Hz (spectral kurtosis {}){}",
+            num(e.band_hz[0]),
+            num(e.band_hz[1]),
+            num(e.spectral_kurtosis),
             e.liftered.map_or(String::new(), |s| format!(", {s} family liftered out"))
         ),
-        x_label: format!("order of the {reference} (tracked angle)"),
+        x_label: format!("order of the {reference} [-] (tracked angle)"),
         y_label: format!("squared envelope [({})^2]", unit_or(&d.unit)),
         y_log: true,
         x_range: Some((0.0, top)),
-        y_range: Some((peak * 1e-4, peak * 10.0)),
+        y_range: Some((peak * 1e-4, peak * 3.0)),
         series,
         markers,
         ..Default::default()
     }
 }
 
-/// The real cepstrum up to 1.2 periods of the slowest shaft, with the rahmonics of each shaft marked.
 /// `b` circularly shifted to the lag of largest correlation with `a` (same length; O(n^2), n <= 4096).
 pub(super) fn aligned(b: &[f64], a: &[f64]) -> Vec<f64> {
     let n = a.len();
@@ -387,8 +600,9 @@ pub(super) fn aligned(b: &[f64], a: &[f64]) -> Vec<f64> {
 const ORDER_MAP_RANGE_DB: f64 = 60.0;
 
 /// The rpm-order map as coloured cells: order across, speed up, colour the amplitude in dB re the
-/// strongest cell; the mesh harmonics marked. A resonance shows as a curve order = f / speed.
-pub(super) fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::order_map::OrderMap, fs: f64) -> Chart {
+/// strongest cell (colour bar at the right); the mesh harmonics marked above the map. A resonance shows
+/// as a curve order = f / speed.
+pub(super) fn order_map_chart(_stem: &str, d: &Diagnosis, m: &crate::signal::order_map::OrderMap, fs: f64) -> Chart {
     let rpm: Vec<f64> = m.speeds.iter().map(|s| s * fs * 60.0).collect();
     let edges = |c: &[f64]| -> Vec<f64> {
         let mut e = Vec::with_capacity(c.len() + 1);
@@ -405,29 +619,35 @@ pub(super) fn order_map_chart(stem: &str, d: &Diagnosis, m: &crate::signal::orde
         .map(|r| r.iter().map(|a| 20.0 * (a.max(f64::MIN_POSITIVE) / top).log10()).collect())
         .collect();
     let z = d.mesh_order as f64;
-    let markers = (1..=3)
+    let last = *m.orders.last().unwrap_or(&0.0);
+    let markers = (1..)
         .map(|h| Marker { x: h as f64 * z, label: format!("{h}x mesh"), color: 8 })
-        .filter(|mk| mk.x <= *m.orders.last().unwrap_or(&0.0))
+        .take_while(|mk| mk.x <= last)
         .collect();
     Chart {
         title: format!(
-            "{stem}: rpm-order map, channel {} (colour: amplitude, dark blue -{ORDER_MAP_RANGE_DB:.0} dB to yellow 0 dB re the strongest line)",
-            d.channels[0]
+            "rpm-order map, channel {} (orders 0 to {} of the {})",
+            d.channels[0],
+            num(last),
+            reference_shaft(d)
         ),
-        x_label: "order of the reference shaft".into(),
-        y_label: "reference shaft speed [rpm]".into(),
+        x_label: format!("order of the {} [-]", reference_shaft(d)),
+        y_label: format!("{} speed [rpm]", reference_shaft(d)),
         heatmap: Some(Heatmap {
             x_edges: edges(&m.orders),
             y_edges: edges(&rpm),
             values,
             range: (-ORDER_MAP_RANGE_DB, 0.0),
+            label: "amplitude [dB re the strongest cell]".into(),
+            outline: None,
         }),
         markers,
         ..Default::default()
     }
 }
 
-pub(super) fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
+/// The real cepstrum up to 1.1 times the longest rahmonic marked, with the rahmonics of each shaft marked.
+pub(super) fn cepstrum_chart(_stem: &str, c: &crate::report::summary::Cepstrum) -> Chart {
     let q_max = c.rahmonics.iter().map(|r| r.quefrency_s).fold(0.0, f64::max) * 1.1;
     let pts: Vec<(f64, f64)> = c
         .values
@@ -441,12 +661,12 @@ pub(super) fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -
         .iter()
         .map(|r| Marker {
             x: 1e3 * r.quefrency_s,
-            label: format!("{} {}", r.shaft.name().split(' ').next().unwrap_or("shaft"), r.k),
+            label: format!("{} {}", if r.shaft == Shaft::Estimated { "shaft" } else { r.shaft.name() }, r.k),
             color: if r.shaft == Shaft::Wheel { 2 } else { 1 },
         })
         .collect();
     Chart {
-        title: format!("{stem}: real power cepstrum with the rahmonics of each shaft"),
+        title: "real power cepstrum with the rahmonics of each shaft (a shaft's family of lines)".into(),
         x_label: "quefrency [ms]".into(),
         y_label: "cepstrum [-]".into(),
         series: vec![Series { name: "cepstrum".into(), points: pts, style: Style::Line, color: 4 }],
@@ -455,13 +675,73 @@ pub(super) fn cepstrum_chart(stem: &str, c: &crate::report::summary::Cepstrum) -
     }
 }
 
-/// Trend chart: for each gear on the first channel, every scored indicator in spreads from the baseline's
-/// centre over the recordings in time order, the suspect limit, and a marker at the first recording that
-/// leaves the band.
+/// The indicator families of a trend: one panel each (their spreads differ by orders of magnitude).
+const TREND_FAMILIES: [(&str, &[&str]); 3] = [
+    (
+        "peakiness of the averaged signal (FM4, M6A, M8A, NA4*, FM0, kurtosis)",
+        &["fm4", "m6a", "m8a", "na4_star", "na4", "fm0", "kurtosis", "crest_factor"],
+    ),
+    ("energy around the mesh (ER, SER, SI, SLF)", &["er", "ser", "si", "slf"]),
+    ("spectral change from the baseline", &["spectral_change"]),
+];
+
+/// The name shown for an indicator key (`na4_star` is NA4*).
+pub fn indicator_label(key: &str) -> String {
+    match key {
+        "na4_star" => "NA4*".into(),
+        "spectral_change" => "spectral change".into(),
+        "crest_factor" => "crest factor".into(),
+        "kurtosis" => "kurtosis".into(),
+        "rms" => "RMS".into(),
+        k => k.to_uppercase(),
+    }
+}
+
+/// Short names of recordings for an axis: the file stems without what they all share at the start and
+/// the end, "#i" in front (the page's table lists the whole names).
+pub fn short_names(files: &[String]) -> Vec<String> {
+    let stems: Vec<String> =
+        files.iter().map(|f| Path::new(f).file_stem().and_then(|s| s.to_str()).unwrap_or(f).to_string()).collect();
+    let common = |rev: bool| -> usize {
+        let chars = |s: &String| -> Vec<char> { if rev { s.chars().rev().collect() } else { s.chars().collect() } };
+        let first = stems.first().map(chars).unwrap_or_default();
+        stems.iter().map(|s| first.iter().zip(chars(s)).take_while(|(a, b)| **a == *b).count()).min().unwrap_or(0)
+    };
+    let (pre, post) = if stems.len() > 1 { (common(false), common(true)) } else { (0, 0) };
+    stems
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let c: Vec<char> = s.chars().collect();
+            let (a, b) = (pre.min(c.len()), c.len().saturating_sub(post).max(pre.min(c.len())));
+            let part: String =
+                c[a..b].iter().collect::<String>().trim_matches(|ch: char| ch == '-' || ch == '_').to_string();
+            if part.is_empty() { format!("#{}", i + 1) } else { format!("#{} {part}", i + 1) }
+        })
+        .collect()
+}
+
+/// Trend chart: for each gear on the first channel and each indicator family, the scored indicators in
+/// spreads from the baseline's centre over the recordings in time order (file names on the x axis), the
+/// suspect and faulty limits, on a symmetric-log scale (a limit of 3.5 spreads and a crack at 200 both
+/// readable).
 ///
 /// # Errors
 /// Nothing scored (no baseline), or the image cannot be written.
 pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
+    let charts = trend_charts(done)?;
+    let h = TREND_PANEL_PX * charts.len() as u32;
+    render_png(png, PAGE_WIDTH_PX, h, &charts)
+}
+
+/// Height of one trend panel, px.
+pub const TREND_PANEL_PX: u32 = 470;
+
+/// The panels of [`trend`].
+///
+/// # Errors
+/// Nothing scored (no baseline).
+pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
     let Some(ch) = done.first().and_then(|d| d.channels.first().copied()) else {
         return Err(ReportError::BadData { what: "trend".into(), why: "no recording".into() });
     };
@@ -471,43 +751,74 @@ pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
             gears.push(s.gear);
         }
     }
+    let files: Vec<String> = done.iter().map(|d| d.file.clone()).collect();
+    let ticks: Vec<(f64, String)> =
+        short_names(&files).into_iter().enumerate().map(|(i, n)| ((i + 1) as f64, n)).collect();
+    let last = done.len() as f64;
     let mut charts = Vec::new();
     for gear in gears {
         let scores = |i: usize| done[i].scores.iter().filter(move |s| s.gear == gear && s.channel == ch);
-        let names: Vec<String> = scores(0).map(|s| s.indicator.clone()).collect();
-        let series: Vec<Series> = names
-            .iter()
-            .enumerate()
-            .map(|(k, name)| Series {
-                name: name.replace('_', " "),
-                points: (0..done.len())
-                    .filter_map(|i| scores(i).find(|s| &s.indicator == name).map(|s| ((i + 1) as f64, s.spreads)))
-                    .collect(),
-                style: Style::LinePoints,
-                color: k,
-            })
-            .collect();
-        let limit = scores(0).map(|s| s.suspect_at).fold(0.0, f64::max);
-        let first = (0..done.len()).find(|&i| scores(i).any(|s| s.decides && s.spreads >= s.suspect_at));
-        let mut all = series;
-        all.push(Series {
-            name: format!("suspect limit ({limit:.1} spreads)"),
-            points: vec![(1.0, limit), (done.len() as f64, limit)],
-            style: Style::Line,
-            color: 8,
-        });
-        charts.push(Chart {
-            title: format!("trend of the {gear} (channel {ch}) against the baseline's band"),
-            x_label: "recording (time order)".into(),
-            y_label: "spreads above the baseline's centre [-]".into(),
-            series: all,
-            markers: first
-                .map(|i| Marker { x: (i + 1) as f64, label: format!("first outside: #{}", i + 1), color: 1 })
-                .into_iter()
-                .collect(),
-            x_range: Some((0.5, done.len() as f64 + 0.5)),
-            ..Default::default()
-        });
+        let mut names: Vec<String> = Vec::new();
+        for i in 0..done.len() {
+            for s in scores(i) {
+                if !names.contains(&s.indicator) {
+                    names.push(s.indicator.clone());
+                }
+            }
+        }
+        for (family, keys) in TREND_FAMILIES {
+            let members: Vec<&String> = names
+                .iter()
+                .filter(|n| {
+                    keys.contains(&n.as_str())
+                        || (family.starts_with("peak") && !TREND_FAMILIES.iter().any(|f| f.1.contains(&n.as_str())))
+                })
+                .collect();
+            if members.is_empty() {
+                continue;
+            }
+            let mut series: Vec<Series> = members
+                .iter()
+                .enumerate()
+                .map(|(k, name)| Series {
+                    name: indicator_label(name),
+                    points: (0..done.len())
+                        .filter_map(|i| scores(i).find(|s| &s.indicator == *name).map(|s| ((i + 1) as f64, s.spreads)))
+                        .collect(),
+                    style: Style::LinePoints,
+                    color: [0, 2, 4, 5, 7, 3, 6, 1][k % 8],
+                })
+                .collect();
+            let limit = |f: fn(&crate::report::summary::Score) -> f64| {
+                (0..done.len()).flat_map(|i| scores(i).map(f)).fold(0.0, f64::max)
+            };
+            let (suspect, faulty) = (limit(|s| s.suspect_at), limit(|s| s.faulty_at));
+            series.push(Series {
+                name: format!("suspect limit ({} spreads)", sig(suspect, 3)),
+                points: vec![(0.6, suspect), (last + 0.4, suspect)],
+                style: Style::Line,
+                color: 3,
+            });
+            series.push(Series {
+                name: format!("faulty limit ({} spreads)", sig(faulty, 3)),
+                points: vec![(0.6, faulty), (last + 0.4, faulty)],
+                style: Style::Line,
+                color: 1,
+            });
+            let hi = series.iter().flat_map(|s| &s.points).map(|p| p.1).fold(faulty, f64::max);
+            let lo = series.iter().flat_map(|s| &s.points).map(|p| p.1).fold(0.0, f64::min);
+            charts.push(Chart {
+                title: format!("{gear}, channel {ch}: {family}"),
+                x_label: "recording [time order as given]".into(),
+                y_label: "spreads from the baseline [-]".into(),
+                series,
+                x_range: Some((0.5, last + 0.5)),
+                y_range: Some((lo * 1.5 - 0.5, hi * 2.0)),
+                y_symlog: true,
+                x_ticks: ticks.clone(),
+                ..Default::default()
+            });
+        }
     }
     if charts.is_empty() {
         return Err(ReportError::BadData {
@@ -515,8 +826,7 @@ pub fn trend(png: &Path, done: &[Diagnosis]) -> Result<(), ReportError> {
             why: "no indicator was scored against a baseline".into(),
         });
     }
-    let h = 450 * charts.len() as u32;
-    render_png(png, 1400, h, &charts)
+    Ok(charts)
 }
 
 /// The (frequency in Hz, value) points of `s` above 0 Hz and up to `max_f` Hz.

@@ -1,8 +1,11 @@
 //! The report images: which data, which axes, which labels. Drawing itself is in [`super::plot`].
 
 use super::ReportError;
-use super::plot::{Band, Chart, Heatmap, Marker, Series, Style, render_png, render_png_grid};
-use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Simulation, SweepPoint};
+use super::format::{num, sig};
+use super::plot::{
+    BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
+};
+use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Sideband, Simulation, SweepPoint};
 use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 
@@ -10,7 +13,10 @@ mod diagnose;
 mod simulate;
 mod sweep;
 
-pub use diagnose::{diagnosis, trend};
+pub use diagnose::{
+    Figure, TREND_PANEL_PX, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names,
+    sideband_words, trend, trend_charts,
+};
 pub use simulate::{multipliers, simulation};
 pub use sweep::{bench, parameter_label, stability_map};
 
@@ -87,12 +93,13 @@ pub(super) fn mesh_markers(scene: &Scene, max_hz: f64) -> Vec<Marker> {
         .collect()
 }
 
-/// A sideband is drawn as detected only above this multiple of the local noise floor (about 10 dB).
-const DETECTION_OVER_FLOOR: f64 = 3.0;
+/// A sideband is drawn as standing out only above this multiple of the local noise floor (12 dB, the
+/// rule of the diagnosis's own wheel-teeth check, so the images and the warnings agree).
+const DETECTION_OVER_FLOOR: f64 = 3.981;
 
 /// Median of the amplitude spectrum within 40 bins of `f_hz`, leaving out the 4 bins nearest to it: the
 /// local noise floor (lines are sparse, so the median sits on the floor between them).
-pub(super) fn noise_floor(s: &crate::signal::Spectrum, f_hz: f64) -> f64 {
+pub fn noise_floor(s: &crate::signal::Spectrum, f_hz: f64) -> f64 {
     let df = s.freqs_hz.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
     let k = (f_hz / df).round() as isize;
     let mut v: Vec<f64> = (k - 40..=k + 40)
@@ -106,7 +113,28 @@ pub(super) fn noise_floor(s: &crate::signal::Spectrum, f_hz: f64) -> f64 {
     v[v.len() / 2]
 }
 
-/// The unit of a recording for axis labels: "unit of the file" when the file does not say.
-pub(super) fn unit_or(unit: &str) -> &str {
-    if unit.is_empty() { "unit of the file" } else { unit }
+/// Whether a sideband stands out: resolved (no other shaft's line within its main lobe), and both its
+/// measured amplitude and the spectrum drawn at it over 12 dB (3.98 times) above the local noise floor of `spectrum` (see [`noise_floor`]). The images put a dot on these
+/// and the text lists these, in the same words ([`sideband_words`]).
+pub fn stands_out(spectrum: &crate::signal::Spectrum, s: &Sideband) -> bool {
+    s.resolved
+        && s.frequency_hz.is_some_and(|f| {
+            let floor = DETECTION_OVER_FLOOR * noise_floor(spectrum, f);
+            s.amplitude > floor && drawn_peak(spectrum, f) > floor
+        })
+}
+
+/// The largest value of `spectrum` within one bin of `f_hz`: the line as the image draws it.
+pub fn drawn_peak(spectrum: &crate::signal::Spectrum, f_hz: f64) -> f64 {
+    let df = spectrum.freqs_hz.get(1).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    let k = (f_hz / df).round() as isize;
+    (k - 1..=k + 1)
+        .filter(|i| *i >= 0 && (*i as usize) < spectrum.values.len())
+        .map(|i| spectrum.values[i as usize])
+        .fold(0.0, f64::max)
+}
+
+/// The unit of a recording for axis labels: "as recorded" when the file names none.
+pub fn unit_or(unit: &str) -> &str {
+    if unit.is_empty() { "as recorded, unit not given" } else { unit }
 }

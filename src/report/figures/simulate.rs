@@ -9,7 +9,7 @@ use super::*;
 pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut out = Vec::new();
     let q = &scene.output.quantity;
-    let unit = if q.unit().is_empty() { String::new() } else { format!(" [{}]", q.unit()) };
+    let unit = if q.unit().is_empty() { " [units of the model]".to_string() } else { format!(" [{}]", q.unit()) };
     let period = sim.steady.period_s;
     // waveform over (up to) three base revolutions, or three periods when the period is shorter
     let revs = (period * scene.output.base_hz).max(1e-12);
@@ -29,7 +29,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         ..Default::default()
     };
     let p = dir.join("waveform.png");
-    render_png(&p, 1400, 600, &[wave])?;
+    render_png(&p, PAGE_WIDTH_PX, 520, &[wave])?;
     out.push(p);
     // spectrum with mesh harmonics and sidebands
     let peak = sim.orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
@@ -66,7 +66,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
                     scene.output.base_name,
                     scene.output.base_hz
                 ),
-                x_label: format!("order of the {}", scene.output.base_name),
+                x_label: format!("order of the {} [-]", scene.output.base_name),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
                 x_range: Some((0.0, max_order + 1.0)),
@@ -77,7 +77,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         }
     };
     let p = dir.join("spectrum.png");
-    render_png(&p, 1400, 700, &[spectrum])?;
+    render_png(&p, PAGE_WIDTH_PX, 620, &[spectrum])?;
     out.push(p);
     // zooms around the first three mesh harmonics (like the paper's Fig 13)
     if let Some((z1, _)) = teeth {
@@ -118,7 +118,7 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
         }
         if !charts.is_empty() {
             let p = dir.join("zoom-mesh.png");
-            render_png(&p, 1400, 420 * charts.len() as u32, &charts)?;
+            render_png(&p, PAGE_WIDTH_PX, 420 * charts.len() as u32, &charts)?;
             out.push(p);
         }
     }
@@ -138,9 +138,9 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
     let r = steady.floquet.rho_max.max(1.0) * 1.15;
     let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
     let chart = Chart {
-        title: format!("{}: multipliers, |rho|max = {:.4e} ({verdict})", scene.name, steady.floquet.rho_max),
-        x_label: "Re rho".into(),
-        y_label: "Im rho".into(),
+        title: format!("{}: multipliers, |rho|max = {} ({verdict})", scene.name, num(steady.floquet.rho_max)),
+        x_label: "Re rho [-]".into(),
+        y_label: "Im rho [-]".into(),
         x_range: Some((-r, r)),
         y_range: Some((-r, r)),
         unit_circle: true,
@@ -153,17 +153,17 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
     if rho > 0.0 && rho < 0.3 {
         let z = rho * 1.3;
         let zoom = Chart {
-            title: format!("zoomed to |rho| <= {z:.2e} (the unit circle is off this panel)"),
-            x_label: "Re rho".into(),
-            y_label: "Im rho".into(),
+            title: format!("zoomed to |rho| <= {} (the unit circle is off this panel)", num(z)),
+            x_label: "Re rho [-]".into(),
+            y_label: "Im rho [-]".into(),
             x_range: Some((-z, z)),
             y_range: Some((-z, z)),
             series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
             ..Default::default()
         };
-        render_png_grid(&p, 1500, 760, 2, &[chart, zoom])?;
+        render_png_grid(&p, PAGE_WIDTH_PX, 600, 2, &[chart, zoom])?;
     } else {
-        render_png(&p, 800, 800, &[chart])?;
+        render_png(&p, 800, 820, &[chart])?;
     }
     Ok(p)
 }
@@ -204,7 +204,7 @@ pub(super) fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Resu
                 "spectrum of {name} by order of the input speed W (Fig {})",
                 if idx == 0 { "3b" } else { "4b" }
             ),
-            x_label: "order of W".into(),
+            x_label: "order of W [-]".into(),
             y_label: format!("amplitude [{unit}]"),
             y_log: true,
             x_range: Some((0.0, 25.0)),
@@ -214,6 +214,6 @@ pub(super) fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Resu
         });
     }
     let p = dir.join("press-q1-q2.png");
-    render_png(&p, 1400, 1600, &charts)?;
+    render_png(&p, PAGE_WIDTH_PX, 1500, &charts)?;
     Ok(p)
 }

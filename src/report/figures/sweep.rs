@@ -25,7 +25,7 @@ pub fn parameter_label(path: &str) -> String {
             return format!("{} [{unit}]", name.replace('_', " "));
         }
     }
-    last.replace('_', " ")
+    format!("{} [-]", last.replace('_', " "))
 }
 
 /// Ranges of unstable points as bands reaching half a step to each side, so a single unstable point shows.
@@ -82,7 +82,7 @@ pub fn stability_map(
     let top = Chart {
         title: format!("{scene}: Floquet stability margin over {x_label} (shaded: unstable)"),
         x_label: x_label.clone(),
-        y_label: "|1 - |rho|max|".into(),
+        y_label: "|1 - |rho|max| [-]".into(),
         y_log: true,
         x_range: Some((lo, hi)),
         series,
@@ -112,7 +112,7 @@ pub fn stability_map(
             title: "steady-state line amplitudes (stable points only)".into(),
             x_label,
             y_label: if amplitude_unit.is_empty() {
-                "amplitude".into()
+                "amplitude [unit of the output]".into()
             } else {
                 format!("amplitude [{amplitude_unit}]")
             },
@@ -123,7 +123,7 @@ pub fn stability_map(
             ..Default::default()
         });
     }
-    render_png(path, 1400, 500 * charts.len() as u32, &charts)
+    render_png(path, PAGE_WIDTH_PX, 480 * charts.len() as u32, &charts)
 }
 
 /// Work-precision chart of one scene's results (log-log error against time).
@@ -160,7 +160,7 @@ pub(super) fn bench_chart(scene: &str, results: &[BenchResult]) -> Chart {
     Chart {
         title: format!("Speed against error: {scene}"),
         x_label: "wall time of one solve [s] (median)".into(),
-        y_label: "relative error of the periodic solution".into(),
+        y_label: "relative error of the periodic solution [-]".into(),
         x_log: true,
         y_log: true,
         series,
@@ -173,5 +173,5 @@ pub(super) fn bench_chart(scene: &str, results: &[BenchResult]) -> Chart {
 /// # Errors
 /// Empty data or a failed write.
 pub fn bench(png: &Path, scene: &str, results: &[BenchResult]) -> Result<(), ReportError> {
-    render_png(png, 1200, 800, &[bench_chart(scene, results)])
+    render_png(png, PAGE_WIDTH_PX, 720, &[bench_chart(scene, results)])
 }

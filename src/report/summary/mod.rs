@@ -63,6 +63,45 @@ pub struct SweepSummary {
     pub points: Vec<SweepPoint>,
     /// Scene name.
     pub scene: String,
+    /// Runs of consecutive unstable points, in sweep order.
+    pub unstable_ranges: Vec<UnstableRange>,
+}
+
+/// A run of consecutive unstable points of a sweep: the parameter from `from` to `to` (both unstable;
+/// the boundary lies within one step outside them).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct UnstableRange {
+    /// First unstable value.
+    pub from: f64,
+    /// Last unstable value.
+    pub to: f64,
+    /// Unstable points in the run.
+    pub points: usize,
+    /// Largest |rho|max in the run.
+    pub rho_max: f64,
+}
+
+/// The runs of consecutive unstable points of `points` (in their order).
+pub fn unstable_ranges(points: &[SweepPoint]) -> Vec<UnstableRange> {
+    let mut out: Vec<UnstableRange> = Vec::new();
+    let mut open = false;
+    for p in points {
+        match (p.stable, p.rho_max) {
+            (Some(false), Some(r)) => match out.last_mut() {
+                Some(last) if open => {
+                    last.to = p.value;
+                    last.points += 1;
+                    last.rho_max = last.rho_max.max(r);
+                }
+                _ => {
+                    out.push(UnstableRange { from: p.value, to: p.value, points: 1, rho_max: r });
+                    open = true;
+                }
+            },
+            _ => open = false,
+        }
+    }
+    out
 }
 
 /// One measured point.
