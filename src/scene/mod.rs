@@ -2,6 +2,7 @@
 //! (`deny_unknown_fields`), then validated into typed model objects; every error names the file and the
 //! field. Units are in the field names (SI unless the name says otherwise).
 
+pub mod machine;
 mod output;
 mod raw;
 mod validate;
