@@ -1,7 +1,7 @@
 //! Machine files (DESIGN.md section 4): the gearbox's shafts, parallel and planetary stages, the shaft whose
 //! speed is given or tracked, the tachometer and the sensors. Read with serde (`deny_unknown_fields`, every
 //! parse error naming the field path), then validated field by field into a
-//! [`Machine`](crate::model::kinematics::Machine) whose exact ratio chain must close.
+//! [`Machine`] whose exact ratio chain must close.
 //!
 //! ```json
 //! {"machine": "two-stage example", "shafts": ["input", "intermediate", "output"],
