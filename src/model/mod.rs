@@ -6,6 +6,7 @@
 
 pub mod catalog;
 pub mod gear;
+pub mod gear_train;
 pub mod kinematics;
 pub mod output;
 pub mod press;
