@@ -90,7 +90,7 @@ impl TwoToneSolution {
         }
     }
 
-    /// Real amplitudes of the lines of sum_i weights[i] y_i + sum_i dweights[i] y_i' at w = k w_a + l w_b >= 0
+    /// Real amplitudes of the lines of `sum_i weights[i] y_i + sum_i dweights[i] y_i'` at w = k w_a + l w_b >= 0
     /// (lines at the same |w| are not merged), largest first, those above `floor` of the largest:
     /// (k, l, w rad/s, amplitude).
     pub fn lines(&self, weights: &[f64], dweights: &[f64], floor: f64) -> Vec<(isize, isize, f64, f64)> {
