@@ -5,6 +5,7 @@
 pub mod machine;
 mod output;
 mod raw;
+pub mod train;
 mod validate;
 
 use crate::model::{GearPair, OutputQuantity, PressParams, SecondOrderSystem};
