@@ -243,3 +243,29 @@ fn a_machine_file_that_is_not_json_is_refused_with_its_name() {
     let e = load_machine("/nonexistent/box.json").unwrap_err();
     assert!(e.to_string().contains("/nonexistent/box.json"), "{e}");
 }
+
+#[test]
+fn labelled_lines_name_the_shaft_of_every_sideband_family() {
+    use gearvib::model::kinematics::LineKind;
+    let m = bundled("two-stage-z23z61-z19z47.json");
+    let lines = m.labelled_lines(2, 2);
+    // per stage and harmonic: the mesh line and 2 shafts x 2 sides x 2 sidebands
+    assert_eq!(lines.len(), 2 * 2 * (1 + 2 * 2 * 2));
+    let find = |label: &str| lines.iter().find(|l| l.label == label).unwrap_or_else(|| panic!("{label}")).order;
+    // the intermediate shaft (23/61 of the input) spaces a family around both of its meshes:
+    // 23 - 23/61 = 1380/61 around mesh 1, 2 x 437/61 + 2 x 23/61 = 920/61 around mesh 2's second harmonic
+    assert_eq!(find("stage 1 mesh x1 - 1 x intermediate"), r(1380, 61));
+    assert_eq!(find("stage 2 mesh x2 + 2 x intermediate"), r(920, 61));
+    // the output shaft (437/2867) around mesh 2: 437/61 + 437/2867 = 437 x 48 / 2867
+    assert_eq!(find("stage 2 mesh x1 + 1 x output"), r(437 * 48, 2867));
+    assert_eq!(find("stage 1 mesh x2"), r(46, 1));
+    let side = lines.iter().find(|l| l.label == "stage 1 mesh x1 + 2 x input").unwrap();
+    assert_eq!(side.kind, LineKind::ShaftSideband { harmonic: 1, n: 2, shaft: 0 });
+    assert_eq!(side.order, r(25, 1));
+    // planetary: planet-pass families around the mesh, 1743/104 +- 63/104
+    let p = bundled("planetary-z21z31z83-then-parallel-z29z71.json");
+    let lines = p.labelled_lines(1, 1);
+    let find = |label: &str| lines.iter().find(|l| l.label == label).unwrap_or_else(|| panic!("{label}")).order;
+    assert_eq!(find("stage 1 mesh x1 - 1 x planet pass"), r(1680, 104));
+    assert_eq!(find("stage 1 mesh x1 + 1 x carrier"), r(1764, 104));
+}
