@@ -180,6 +180,13 @@ fn stability(out: &mut dyn Write, job: &jobs::simulate::StabilityJob, json: bool
 }
 
 fn simulate(out: &mut dyn Write, job: &jobs::simulate::SimulateJob, json: bool) -> Result<u8, Error> {
+    if crate::scene::train::is_gear_train(&job.scene.display().to_string()) {
+        let done = with_spinner("solving and writing", || jobs::train::run(job))?;
+        if json {
+            return json_line(out, &done).map(|_| 0);
+        }
+        return print::train(out, &done).map(|_| 0).map_err(|e| CliError::from(e).into());
+    }
     let done = with_spinner("solving and writing", || jobs::simulate::run(job))?;
     warn_all(&done.summary.stability.warnings);
     if let Some(info) = &done.signal {

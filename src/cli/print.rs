@@ -218,6 +218,32 @@ pub fn simulate(w: &mut dyn Write, summary: &SimulateSummary) -> io::Result<()> 
     Ok(())
 }
 
+/// The text form of `simulate` on a gear train.
+pub fn train(w: &mut dyn Write, s: &crate::jobs::train::TrainSummary) -> io::Result<()> {
+    if let Some(f) = &s.signal_file {
+        writeln!(w, "wrote {f} and {f}.json")?;
+    }
+    writeln!(w, "method           {} ({})", s.method, s.method_reason)?;
+    match (s.rho_max, s.stable) {
+        (Some(r), Some(st)) => {
+            writeln!(w, "stability        |rho|max = {r:.6} ({})", if st { "stable" } else { "UNSTABLE" })?
+        }
+        _ => writeln!(w, "stability        {}", s.stability_note)?,
+    }
+    writeln!(w, "error estimate   {:.2e}", s.error_estimate)?;
+    for (name, hz) in s.shafts.iter().zip(&s.shaft_hz) {
+        writeln!(w, "shaft {name:<10} {hz:.4} Hz")?;
+    }
+    for (k, hz) in s.mesh_hz.iter().enumerate() {
+        writeln!(w, "mesh {}           {hz:.3} Hz", k + 1)?;
+    }
+    writeln!(w, "sum of dq/dt     RMS {:.4e} m/s; strongest lines:", s.rms)?;
+    for l in s.lines.iter().take(20) {
+        writeln!(w, "  {:10.3} Hz   {:.4e} m/s   {}", l.frequency_hz, l.amplitude, l.label)?;
+    }
+    Ok(())
+}
+
 /// The text form of `bench`.
 pub fn bench(w: &mut dyn Write, all: &BenchReport) -> io::Result<()> {
     writeln!(w, "{:<36} {:<22} {:>10} {:>12} {:>12}", "scene", "method", "resolution", "time [s]", "error")?;

@@ -15,6 +15,7 @@ pub mod identify;
 pub mod simulate;
 pub mod sweep;
 pub mod synth;
+pub mod train;
 
 /// The role a channel number plays in a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

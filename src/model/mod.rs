@@ -6,6 +6,8 @@
 
 pub mod catalog;
 pub mod gear;
+pub mod gear_train;
+pub mod kinematics;
 pub mod output;
 pub mod press;
 pub mod second_order;

@@ -2,8 +2,10 @@
 //! (`deny_unknown_fields`), then validated into typed model objects; every error names the file and the
 //! field. Units are in the field names (SI unless the name says otherwise).
 
+pub mod machine;
 mod output;
 mod raw;
+pub mod train;
 mod validate;
 
 use crate::model::{GearPair, OutputQuantity, PressParams, SecondOrderSystem};

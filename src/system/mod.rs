@@ -10,9 +10,11 @@
 
 pub mod coefficient;
 pub mod fourier;
+pub mod two_tone;
 
 pub use coefficient::{Coefficient, PiecewiseConstant};
 pub use fourier::FourierSeries;
+pub use two_tone::TwoToneForm;
 
 use nalgebra::{DMatrix, DVector};
 
