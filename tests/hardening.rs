@@ -280,3 +280,114 @@ fn interrupted_writes_leave_no_temporary_and_stale_ones_are_swept() {
     }
     assert!(!stale.exists(), "the stale temporary of a dead process was swept");
 }
+
+/// Issue 29: a damaged tachometer (contact chatter: 10-sample pulses every 40 samples, or every third
+/// pulse missing; fixtures cut from the bundled healthy recording), teeth beyond any TSA's resolution and
+/// a wrong pulse count once panicked in the block indicators (index out of bounds) or gave a confident
+/// verdict at a wrong speed. Each is now one line naming the file and what is wrong.
+#[test]
+fn damaged_tachometers_absurd_teeth_and_wrong_pulse_counts_are_refused() {
+    let chatter = "tests/fixtures/pipeline/tacho-chatter-every-40-samples-i16.wav";
+    let missing = "tests/fixtures/pipeline/tacho-every-third-pulse-missing-i16.wav";
+    for (args, needles) in [
+        (
+            &["diagnose", chatter, "--tacho-channel", "2", "--teeth", "14,39"][..],
+            &["tacho-chatter-every-40-samples-i16.wav", "mesh order 14", "samples per revolution"][..],
+        ),
+        (
+            &["diagnose", missing, "--tacho-channel", "2", "--teeth", "14,39"],
+            &["tacho-every-third-pulse-missing-i16.wav", "tachometer pulses missing"],
+        ),
+        (&["diagnose", HEALTHY, "--teeth", "100000,100000"], &["healthy.wav", "mesh order 100000"]),
+        (&["diagnose", HEALTHY, "--teeth", "100000,14", "--rpm", "1800"], &["healthy.wav", "mesh order 100000"]),
+        (&["diagnose", HEALTHY, "--tacho-channel", "2", "--pulses-per-rev", "0"], &["--pulses-per-rev", "at least 1"]),
+        // the bundled tachometer gives one pulse per revolution: with 2 the pinion's average spans two
+        // revolutions and its mesh line of 14 teeth stands at order 28
+        (
+            &["diagnose", HEALTHY, "--tacho-channel", "2", "--pulses-per-rev", "2", "--teeth", "14,39"],
+            &["healthy.wav", "2 pulse(s) per revolution", "order 28"],
+        ),
+    ] {
+        let run = limited(args);
+        assert_one_line_error(&run, needles);
+    }
+    // the same files through the library: errors, no panic
+    let o = gearvib::jobs::diagnose::Options { tacho_channel: Some(2), teeth: Some((14, 39)), ..Default::default() };
+    for f in [chatter, missing] {
+        let e = gearvib::jobs::diagnose::diagnose(std::path::Path::new(&repo(f)), &o, None).unwrap_err();
+        assert!(e.to_string().contains(std::path::Path::new(f).file_name().unwrap().to_str().unwrap()), "{e}");
+    }
+    // the right count still diagnoses the intact recording
+    let run = gearvib(&["diagnose", HEALTHY, "--tacho-channel", "2", "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+}
+
+/// Copies the bundled healthy WAV into `dir` as `name` with `sidecar` (a fixture of tests/fixtures/io) as
+/// its sidecar; returns the WAV's path.
+fn wav_with_sidecar(dir: &std::path::Path, name: &str, sidecar: &str) -> String {
+    let wav = dir.join(name);
+    std::fs::copy(repo(HEALTHY), &wav).unwrap();
+    std::fs::copy(repo(&format!("tests/fixtures/io/{sidecar}")), dir.join(format!("{name}.json"))).unwrap();
+    wav.to_string_lossy().into_owned()
+}
+
+/// Issue 29: an unreadable, truncated or damaged sidecar was ignored silently (RMS 10 times too large, the
+/// unit lost, the tachometer unused), a device as sidecar was read for seconds, and a sidecar whose rate
+/// disagrees with the WAV header was not mentioned.
+#[test]
+fn sidecars_are_read_with_a_limit_and_damage_is_named() {
+    let dir = temp_dir("sidecars");
+    for (name, sidecar, needles) in [
+        ("trunc.wav", "sidecar-truncated-at-300-bytes.json", &["trunc.wav.json", "not valid JSON", "line 12"][..]),
+        ("flip.wav", "sidecar-key-bit-flipped.json", &["flip.wav.json", "damaged sidecar", "full_scal3"]),
+        ("huge.wav", "sidecar-full-scale-1e308.json", &["huge.wav.json", "full_scale 1e308"]),
+    ] {
+        let wav = wav_with_sidecar(&dir, name, sidecar);
+        assert_one_line_error(&limited(&["diagnose", &wav]), needles);
+    }
+    // a device is refused before a byte is read (a read of /dev/zero would not end within the limit)
+    let wav = dir.join("dev.wav");
+    std::fs::copy(repo(HEALTHY), &wav).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.join("dev.wav.json")).unwrap();
+    assert_one_line_error(&limited(&["diagnose", wav.to_str().unwrap()]), &["dev.wav.json", "not a regular file"]);
+    // more than 1 MiB: refused by its size
+    let big = dir.join("big.wav");
+    std::fs::copy(repo(HEALTHY), &big).unwrap();
+    std::fs::write(dir.join("big.wav.json"), vec![b' '; 2 << 20]).unwrap();
+    assert_one_line_error(&limited(&["diagnose", big.to_str().unwrap()]), &["big.wav.json", "bytes"]);
+    // another program's JSON: ignored with a warning saying what is lost; the samples stay integer-scaled
+    let wav = wav_with_sidecar(&dir, "foreign.wav", "sidecar-foreign-json.json");
+    let rec = gearvib::io::read_recording(std::path::Path::new(&wav)).unwrap();
+    assert!(rec.warnings.iter().any(|w| w.contains("not a gearvib sidecar") && w.contains("full scale")), "{rec:?}");
+    assert_eq!(rec.units[0], "", "no unit from a foreign file");
+    // the bundled sidecar's full scale is 0.1: the same samples with it are 0.1 times those without
+    let own = gearvib::io::read_recording(std::path::Path::new(&repo(HEALTHY))).unwrap();
+    let ratio = own.channels[0][1000] / rec.channels[0][1000];
+    assert!((ratio - 0.1).abs() < 1e-6, "{ratio}");
+    // a sidecar rate that disagrees with the header: warned in the diagnosis, the header's rate used
+    let wav = wav_with_sidecar(&dir, "rate.wav", "sidecar-rate-20000-for-a-10000-hz-wav.json");
+    let run = gearvib(&["diagnose", &wav, "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(v["sample_rate_hz"], 10000.0);
+    let warnings = v["warnings"].to_string();
+    assert!(warnings.contains("20000 Hz") && warnings.contains("header"), "{warnings}");
+}
+
+/// Issue 29: a time column headed `time [ms]` was read as seconds (a 10 Hz sample rate). Units s, ms and
+/// us are honoured, others refused naming the column.
+#[test]
+fn csv_time_units_are_honoured_or_refused() {
+    for file in ["csv-time-ms-fs10kHz.csv", "csv-time_us-fs10kHz.csv", "csv-t-s-in-parentheses-fs10kHz.csv"] {
+        let rec =
+            gearvib::io::read_recording(std::path::Path::new(&repo(&format!("tests/fixtures/io/{file}")))).unwrap();
+        // steps of 0.1 ms, 100 us, 1e-4 s, printed to 6 significant digits: 10 kHz within 1e-6
+        let fs = rec.sample_rate_hz.unwrap();
+        assert!((fs - 1e4).abs() < 1e-2, "{file}: {fs}");
+        assert_eq!(rec.channels.len(), 1, "{file}: the time column is no channel");
+    }
+    let e = gearvib::io::read_recording(std::path::Path::new(&repo("tests/fixtures/io/csv-time-min-unit-refused.csv")))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("csv-time-min-unit-refused.csv") && e.contains("\"min\""), "{e}");
+}

@@ -339,6 +339,7 @@ fn recording_of<'a>(h: &'a Held<'_>, fs: Option<f64>) -> PyResult<Recording<'a>>
         sample_rate_hz: fs,
         names: (1..=n).map(|c| format!("ch{c}")).collect(),
         units: vec![String::new(); n],
+        warnings: Vec::new(),
     })
 }
 

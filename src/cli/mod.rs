@@ -242,6 +242,9 @@ fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'static>
             "is also the --tacho-channel: tachometer pulses are not a vibration signal",
         ));
     }
+    if a.pulses_per_rev == 0 {
+        return Err(CliError::flag("--pulses-per-rev", "0: a tachometer gives at least 1 pulse per revolution"));
+    }
     let shaft_hz = match (a.rpm, a.shaft_hz) {
         (Some(r), _) => Some(positive("--rpm", r)? / 60.0),
         (_, Some(h)) => Some(positive("--shaft-hz", h)?),
