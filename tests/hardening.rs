@@ -485,3 +485,121 @@ fn a_wheel_crack_takes_the_right_side_of_every_jump() {
         assert!((k(b, Side::Left) - 0.7).abs() < 1e-12 && (k(b, Side::Right) - 1.0).abs() < 1e-12, "end, rev {r}");
     }
 }
+
+/// Issue 29: one corrupt WAV in a directory stopped the whole batch with nothing reported for the good
+/// files. Now every recording is reported (a failure as `{"file", "error"}` in its place in the JSON
+/// Lines, and on stderr), and the exit code 2 says some failed.
+#[test]
+fn a_batch_reports_every_recording_and_says_some_failed() {
+    let dir = temp_dir("batch");
+    for name in ["a-healthy.wav", "c-pitted.wav"] {
+        let src = if name.starts_with('a') {
+            HEALTHY.to_string()
+        } else {
+            HEALTHY.replace("healthy", "pitted-pinion-tooth3")
+        };
+        std::fs::copy(repo(&src), dir.join(name)).unwrap();
+        std::fs::copy(repo(&format!("{src}.json")), dir.join(format!("{name}.json"))).unwrap();
+    }
+    // a WAV cut after its first 1000 bytes' header, and one that is no WAV at all
+    let bytes = std::fs::read(repo(HEALTHY)).unwrap();
+    std::fs::write(dir.join("b-cut.wav"), &bytes[..1000]).unwrap();
+    std::fs::write(dir.join("d-not-a-wav.wav"), b"RIFX garbage").unwrap();
+    let d = dir.to_str().unwrap();
+    let run = gearvib(&["diagnose", d, "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    let lines: Vec<serde_json::Value> = run.stdout.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let files: Vec<&str> = lines.iter().map(|l| l["file"].as_str().unwrap()).collect();
+    assert_eq!(files.len(), 4, "{files:?}");
+    for (l, name) in lines.iter().zip(["a-healthy.wav", "b-cut.wav", "c-pitted.wav", "d-not-a-wav.wav"]) {
+        assert!(l["file"].as_str().unwrap().ends_with(name), "{l}");
+        let failed = name.starts_with('b') || name.starts_with('d');
+        assert_eq!(l.get("error").is_some(), failed, "{name}: {l}");
+        assert_eq!(l.get("verdict").is_some(), !failed, "{name}");
+        if failed {
+            assert!(l["error"].as_str().unwrap().contains(name), "{l}");
+        }
+    }
+    assert_eq!(run.stderr.lines().count(), 2, "one line per failed recording: {}", run.stderr);
+    // the text output: both good diagnoses printed, exit 2
+    let run = gearvib(&["diagnose", d, "--teeth", "14,39"]);
+    assert_eq!(run.code, 2);
+    assert_eq!(run.stdout.matches("VERDICT").count(), 2, "{}", run.stdout);
+}
+
+/// Issue 29: `diagnose a.wav trend.csv --baseline b.wav --report DIR` wrote a.wav's report and then refused
+/// to overwrite trend.csv (an input), leaving half a report set; two recordings of one stem replaced each
+/// other's reports. Every output is now checked before the first is written.
+#[test]
+fn a_report_set_is_refused_whole_before_anything_is_written() {
+    let dir = temp_dir("report-set");
+    let rec = gearvib::io::read_recording(std::path::Path::new(&repo(HEALTHY))).unwrap();
+    let trend = dir.join("trend.csv");
+    gearvib::io::write_recording(&trend, &rec).unwrap();
+    std::fs::copy(repo(HEALTHY), dir.join("a.wav")).unwrap();
+    std::fs::copy(repo(&format!("{HEALTHY}.json")), dir.join("a.wav.json")).unwrap();
+    let listing = || {
+        let mut v: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    };
+    let before = listing();
+    let d = dir.to_str().unwrap();
+    let (a, t) = (dir.join("a.wav"), trend.to_str().unwrap().to_string());
+    let run = gearvib(&[
+        "diagnose",
+        a.to_str().unwrap(),
+        &t,
+        "--teeth",
+        "14,39",
+        "--tacho-channel",
+        "2",
+        "--baseline",
+        &repo(HEALTHY),
+        "--report",
+        d,
+    ]);
+    assert_one_line_error(&run, &["trend.csv", "refusing to overwrite an input"]);
+    assert_eq!(listing(), before, "nothing written");
+    // a.wav and a.csv would share a-diagnosis.json
+    gearvib::io::write_recording(&dir.join("a.csv"), &rec).unwrap();
+    let out = dir.join("out");
+    let run = gearvib(&[
+        "diagnose",
+        a.to_str().unwrap(),
+        dir.join("a.csv").to_str().unwrap(),
+        "--rpm",
+        "1800",
+        "--channel",
+        "1",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    assert_one_line_error(&run, &["a.csv", "would replace those of", "a.wav"]);
+    assert!(std::fs::read_dir(&out).map_or(true, |mut e| e.next().is_none()), "no report file written");
+}
+
+/// Issue 29: on a full disk the report's message was plotters' debug text (`ImageError(IoError(...`). The
+/// temporaries of this process are pointed at /dev/full (writes fail with ENOSPC): one plain line.
+#[test]
+fn a_full_disk_is_one_plain_line() {
+    for (n, temp) in [(0, "h-diagnosis.json.{pid}.tmp"), (1, "h-tsa.png.{pid}.tmp.png")] {
+        let dir = temp_dir(&format!("full-disk-{n}"));
+        std::fs::copy(repo(HEALTHY), dir.join("h.wav")).unwrap();
+        std::fs::copy(repo(&format!("{HEALTHY}.json")), dir.join("h.wav.json")).unwrap();
+        let out = dir.join("report");
+        std::fs::create_dir(&out).unwrap();
+        let tmp = temp.replace("{pid}", &std::process::id().to_string());
+        std::os::unix::fs::symlink("/dev/full", out.join(&tmp)).unwrap();
+        let job = gearvib::jobs::diagnose::DiagnoseJob {
+            recordings: vec![dir.join("h.wav")],
+            report: Some(out.clone()),
+            ..Default::default()
+        };
+        let e = gearvib::jobs::diagnose::run(&job).unwrap_err().to_string();
+        assert!(e.contains("No space left on device"), "{e}");
+        assert!(!e.contains("Error(") && !e.contains("Os {") && !e.contains('\n'), "{e}");
+        assert!(e.contains(&tmp.split(".png.").next().unwrap().split(".json.").next().unwrap().to_string()), "{e}");
+    }
+}

@@ -187,6 +187,8 @@ fn diagnose(
         let prepared = prepared_for(&job)?;
         let mut out = Vec::new();
         gearvib::jobs::diagnose::run_streaming_prepared(&job, &prepared, &mut |d| {
+            // a recording that fails raises, naming it (the binary's batches report it and go on)
+            let d = d.map_err(|f| f.error)?;
             out.push((serde_json::to_string(&d).unwrap_or_default(), Curves::of(d)));
             Ok(())
         })?;
