@@ -408,6 +408,7 @@ fn identify(
 #[pymodule]
 fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("GearvibError", m.py().get_type::<GearvibError>())?;
+    m.add("MAX_SWEEP_VALUES", gearvib::jobs::sweep::MAX_SWEEP_VALUES)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(stability, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;
