@@ -15,6 +15,7 @@ fn two_channels(fs: f64) -> Recording<'static> {
         sample_rate_hz: Some(fs),
         names: vec!["accel".into(), "tacho pinion".into()],
         units: vec!["m/s".into(), "pulse".into()],
+        warnings: Vec::new(),
     }
 }
 

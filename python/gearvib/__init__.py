@@ -76,7 +76,13 @@ def sweep(scene: SceneLike, param: str, values: Iterable[float]) -> dict:
     numpy arrays ``value``, ``rho_max`` (NaN where a point failed) and ``stable`` (bool).
     """
     text, name = _scene_text(scene)
-    out = json.loads(_gearvib.sweep(text, name, param, [float(v) for v in values]))
+    # the limit is checked while reading: an endless or huge iterable is refused at its limit, not read whole
+    taken = []
+    for v in values:
+        if len(taken) == _gearvib.MAX_SWEEP_VALUES:
+            raise ValueError(f"sweep: more than {_gearvib.MAX_SWEEP_VALUES} values; give fewer")
+        taken.append(float(v))
+    out = json.loads(_gearvib.sweep(text, name, param, taken))
     points = out["points"]
     out["value"] = np.array([p["value"] for p in points])
     out["rho_max"] = np.array([np.nan if p["rho_max"] is None else p["rho_max"] for p in points])
@@ -98,7 +104,8 @@ def diagnose(
     profile: Union[None, str, "os.PathLike[str]"] = None,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
-    ``fs`` Hz, a WAV/CSV path, or a list of them (then a list of results, in order).
+    ``fs`` Hz, a WAV/CSV path, a directory (its .wav and .csv recordings in name order), or a list of them
+    (then a list of results, in order, a directory's recordings in its place; a directory alone gives a list).
 
     ``rpm``: pinion speed in rev/min (estimated when absent); ``teeth``: (pinion, wheel); ``tacho``: the
     1-based tachometer channel; ``channel``: analyse only this 1-based channel; ``unit``: the samples'
@@ -126,10 +133,23 @@ def diagnose(
         raise ValueError("baseline and profile: give one (a profile is a learned baseline)")
     prof = os.fspath(profile) if profile is not None else None
     raw = _gearvib.diagnose(paths, data, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base, prof)
-    # files come back first, then arrays: restore the order given
-    by_kind = {"path": iter(raw[: len(paths)]), "array": iter(raw[len(paths):])}
-    out = [_with_arrays(*next(by_kind["path" if isinstance(x, (str, os.PathLike)) else "array"]), arrays) for x in items]
-    return out if many else out[0]
+    # files come back first (a directory as all its recordings, in name order), then arrays: restore the
+    # order given, a directory expanded in its place
+    n_files = len(raw) - len(data)
+    files, arrs = raw[:n_files], iter(raw[n_files:])
+    out, at = [], 0
+    for x in items:
+        if not isinstance(x, (str, os.PathLike)):
+            out.append(_with_arrays(*next(arrs), arrays))
+        elif os.path.isdir(x):
+            inside = os.path.join(os.fspath(x), "")
+            while at < n_files and json.loads(files[at][0])["file"].startswith(inside):
+                out.append(_with_arrays(*files[at], arrays))
+                at += 1
+        else:
+            out.append(_with_arrays(*files[at], arrays))
+            at += 1
+    return out if many or len(out) != 1 or any(isinstance(x, (str, os.PathLike)) and os.path.isdir(x) for x in items) else out[0]
 
 
 def _with_arrays(text: str, curves: dict, arrays: bool) -> dict:

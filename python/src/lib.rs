@@ -189,6 +189,8 @@ fn diagnose(
         let prepared = prepared_for(&job)?;
         let mut out = Vec::new();
         gearvib::jobs::diagnose::run_streaming_prepared(&job, &prepared, &mut |d| {
+            // a recording that fails raises, naming it (the binary's batches report it and go on)
+            let d = d.map_err(|f| f.error)?;
             out.push((serde_json::to_string(&d).unwrap_or_default(), Curves::of(d)));
             Ok(())
         })?;
@@ -374,6 +376,7 @@ fn recording_of<'a>(h: &'a Held<'_>, fs: Option<f64>) -> PyResult<Recording<'a>>
         sample_rate_hz: fs,
         names: (1..=n).map(|c| format!("ch{c}")).collect(),
         units: vec![String::new(); n],
+        warnings: Vec::new(),
     })
 }
 
@@ -440,6 +443,7 @@ fn identify(
 #[pymodule]
 fn _gearvib(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("GearvibError", m.py().get_type::<GearvibError>())?;
+    m.add("MAX_SWEEP_VALUES", gearvib::jobs::sweep::MAX_SWEEP_VALUES)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(stability, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;

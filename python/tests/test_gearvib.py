@@ -14,7 +14,23 @@ import pytest
 import gearvib
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-CLI = os.environ.get("GEARVIB_CLI", os.path.join(ROOT, "target", "release", "gearvib"))
+def _target_dir():
+    """The target directory as cargo finds it: CARGO_TARGET_DIR (relative to the working directory), else
+    `cargo metadata` (which reads .cargo/config.toml's build.target-dir), else ROOT/target."""
+    env = os.environ.get("CARGO_TARGET_DIR")
+    if env:
+        return os.path.abspath(env)
+    try:
+        meta = subprocess.run(
+            ["cargo", "metadata", "--format-version", "1", "--no-deps"],
+            cwd=ROOT, capture_output=True, text=True, check=True, timeout=60,
+        )
+        return json.loads(meta.stdout)["target_directory"]
+    except (OSError, subprocess.SubprocessError, ValueError, KeyError):
+        return os.path.join(ROOT, "target")
+
+
+CLI = os.environ.get("GEARVIB_CLI") or os.path.join(_target_dir(), "release", "gearvib")
 REC = os.path.join(ROOT, "data", "recordings", "gear-z14z39-fs10kHz-{}.wav")
 SCENE = os.path.join(ROOT, "data", "scenes", "{}.json")
 
@@ -258,3 +274,23 @@ def test_learn_then_diagnose_with_the_profile_equals_the_cli(tmp_path):
     assert got["verdict"] == one_call["verdict"] and got["scores"] == one_call["scores"]
     with pytest.raises(ValueError):
         gearvib.diagnose(cracked, profile=out, baseline=healthy)
+
+
+def test_a_directory_gives_every_recording(tmp_path):
+    # issue 29: diagnose(DIR) returned the first recording only
+    for name in ["healthy", "pitted-pinion-tooth3"]:
+        shutil.copy(REC.format(name), tmp_path / f"{name}.wav")
+        shutil.copy(REC.format(name) + ".json", tmp_path / f"{name}.wav.json")
+    got = gearvib.diagnose(str(tmp_path), teeth=(14, 39), arrays=False)
+    assert [os.path.basename(d["file"]) for d in got] == ["healthy.wav", "pitted-pinion-tooth3.wav"]
+    want = cli_json("diagnose", str(tmp_path), "--teeth", "14,39")
+    assert [d["verdict"] for d in got] == [d["verdict"] for d in want]
+    # a directory among other inputs is expanded in its place
+    mixed = gearvib.diagnose([REC.format("healthy"), str(tmp_path)], teeth=(14, 39), arrays=False)
+    assert len(mixed) == 3
+
+
+def test_sweep_refuses_a_huge_iterable_at_its_limit():
+    # issue 29: sweep(..., iter(range(10**12))) read the whole iterable before its limit
+    with pytest.raises(ValueError, match="more than"):
+        gearvib.sweep(SCENE.format("paper-gear-fig8a"), "speed", iter(range(10**12)))

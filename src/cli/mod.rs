@@ -259,6 +259,9 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
             "is also the --tacho-channel: tachometer pulses are not a vibration signal",
         ));
     }
+    if a.pulses_per_rev == 0 {
+        return Err(CliError::flag("--pulses-per-rev", "0: a tachometer gives at least 1 pulse per revolution"));
+    }
     let shaft_hz = match (a.rpm, a.shaft_hz) {
         (Some(r), _) => Some(positive("--rpm", r)? / 60.0),
         (_, Some(h)) => Some(positive("--shaft-hz", h)?),
@@ -373,16 +376,23 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
     let job = diagnose_job(a)?;
     if a.json && job.report.is_none() {
         // JSON Lines as the recordings are judged: a directory of any size in bounded memory
-        let mut worst = VerdictState::Healthy;
-        let mut unjudged = false;
+        let (mut worst, mut failed, mut unjudged) = (VerdictState::Healthy, 0, false);
         jobs::diagnose::run_streaming(&job, &mut |d| {
-            worst = worst.max(d.verdict.state);
-            unjudged |= d.verdict.state == VerdictState::NotJudged;
-            json_line(out, &d)?;
+            match d {
+                Ok(d) => {
+                    worst = worst.max(d.verdict.state);
+                    unjudged |= d.verdict.state == VerdictState::NotJudged;
+                    json_line(out, &d)?;
+                }
+                Err(f) => {
+                    failed += 1;
+                    failure_line(out, f)?;
+                }
+            }
             out.flush().map_err(CliError::from)?;
             Ok(())
         })?;
-        return Ok(fail_code(a.fail_on, worst, unjudged));
+        return Ok(batch_code(a.fail_on, worst, failed, unjudged));
     }
     let done = with_spinner("diagnosing", || jobs::diagnose::run(&job))?;
     if !a.json && !done.report_files.is_empty() {
@@ -395,9 +405,36 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
             print::diagnosis(out, d, job.iso_class).map_err(CliError::from)?;
         }
     }
-    let worst = done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy);
+    let (worst, failed) =
+        (done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy), done.failures.len());
     let unjudged = done.diagnoses.iter().any(|d| d.verdict.state == VerdictState::NotJudged);
-    Ok(fail_code(a.fail_on, worst, unjudged))
+    for f in done.failures {
+        if a.json {
+            failure_line(out, f)?;
+        } else {
+            eprintln!("gearvib: error: {}", restate_for_flags(f.error));
+        }
+    }
+    Ok(batch_code(a.fail_on, worst, failed, unjudged))
+}
+
+/// A recording of a batch that failed, in JSON Lines: `{"file": ..., "error": ...}` on standard output
+/// (in its place among the others) and the error on standard error.
+fn failure_line(out: &mut dyn Write, f: jobs::diagnose::Failure) -> Result<(), Error> {
+    let message = restate_for_flags(f.error).to_string();
+    eprintln!("gearvib: error: {message}");
+    #[derive(serde::Serialize)]
+    struct Line<'a> {
+        file: &'a str,
+        error: &'a str,
+    }
+    json_line(out, &Line { file: &f.file, error: &message })
+}
+
+/// Exit code of a `diagnose` batch: 2 when any recording failed (the others were reported), else
+/// [`fail_code`].
+fn batch_code(fail_on: Option<FailOn>, worst: VerdictState, failed: usize, unjudged: bool) -> u8 {
+    if failed > 0 { 2 } else { fail_code(fail_on, worst, unjudged) }
 }
 
 /// Exit code of `diagnose`: 1 when `--fail-on` is given and the worst verdict reaches it; else 3 when a

@@ -1,5 +1,6 @@
 //! CSV (and tab/semicolon separated) signals: optional header row, an optional time column (named
-//! `time`, `t`, `time_s` or starting with `time`), comma, semicolon or tab delimiters (with `;`, a decimal
+//! `time`, `t`, `time_s` or starting with `time`; its unit s, ms or us from the header, `time [ms]`,
+//! `time_us`, seconds when none is named, any other unit refused), comma, semicolon or tab delimiters (with `;`, a decimal
 //! comma is accepted), trailing empty rows tolerated. Read line by line: memory grows with the data
 //! actually present, never with a claimed size.
 
@@ -14,7 +15,35 @@ fn delimiter(line: &str) -> char {
 
 fn is_time_name(name: &str) -> bool {
     let n = name.trim().trim_matches('"').to_ascii_lowercase();
-    n == "t" || n.starts_with("time")
+    n == "t" || n.starts_with("time") || n.starts_with("t [") || n.starts_with("t (")
+}
+
+/// Seconds per unit of a time column, from its header: a unit in brackets or parentheses (`time [ms]`,
+/// `t (us)`) or after an underscore (`time_ms`); none means seconds. Honoured: s, ms, us (also µs, μs).
+///
+/// # Errors
+/// Any other unit, named.
+fn time_unit(name: &str) -> Result<f64, String> {
+    let n = name.trim().trim_matches('"').to_lowercase();
+    let rest = n.strip_prefix("time").or_else(|| n.strip_prefix('t')).unwrap_or(&n).trim();
+    let unit = if let Some(u) = rest.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+        u
+    } else if let Some(u) = rest.strip_prefix('(').and_then(|r| r.strip_suffix(')')) {
+        u
+    } else if let Some(u) = rest.strip_prefix('_') {
+        u
+    } else {
+        return Ok(1.0); // "time", "t", "timestamp": seconds
+    };
+    match unit.trim() {
+        "s" | "sec" | "second" | "seconds" => Ok(1.0),
+        "ms" | "msec" => Ok(1e-3),
+        "us" | "µs" | "μs" | "usec" => Ok(1e-6),
+        other => Err(format!(
+            "time column {:?}: unit {other:?} is not one of s, ms, us; convert the column or give the sample rate (and drop the column)",
+            name.trim()
+        )),
+    }
 }
 
 /// Reads a delimited text signal. Channels are the non-time columns; the sample rate comes from a time
@@ -92,7 +121,8 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     }
     let mut sample_rate_hz = None;
     if let Some(tc) = time_col {
-        sample_rate_hz = Some(rate_from_time(path, &columns[tc])?);
+        let seconds = time_unit(&names[tc]).map_err(|m| DataError::format(path, m))?;
+        sample_rate_hz = Some(rate_from_time(path, &columns[tc])? / seconds);
     }
     // channels are kept as f32 (see `Recording`); each f64 column is dropped as soon as it is converted
     let (names, channels): (Vec<String>, Vec<Vec<f32>>) = names
@@ -109,6 +139,7 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
         channels: channels.into_iter().map(std::borrow::Cow::Owned).collect(),
         sample_rate_hz,
         names,
+        warnings: Vec::new(),
     })
 }
 
@@ -147,7 +178,7 @@ fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
             return Err(DataError::format(
                 path,
                 format!(
-                    "time column is not uniformly sampled near data row {} (step {} s, mean {} s)",
+                    "time column is not uniformly sampled near data row {} (step {}, mean {}, in the column's unit)",
                     i + 2,
                     w[1] - w[0],
                     dt

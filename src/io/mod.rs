@@ -248,6 +248,9 @@ pub struct Recording<'a> {
     pub names: Vec<String>,
     /// Physical unit of each channel when known (from gearvib's sidecar), else empty.
     pub units: Vec<String>,
+    /// What the reader noticed and the analysis should report (a foreign sidecar ignored, a sidecar whose
+    /// sample rate or frame count disagrees with the file).
+    pub warnings: Vec<String>,
 }
 
 impl Recording<'_> {
@@ -258,6 +261,7 @@ impl Recording<'_> {
             sample_rate_hz: self.sample_rate_hz,
             names: self.names.clone(),
             units: self.units.clone(),
+            warnings: self.warnings.clone(),
         }
     }
 }
@@ -280,8 +284,10 @@ pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Re
     register_input(&sidecar::path_of(path));
     match extension(path).as_deref() {
         Some("wav") => {
+            // the sidecar first: a device or a damaged one is refused before the signal is read
+            let side = sidecar::read(path)?;
             let mut rec = wav::read_channels(path, keep)?;
-            apply_sidecar(path, &mut rec);
+            apply_sidecar(path, side, &mut rec)?;
             Ok(rec)
         }
         Some("csv") | Some("txt") | Some("tsv") => {
@@ -305,20 +311,67 @@ pub fn extension(path: &Path) -> Option<String> {
 }
 
 /// An integer WAV written by gearvib stores value / full_scale; its sidecar `FILE.json` states
-/// `full_scale`, which restores physical units, and names the channels. Files without a readable sidecar
-/// are left as read.
-fn apply_sidecar(path: &Path, rec: &mut Recording<'_>) {
-    let Some(side) = sidecar::read(path) else { return };
-    if let Some(fs) = side.full_scale.filter(|f| f.is_finite() && *f > 0.0) {
-        for c in &mut rec.channels {
-            c.to_mut().iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
+/// `full_scale`, which restores physical units, and names the channels. A sidecar whose sample rate or
+/// frame count disagrees with the WAV is warned about (the WAV's header is used); a foreign JSON file of
+/// the sidecar's name leaves the samples as read, with its warning.
+///
+/// # Errors
+/// A `full_scale` that is not a positive number whose scaled samples stay within 32-bit float range.
+fn apply_sidecar(path: &Path, found: sidecar::Found, rec: &mut Recording<'_>) -> Result<(), DataError> {
+    let side = match found {
+        sidecar::Found::None => return Ok(()),
+        sidecar::Found::Foreign(w) => {
+            rec.warnings.push(w);
+            return Ok(());
         }
+        sidecar::Found::Sidecar(s) => *s,
+    };
+    let side_path = sidecar::path_of(path);
+    if let Some(fs) = side.full_scale {
+        // integer samples are in [-1, 1]: any positive full scale up to f32::MAX keeps them finite
+        if !(fs.is_finite() && fs > 0.0 && fs <= f64::from(f32::MAX)) {
+            return Err(DataError::format(
+                &side_path,
+                format!("full_scale {fs:e}: a full scale is a positive number within 32-bit float range"),
+            ));
+        }
+        for c in &mut rec.channels {
+            if !c.is_empty() {
+                c.to_mut().iter_mut().for_each(|x| *x = (f64::from(*x) * fs) as f32);
+            }
+        }
+    }
+    if let Some(header) = rec.sample_rate_hz {
+        if !(side.sample_rate_hz.is_finite() && (side.sample_rate_hz - header).abs() <= 1e-6 * header) {
+            rec.warnings.push(format!(
+                "{}: the sidecar states a sample rate of {} Hz, the WAV header {header} Hz: the header's rate is used; check which is right",
+                side_path.display(),
+                side.sample_rate_hz
+            ));
+        }
+    }
+    let frames = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0) as u64;
+    if side.frames != frames {
+        rec.warnings.push(format!(
+            "{}: the sidecar states {} frames, the WAV holds {frames}: the file may be truncated or not the one the sidecar describes",
+            side_path.display(),
+            side.frames
+        ));
+    }
+    if side.channels.len() != rec.channels.len() {
+        rec.warnings.push(format!(
+            "{}: the sidecar names {} channel(s), the WAV holds {}: names and units are taken in order",
+            side_path.display(),
+            side.channels.len(),
+            rec.channels.len()
+        ));
     }
     for (name, c) in rec.names.iter_mut().zip(&side.channels) {
         name.clone_from(&c.name);
     }
     rec.units = side.channels.iter().map(|c| c.unit.clone()).collect();
     rec.units.resize(rec.names.len(), String::new());
+    Ok(())
 }
 
 /// A signal file being written under a temporary name, by its extension: a WAV (`.wav`) or a CSV with a

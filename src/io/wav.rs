@@ -236,6 +236,7 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'s
                     sample_rate_hz: Some(f64::from(rate)),
                     units: vec![String::new(); nch],
                     names,
+                    warnings: Vec::new(),
                 });
             }
             _ => {

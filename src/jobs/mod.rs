@@ -17,6 +17,20 @@ pub mod sweep;
 pub mod synth;
 pub mod train;
 
+/// Where the last panic of this process happened (`file:line:column`), as the binary's panic hook
+/// records it with [`note_panic`]: a panic caught as an internal error then says where.
+static LAST_PANIC: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Records where a panic happened (called from a panic hook).
+pub fn note_panic(location: String) {
+    *LAST_PANIC.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = Some(location);
+}
+
+/// The location recorded by [`note_panic`] since the last call, if any.
+pub fn last_panic_location() -> Option<String> {
+    LAST_PANIC.lock().unwrap_or_else(std::sync::PoisonError::into_inner).take()
+}
+
 /// The role a channel number plays in a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ChannelRole {

@@ -172,6 +172,9 @@ pub fn sweep(
     sweep_values(scene, path, &values, partial, progress)
 }
 
+/// Most values one sweep takes.
+pub const MAX_SWEEP_VALUES: usize = 1_000_000;
+
 /// [`sweep`] over the given parameter `values` (in the parameter's unit, any order; 1 to 1 000 000 finite
 /// values), one point per value in the same order.
 ///
@@ -184,7 +187,7 @@ pub fn sweep_values(
     partial: Option<&std::path::Path>,
     progress: &Progress<'_>,
 ) -> Result<Vec<SweepPoint>, Error> {
-    if values.is_empty() || values.len() > 1_000_000 || values.iter().any(|v| !v.is_finite()) {
+    if values.is_empty() || values.len() > MAX_SWEEP_VALUES || values.iter().any(|v| !v.is_finite()) {
         return Err(JobError::Value {
             what: "sweep values".into(),
             message: format!(

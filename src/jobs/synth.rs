@@ -329,6 +329,18 @@ pub fn write_signal(scene: &Scene, sim: &Simulation, out: &Path, allow_aliasing:
         (true, f) => {
             let peak = steady_peak + 4.0 * o.noise_rms;
             let fsc = o.full_scale.unwrap_or_else(|| nice_ceiling(1.25 * peak));
+            // a full scale so large that the whole signal rounds to 0 would write an all-zero channel
+            let step = fsc / if f == WavFormat::I16 { 32768.0 } else { 8_388_608.0 };
+            if peak > 0.0 && peak < 0.5 * step {
+                return Err(JobError::Input {
+                    file: scene.file.clone(),
+                    message: format!(
+                        "field `output.full_scale`: {fsc:e} makes one integer step {step:.3e}, above twice the signal's peak {peak:.3e}: every sample would be written as 0; lower output.full_scale (or leave it out for {:e})",
+                        nice_ceiling(1.25 * peak)
+                    ),
+                }
+                .into());
+            }
             (if f == WavFormat::I16 { "i16" } else { "i24" }.to_string(), Some(fsc))
         }
     };

@@ -400,6 +400,7 @@ fn write_recording(scene: &TrainScene, sol: &TrainSolution, out: &std::path::Pat
         units: channels.iter().map(|c| c.2.clone()).collect(),
         sample_rate_hz: Some(o.sample_rate_hz),
         channels: channels.into_iter().map(|c| std::borrow::Cow::Owned(c.3)).collect(),
+        warnings: Vec::new(),
     };
     crate::io::write_recording(out, &rec)?;
     Ok(())

@@ -217,14 +217,19 @@ impl GearPair {
     fn crack_factor(&self, t: f64, side: Side) -> f64 {
         let Some((a, b, rev)) = self.crack_window() else { return 1.0 };
         let loss = self.params.crack.as_ref().map_or(0.0, |c| c.loss);
-        let tau = t.rem_euclid(rev);
-        // guard rounding: tau within 1e-12 rev of rev counts as 0
-        let tau = if rev - tau < 1e-12 * rev { 0.0 } else { tau };
+        // a time within eps of a jump counts as on it: the solver's grid puts nodes at a + r rev, whose
+        // remainder modulo rev rounds to either side of a for r > 0 (a cracked wheel over the hunting
+        // period), and taking the wrong side there dropped the step scheme to first order
+        let eps = 1e-9 * (b - a);
+        let mut tau = t.rem_euclid(rev);
+        if rev - tau <= eps {
+            tau -= rev; // the start of the next revolution
+        }
         let inside = match side {
-            Side::Right => tau >= a && tau < b,
+            Side::Right => tau >= a - eps && tau < b - eps,
             // the left limit at a revolution start is the end of the previous revolution: inside only when
             // the window is the last tooth's
-            Side::Left => (tau > a && tau <= b) || (tau == 0.0 && b >= rev * (1.0 - 1e-12)),
+            Side::Left => (tau > a + eps && tau <= b + eps) || (tau <= eps && b >= rev - eps),
         };
         if inside { 1.0 - loss } else { 1.0 }
     }
@@ -379,6 +384,58 @@ impl PeriodicSystem for GearPair {
         let c =
             (self.params.wheel_errors.harmonics() as f64 * revs * z1 / self.params.wheel_teeth as f64).round() as usize;
         a.max(b).max(c) + a.min(b.max(c))
+    }
+}
+
+/// A lower bound of the work of a time-stepped steady state of a gear pair and of its output's orders
+/// (see [`GearPair::stepped_work`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepWork {
+    /// Steps of the final grid, at least.
+    pub steps: usize,
+    /// Orders of the period integrated on every step (the output's highest order times the pinion
+    /// revolutions per period).
+    pub orders: usize,
+    /// Floating-point operations of the step products (the tolerance loop's attempts).
+    pub solve_flops: f64,
+    /// Floating-point operations of the orders: 4 Gauss points per step, one complex multiply-add per order
+    /// and state component (2).
+    pub orders_flops: f64,
+}
+
+impl StepWork {
+    /// Both parts, floating-point operations.
+    pub fn total(&self) -> f64 {
+        self.solve_flops + self.orders_flops
+    }
+}
+
+impl GearPair {
+    /// The work of time stepping this pair (no Fourier form: a crack, or a piecewise mesh stiffness) to
+    /// `tolerance` with the orders up to `max_order` of the pinion computed on the solver's grid; `None`
+    /// when harmonic balance applies (its work is the solver's estimate). Steps: the larger of the step
+    /// solver's final grid at the least (8 per highest coefficient harmonic) and 400 per cycle of the mesh
+    /// natural frequency over the period, scaled by (1e-7 / tolerance)^(1/4) as a fourth-order method's
+    /// step count is: the bundled pinion-crack and rectangular-stiffness scenes (29 natural cycles per
+    /// period, tolerance 1e-7) needed 7248 and 17080 steps, against 11600 estimated for each.
+    pub fn stepped_work(&self, max_order: f64, tolerance: f64) -> Option<StepWork> {
+        if self.params.crack.is_none() && matches!(self.params.mesh, MeshStiffness::Fourier(_)) {
+            return None;
+        }
+        let grid = 2 * (4 * self.max_harmonic()).max(64).max(2 * (self.breakpoints.len() + 1));
+        let cycles = self.natural_frequency_rad_s() / (2.0 * PI) * self.period_s;
+        let scale = (1e-7 / tolerance.max(1e-15)).powf(0.25);
+        let steps = ((grid as f64).max(400.0 * cycles) * scale).min(1e15) as usize;
+        let orders = (max_order * self.revolutions_per_period()).max(1.0).floor() as usize;
+        // 3 passes (coarse, fine, the trajectory), 4 stage evaluations each of the coefficient terms
+        // (a sine and cosine, ~20 flops) and the 2 x 3 augmented block
+        let per_step = 4.0 * (20.0 * self.eval_terms() as f64 + 24.0);
+        Some(StepWork {
+            steps,
+            orders,
+            solve_flops: 3.0 * steps as f64 * per_step,
+            orders_flops: 4.0 * steps as f64 * orders as f64 * 2.0 * 8.0,
+        })
     }
 }
 

@@ -371,7 +371,15 @@ fn draw_all(root: &Area<'_>, columns: usize, charts: &[Chart]) -> Result<Vec<Geo
 }
 
 fn draw_err(path: &Path, e: impl std::fmt::Display) -> ReportError {
-    ReportError::Write { path: path.display().to_string(), message: e.to_string() }
+    // plotters puts a failed write in debug text (ImageError(IoError(Os { .., message: "No space left on
+    // device" })), or IoError(Custom { .., error: "..." })): the OS's message alone is the line a user needs
+    let text = e.to_string();
+    let quoted = text.contains("IoError(").then(|| text.rsplit_once(": \"")).flatten();
+    let message = match quoted.and_then(|(_, r)| r.split_once('"')) {
+        Some((m, _)) => format!("cannot write: {m}"),
+        None => text,
+    };
+    ReportError::Write { path: path.display().to_string(), message }
 }
 
 type DrawResult = Result<Geometry, Box<dyn std::error::Error>>;

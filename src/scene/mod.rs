@@ -256,8 +256,7 @@ impl Scene {
     /// [`SceneError`] naming the file and field.
     pub fn load(path: &str) -> Result<Self, SceneError> {
         crate::io::register_input(std::path::Path::new(path));
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
+        let text = read_limited(path)?;
         // typed parse first, for messages with the field path and line/column
         let mut de = serde_json::Deserializer::from_str(&text);
         let raw: RawScene = serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(path, e))?;
@@ -298,6 +297,7 @@ impl Scene {
                 let g = raw.gear_pair.as_ref().ok_or_else(|| missing("gear_pair"))?;
                 let gp = v.gear_pair(g, solver.tolerance, &mut notes)?;
                 let out = v.gear_output(&raw.output, &gp)?;
+                v.gear_work(&gp, out.max_order, solver.tolerance)?;
                 (Model::GearPair(gp), out)
             }
             ModelKind::Press => {
@@ -337,6 +337,27 @@ impl Scene {
 pub fn parse_json<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T, SceneError> {
     let mut de = serde_json::Deserializer::from_str(text);
     serde_path_to_error::deserialize(&mut de).map_err(|e| json_error(file, e))
+}
+
+/// Largest scene file read, bytes: a sampled table of the largest accepted size is well under 1 MB.
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+
+/// The text of a scene file, read with a size limit: a device, a pipe or a file over [`MAX_SCENE_BYTES`]
+/// is refused before it is read.
+fn read_limited(path: &str) -> Result<String, SceneError> {
+    use std::io::Read;
+    let io = |message: String| SceneError::Io { file: path.to_string(), message };
+    let meta = std::fs::metadata(path).map_err(|e| io(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(io("not a regular file (a device, pipe or directory)".into()));
+    }
+    let file = std::fs::File::open(path).map_err(|e| io(e.to_string()))?;
+    let mut bytes = Vec::with_capacity(meta.len().min(MAX_SCENE_BYTES) as usize);
+    file.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(|e| io(e.to_string()))?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(io(format!("larger than the {MAX_SCENE_BYTES} bytes a scene may hold")));
+    }
+    String::from_utf8(bytes).map_err(|e| io(format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
 }
 
 fn json_error(file: &str, e: serde_path_to_error::Error<serde_json::Error>) -> SceneError {

@@ -39,6 +39,10 @@ impl Validator<'_> {
         let speed_change = self.speed_change(o, duration_s)?;
         let wav_format = o.wav_format.unwrap_or(WavFormat::F32);
         let full_scale = match o.full_scale {
+            // a reader scales integer samples in [-1, 1] by it into 32-bit floats
+            Some(x) if x > f64::from(f32::MAX) => {
+                return Err(self.err("output.full_scale", format!("{x:e} is beyond 32-bit float range (3.4e38)")));
+            }
             Some(x) => Some(self.positive("output.full_scale", x)?),
             None => None,
         };

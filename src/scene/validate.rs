@@ -11,6 +11,9 @@ use std::f64::consts::PI;
 
 /// Most cam coefficients of a press scene (a real cam profile needs tens).
 const MAX_CAM_COEFFICIENTS: usize = 1000;
+/// Sine-cosine pairs allowed for turning a sampled mesh-stiffness table into its Fourier series (N^2 / 2
+/// for N samples: about 1.5 s on one core of the development machine; 100000 samples took 77 s).
+const TABLE_BUDGET: f64 = 1e8;
 /// Largest accepted mesh damping ratio (critical damping is 1).
 const MAX_DAMPING_RATIO: f64 = 10.0;
 /// Largest accepted ratio between the mesh natural frequency and the mesh frequency (either way).
@@ -184,8 +187,22 @@ impl Validator<'_> {
                         "needs at least 3 samples over one mesh cycle".into(),
                     ));
                 }
+                let n = values_n_per_m.len() as f64;
+                let work = n * n / 2.0;
+                if work > TABLE_BUDGET {
+                    return Err(self.err(
+                        &format!("{f}.samples.values_n_per_m"),
+                        format!(
+                            "{n} samples: their Fourier series would take about {work:.1e} sine-cosine evaluations (~{:.0} s), beyond the budget of {TABLE_BUDGET:.0e}: give at most {} samples over the mesh cycle",
+                            work * 15e-9,
+                            (2.0 * TABLE_BUDGET).sqrt().floor()
+                        ),
+                    ));
+                }
                 for (i, x) in values_n_per_m.iter().enumerate() {
-                    self.positive(&format!("{f}.samples.values_n_per_m[{i}]"), *x)?;
+                    if !(x.is_finite() && *x > 0.0) {
+                        self.positive(&format!("{f}.samples.values_n_per_m[{i}]"), *x)?;
+                    }
                 }
                 let mut s = FourierSeries::from_samples(1.0, values_n_per_m, values_n_per_m.len() / 2);
                 let dropped = s.truncate_below(tolerance * s.mean);
@@ -298,6 +315,28 @@ impl Validator<'_> {
             gp.mesh_cycles_per_period()
         ));
         Ok(gp)
+    }
+
+    /// A gear pair without a Fourier form is time-stepped over its whole period, and the output's orders
+    /// are integrated on every step: refused when the estimate of that work ([`GearPair::stepped_work`])
+    /// is beyond the solver's budget (a crack on the wheel makes the period the hunting period).
+    pub(super) fn gear_work(&self, gp: &GearPair, max_order: f64, tolerance: f64) -> Result<(), SceneError> {
+        let Some(work) = gp.stepped_work(max_order, tolerance) else { return Ok(()) };
+        if work.total() <= crate::solver::WORK_BUDGET_FLOPS {
+            return Ok(());
+        }
+        Err(self.err(
+            if gp.params().crack.is_some() { "gear_pair.crack" } else { "gear_pair.mesh_stiffness" },
+            format!(
+                "no Fourier form (a crack or a piecewise mesh stiffness), so time steps over the period of {} pinion revolutions ({} mesh cycles): about {} steps and {:.1e} floating-point operations with the output's {} orders, beyond the budget of {:.0e}: put the crack on the pinion (a period of one revolution), lower output.max_order, or give a smooth mesh stiffness",
+                fmt_revs(gp.revolutions_per_period()),
+                gp.mesh_cycles_per_period(),
+                work.steps,
+                work.total(),
+                work.orders,
+                crate::solver::WORK_BUDGET_FLOPS
+            ),
+        ))
     }
 
     /// The mesh's natural frequency must be a finite, sensible multiple of the mesh frequency: an inertia

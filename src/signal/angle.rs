@@ -98,7 +98,9 @@ pub fn from_pulses(pulses: &[f64], per_rev: usize) -> Result<AngleMap, SignalErr
         let hi = (i + 5).min(gaps.len());
         let mut near: Vec<f64> = gaps[lo..hi].to_vec();
         near.sort_by(f64::total_cmp);
-        let median = near[near.len() / 2];
+        // the lower quartile of the neighbours: with every third pulse missing the median is itself a
+        // doubled gap, the lower quartile still a whole revolution
+        let median = near[near.len() / 4];
         if *g > 1.6 * median {
             return Err(SignalError::Invalid(format!(
                 "tachometer pulses missing: the gap after pulse {} at sample {:.0} is {:.2} times its neighbours'",

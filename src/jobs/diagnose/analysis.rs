@@ -10,7 +10,7 @@ pub(super) fn analyse(
     o: &Options,
     geometry: Option<&Geometry>,
 ) -> Result<Diagnosis, Error> {
-    let mut warnings = Vec::new();
+    let mut warnings = std::mem::take(&mut rec.warnings);
     let Checked { tacho, channels, moments, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
     let mut fft = Fft::new();
     let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
@@ -63,6 +63,12 @@ pub(super) fn analyse(
         Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
         None => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
+    // a mesh order known now must fit the averages' resolution before their blocks are scored
+    for &(name, _, z) in &gears {
+        if let Some(z) = z {
+            check_mesh_order(path, z, points, name, source)?;
+        }
+    }
     // the TSAs of every channel, gear by gear (each in parallel runs of blocks, the channels sharing the
     // angle's interpolation); each block's indicators as the block completes when the gear's mesh order
     // is known (else the block is kept until the TSAs give it)
@@ -126,18 +132,18 @@ pub(super) fn analyse(
                 z
             }
         };
-        if z * 2 + 8 > points / 2 {
-            return Err(bad(
-                path,
-                format!(
-                    "mesh order {z} needs more than {points} samples per revolution of the {name}: the shaft speed ({}) is too high for the sample rate, or the teeth are wrong",
-                    match source {
-                        SpeedSource::Estimated => "estimated; give --rpm",
-                        SpeedSource::Given => "given",
-                        SpeedSource::Tachometer => "from the tachometer",
-                    }
-                ),
-            ));
+        check_mesh_order(path, z, points, *name, source)?;
+        if let (Some(t), Some(_), Shaft::Pinion) = (tacho, o.teeth, *name) {
+            let pinion = tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice());
+            if let Some(found) = teeth::pulses_misfit(pinion, z) {
+                return Err(bad(
+                    path,
+                    format!(
+                        "tachometer channel {t}: with {} pulse(s) per revolution the mesh line of {z} teeth stands at order {found} of the pinion's average, not {z}: check the pulses per revolution and the tachometer's pulses",
+                        o.pulses_per_rev
+                    ),
+                ));
+            }
         }
         if o.teeth.is_some() {
             if let Some(w) = teeth_misfit(tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()), z, *name) {
@@ -314,6 +320,31 @@ pub(super) fn analyse(
     Ok(d)
 }
 
+/// A mesh order `z` that the TSA of `points` samples per revolution of `gear` resolves with room for its
+/// sidebands (and is not zero).
+///
+/// # Errors
+/// [`JobError::Input`] naming the file, the order and the speed's source.
+fn check_mesh_order(path: &Path, z: usize, points: usize, gear: Shaft, source: SpeedSource) -> Result<(), Error> {
+    if z == 0 {
+        return Err(bad(path, format!("mesh order 0 of the {gear}: a gear has at least one tooth")));
+    }
+    if z.saturating_mul(2).saturating_add(8) <= points / 2 {
+        return Ok(());
+    }
+    Err(bad(
+        path,
+        format!(
+            "mesh order {z} needs more than {points} samples per revolution of the {gear}: the shaft speed ({}) is too high for the sample rate, or the teeth are wrong",
+            match source {
+                SpeedSource::Estimated => "estimated; give --rpm",
+                SpeedSource::Given => "given",
+                SpeedSource::Tachometer => "from the tachometer",
+            }
+        ),
+    ))
+}
+
 /// Frees the samples of every channel of `channels` but `keep` (the recording's raw statistics were taken
 /// by the checks).
 fn free_other_channels(rec: &mut Recording, channels: &[usize], keep: usize) {
@@ -363,7 +394,11 @@ pub(super) fn tsa_indicators(
         (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
     let mean = x.iter().sum::<f64>() / x.len() as f64;
     let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let side = amplitudes[z - 1] + amplitudes[z + 1];
+    // indices checked here: a mesh order beyond the average's resolution (refused by the caller) reads NaN
+    let side = match (z.checked_sub(1).and_then(|i| amplitudes.get(i)), amplitudes.get(z + 1)) {
+        (Some(a), Some(b)) => a + b,
+        _ => f64::NAN,
+    };
     let rms = ind::rms(&centred);
     let [fm4, m6a, m8a] = ind::normalized_moments_4_6_8(difference);
     let mut m = BTreeMap::new();
@@ -378,7 +413,7 @@ pub(super) fn tsa_indicators(
     m.insert("er".into(), ind::energy_ratio(difference, regular));
     m.insert("si".into(), side / 2.0);
     m.insert("slf".into(), side / rms);
-    m.insert("ser".into(), ind::sideband_energy_ratio(amplitudes, z, 1));
+    m.insert("ser".into(), if z < amplitudes.len() { ind::sideband_energy_ratio(amplitudes, z, 1) } else { f64::NAN });
     (m, d)
 }
 

@@ -80,13 +80,37 @@ pub struct DiagnoseJob<'a> {
     pub iso_class: Option<crate::signal::velocity::MachineClass>,
 }
 
-/// What [`run`] produced: one diagnosis per recording, in the order given, and the report files written.
-#[derive(Clone, Debug)]
+/// What [`run`] produced: one diagnosis per recording that could be diagnosed, in the order given, the
+/// recordings that could not, and the report files written.
+#[derive(Debug)]
 pub struct DiagnoseOutcome {
     /// Diagnoses in the order of the recordings.
     pub diagnoses: Vec<Diagnosis>,
+    /// Recordings of a batch that failed, each with its error (the others are diagnosed all the same).
+    pub failures: Vec<Failure>,
     /// Report files written (empty without a report directory).
     pub report_files: Vec<PathBuf>,
+}
+
+/// A recording of a batch that could not be diagnosed: its file and the error (which names it).
+#[derive(Debug)]
+pub struct Failure {
+    /// The recording as given.
+    pub file: String,
+    /// What went wrong.
+    pub error: Error,
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.error.fmt(f)
+    }
+}
+
+impl Failure {
+    fn of(file: &Path, error: Error) -> Self {
+        Self { file: file.display().to_string(), error }
+    }
 }
 
 /// Diagnoses every recording of `job`: the baseline first (its speed and mesh order are shared with the
@@ -96,13 +120,18 @@ pub struct DiagnoseOutcome {
 /// # Errors
 /// Any recording, the baseline or the scene cannot be read or analysed; the report cannot be written.
 pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
-    let mut done = Vec::new();
+    let (mut done, mut failures) = (Vec::new(), Vec::new());
     let reference = run_streaming(job, &mut |d| {
-        done.push(d);
+        match d {
+            Ok(d) => done.push(d),
+            Err(f) => failures.push(f),
+        }
         Ok(())
     })?;
     let mut report_files = Vec::new();
-    if let Some(dir) = &job.report {
+    if let (Some(dir), false) = (&job.report, done.is_empty()) {
+        // every output checked before the first is written: a refusal leaves no half report set
+        check_report_outputs(dir, &done, done.len() >= 2 && reference)?;
         let mut sections = Vec::new();
         for d in &done {
             let files = write_report(d, dir)?;
@@ -120,7 +149,56 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         }
         report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);
     }
-    Ok(DiagnoseOutcome { diagnoses: done, report_files })
+    Ok(DiagnoseOutcome { diagnoses: done, failures, report_files })
+}
+
+/// Suffixes of the report files of one recording `STEM` (`STEM-diagnosis.json` and its images).
+const REPORT_SUFFIXES: [&str; 9] = [
+    "-diagnosis.json",
+    "-tsa.png",
+    "-spectrum.png",
+    "-zoom.png",
+    "-envelope.png",
+    "-kurtogram.png",
+    "-cepstrum.png",
+    "-order-map.png",
+    "-vs-model.png",
+];
+
+/// The report's files that [`run`] may write into `dir` for `done` (with the trend files when `trend`):
+/// none may be an input of this run, and no two recordings may share a stem (the second's report would
+/// replace the first's).
+///
+/// # Errors
+/// [`JobError::Input`] naming the output and the input, or the two recordings.
+fn check_report_outputs(dir: &Path, done: &[Diagnosis], trend: bool) -> Result<(), Error> {
+    let mut stems: BTreeMap<String, &str> = BTreeMap::new();
+    let mut names = vec!["index.html".to_string()];
+    if trend {
+        names.extend(["trend.csv", "trend.jsonl", "trend.png"].map(String::from));
+    }
+    for d in done {
+        let stem = report_stem(d);
+        if let Some(first) = stems.insert(stem.clone(), &d.file) {
+            return Err(bad(
+                Path::new(&d.file),
+                format!(
+                    "its report files ({stem}-...) would replace those of {first} in {}: give the recordings different names or one report directory each",
+                    dir.display()
+                ),
+            ));
+        }
+        names.extend(REPORT_SUFFIXES.iter().map(|s| format!("{stem}{s}")));
+    }
+    for n in names {
+        io::check_output(&dir.join(n))?;
+    }
+    Ok(())
+}
+
+/// The name a recording's report files start with: its file stem.
+fn report_stem(d: &Diagnosis) -> String {
+    Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string()
 }
 
 /// The baseline side of a call, prepared once: options as fixed by the first baseline (or a profile), the
@@ -216,13 +294,15 @@ fn chunk_size() -> usize {
     2 * rayon::current_num_threads().max(1)
 }
 
-/// [`run`] without the report: each diagnosis is handed to `emit` as soon as it and every recording before
-/// it are judged (time order kept; NA4 over the ensemble carried from one to the next), so a directory of
-/// any size runs in bounded memory. Returns whether a statistical baseline was used.
+/// [`run`] without the report: each recording's diagnosis, or its failure, is handed to `emit` as soon as
+/// it and every recording before it are judged (time order kept; NA4 over the ensemble carried from one
+/// to the next), so a directory of any size runs in bounded memory. A recording that fails (bad data, or
+/// a panic caught as an internal error) does not stop the others. Returns whether a statistical baseline
+/// was used.
 ///
 /// # Errors
-/// As [`run`], or what `emit` returns.
-pub fn run_streaming(job: &DiagnoseJob, emit: &mut dyn FnMut(Diagnosis) -> Result<(), Error>) -> Result<bool, Error> {
+/// The baseline or the scene cannot be used, a directory cannot be listed, or what `emit` returns.
+pub fn run_streaming(job: &DiagnoseJob, emit: &mut Emit<'_>) -> Result<bool, Error> {
     crate::io::begin_run();
     let p = prepare(job)?;
     run_streaming_prepared(job, &p, emit)
@@ -233,25 +313,42 @@ pub fn run_streaming(job: &DiagnoseJob, emit: &mut dyn FnMut(Diagnosis) -> Resul
 ///
 /// # Errors
 /// As [`run_streaming`].
-pub fn run_streaming_prepared(
-    job: &DiagnoseJob,
-    p: &Prepared,
-    emit: &mut dyn FnMut(Diagnosis) -> Result<(), Error>,
-) -> Result<bool, Error> {
+pub fn run_streaming_prepared(job: &DiagnoseJob, p: &Prepared, emit: &mut Emit<'_>) -> Result<bool, Error> {
     let recordings = expand_dirs(&job.recordings)?;
     let mut history = verdict::Na4History::default();
+    let report = job.report.is_some();
     for chunk in recordings.chunks(chunk_size()) {
         let results: Vec<Result<Diagnosis, Error>> =
-            chunk.par_iter().map(|r| diagnose(r, &p.opts, p.geometry.as_ref())).collect();
-        for d in results {
-            emit(finish(d?, p, &mut history, job.report.is_some())?)?;
+            chunk.par_iter().map(|r| caught(r, || diagnose(r, &p.opts, p.geometry.as_ref()))).collect();
+        for (r, d) in chunk.iter().zip(results) {
+            let judged = d.and_then(|d| caught(r, || finish(d, p, &mut history, report)));
+            emit(judged.map_err(|e| Failure::of(r, e)))?;
         }
     }
     for (name, rec) in &job.in_memory {
-        let d = diagnose_in_memory(name, rec.lent(), &p.opts, p.geometry.as_ref())?;
-        emit(finish(d, p, &mut history, job.report.is_some())?)?;
+        let d = caught(name, || diagnose_in_memory(name, rec.lent(), &p.opts, p.geometry.as_ref()))
+            .and_then(|d| caught(name, || finish(d, p, &mut history, report)));
+        emit(d.map_err(|e| Failure::of(name, e)))?;
     }
     Ok(p.reference.is_some())
+}
+
+/// What [`run_streaming`] hands each recording's outcome to, in time order; an error it returns stops the
+/// batch (a closed output, a caller that wants no more).
+pub type Emit<'a> = dyn FnMut(Result<Diagnosis, Failure>) -> Result<(), Error> + 'a;
+
+/// `f`, with a panic inside it (a bug, in this thread or a worker's) turned into an error naming `file`:
+/// the batch goes on, and the process never ends with a partial result and a success code.
+fn caught<T>(file: &Path, f: impl FnOnce() -> Result<T, Error>) -> Result<T, Error> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic".into());
+        let at = crate::jobs::last_panic_location().map(|l| format!(" at {l}")).unwrap_or_default();
+        Err(bad(file, format!("internal error{at}: {what} (a bug in gearvib: please report it with this file)")))
+    })
 }
 
 /// Judges one diagnosis (the next in time order): against the baseline when there is one, NA4 over the
@@ -341,7 +438,7 @@ pub(crate) fn expand_dirs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Error> {
 /// The directory cannot be created or a file cannot be written.
 pub fn write_report(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>, Error> {
     io::create_dir(dir)?;
-    let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
+    let stem = report_stem(d);
     io::write_atomic(&dir.join(format!("{stem}-diagnosis.json")), crate::report::summary::to_json_line(d).as_bytes())?;
     Ok(crate::report::figures::diagnosis(d, dir)?)
 }

@@ -11,7 +11,7 @@ pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result
     // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
     // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
     // tachometer in use are not decoded either (they are never analysed as vibration)
-    let sidecar = io::sidecar::read(path);
+    let sidecar = io::sidecar::read(path)?.sidecar();
     let sidecar_tacho = (o.tacho_channel.is_none() && o.shaft_hz.is_none())
         .then_some(sidecar.as_ref())
         .flatten()
@@ -206,6 +206,9 @@ pub(super) fn check_recording(
         }
     };
     let tacho = o.tacho_channel.map(|c| check_index(ChannelRole::Tachometer, c)).transpose()?;
+    if o.pulses_per_rev == 0 {
+        return Err(bad(path, "0 tachometer pulses per revolution: a tachometer gives at least 1"));
+    }
     let channels: Vec<usize> = match o.channel {
         Some(c) => {
             let c = check_index(ChannelRole::Vibration, c)?;

@@ -24,6 +24,41 @@ pub(super) fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, 
     })
 }
 
+/// Largest share of the mesh line at order `z` in a line at order `k z` (k = 2, 3, 4) for the tachometer's
+/// pulses per revolution to be taken as too many: a resonance near twice the mesh makes the first mesh
+/// line 7-10 % of the second on the bundled scenes (`MESH_FUNDAMENTAL_SHARE` of the tracking), while a
+/// revolution that really spans k revolutions has no line at all at order z (0.1 % on the bundled healthy
+/// recording with 2 pulses per revolution given for 1): 1 % lies between the two.
+const PULSES_TOO_MANY_SHARE: f64 = 0.01;
+
+/// Ratio by which a line at order z / k must exceed the mesh line for the tachometer to have k times more
+/// pulses per revolution than given: a revolution that is really 1/k revolution puts the mesh fundamental
+/// there, and the given mesh order holds only its k-th harmonic.
+const PULSES_TOO_FEW_RATIO: f64 = 3.0;
+
+/// Where the pinion's TSAs (revolutions of the given tachometer pulses) put the mesh line of `z` teeth when
+/// it is not at order z: at order k z when the line is missing at z (each averaged "revolution" spans k
+/// revolutions: fewer pulses per revolution than given, or pulses missing), or at order z / k when that
+/// line stands well above the one at z (more pulses per revolution than given). `None` when the line is
+/// where the teeth put it or no other order explains the lines better.
+pub(super) fn pulses_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize) -> Option<usize> {
+    let mut power: Vec<f64> = Vec::new();
+    for t in tsas {
+        let a = crate::signal::spectrum::periodic_amplitudes(t);
+        power.resize(power.len().max(a.len()), 0.0);
+        power.iter_mut().zip(&a).for_each(|(p, v)| *p += v * v);
+    }
+    let at = |k: usize| power.get(k).copied().unwrap_or(0.0).sqrt();
+    let mesh = at(z);
+    let spans =
+        (2..=4usize).map(|k| k * z).filter(|&o| o < power.len()).find(|&o| mesh < PULSES_TOO_MANY_SHARE * at(o));
+    let part = (2..=4usize)
+        .filter(|k| z.is_multiple_of(*k))
+        .map(|k| z / k)
+        .find(|&o| at(o) > PULSES_TOO_FEW_RATIO * mesh && at(o) > 0.0);
+    spans.or(part)
+}
+
 /// Smallest ratio of a wheel sideband to the floor around its mesh harmonic to count as present (12 dB).
 const WHEEL_LINE_OVER_FLOOR: f64 = 4.0;
 
