@@ -17,6 +17,7 @@ pub mod error;
 pub mod floquet;
 pub mod hill;
 pub mod magnus;
+pub mod response;
 pub mod rk4;
 pub mod steady;
 
