@@ -5,11 +5,11 @@ use super::JobError;
 use super::synth::{self, SignalInfo};
 use crate::Error;
 use crate::model::OutputQuantity;
-use crate::report::summary::{OrderLine, SimulateSummary, Simulation, StabilitySummary, to_json_line};
+use crate::report::summary::{OrderLine, QuantityErrors, SimulateSummary, Simulation, StabilitySummary, to_json_line};
 use crate::scene::Scene;
 use crate::signal::spectrum::Fft;
-use crate::signal::spectrum::periodic_amplitudes;
 use crate::solver::hill::HillSolution;
+use crate::solver::response::{self, Probe, Response};
 use crate::solver::{self, SteadyState, Trajectory};
 use nalgebra::Complex;
 use std::path::PathBuf;
@@ -221,20 +221,6 @@ pub(super) fn fourier_table(q: &OutputQuantity, sol: &HillSolution, m: usize) ->
     (samples_from(&z, m), samples_from(&dz, m))
 }
 
-/// Fourier coefficients Z_k, k = 0..=kmax, of the output of a time-stepped solution (the weighted sum of
-/// [`grid_coefficients`] of the state components). Returns `None` for outputs that need x' (then the FFT of
-/// samples is used) and for harmonic-balance solutions.
-fn stepped_output(scene: &Scene, steady: &SteadyState, kmax: usize) -> Option<Vec<Complex<f64>>> {
-    let OutputQuantity::Linear { weights, .. } = &scene.output.quantity else { return None };
-    let used: Vec<usize> = (0..weights.len()).filter(|&c| weights[c] != 0.0).collect();
-    let per_state = grid_coefficients(scene.system(), steady, kmax, &used)?;
-    Some(
-        (0..=kmax)
-            .map(|k| used.iter().zip(&per_state).map(|(&c, z)| z[k] * weights[c]).sum::<Complex<f64>>())
-            .collect(),
-    )
-}
-
 /// Fourier coefficients Z_c(k), k = 0..=kmax, of the state components c in `components` (in that order) of
 /// a time-stepped solution (x_c(t) = Re Z_c(0) + 2 Re sum Z_c(k) e^{i k w t}) by Gauss-Legendre quadrature (4 points) on every step
 /// of the solver's own grid, so jumps of the coefficients (and kinks of the state) sit on step ends and the
@@ -288,11 +274,6 @@ pub fn grid_coefficients(
     Some(z)
 }
 
-/// One-sided amplitudes of coefficients Z_k: |Z_0| and 2 |Z_k|.
-fn amplitudes(z: &[Complex<f64>]) -> Vec<f64> {
-    z.iter().enumerate().map(|(k, c)| if k == 0 { c.norm() } else { 2.0 * c.norm() }).collect()
-}
-
 /// Samples of z(t) at m equally spaced times of one period from its coefficients (inverse FFT).
 fn samples_from(z: &[Complex<f64>], m: usize) -> Vec<f64> {
     let spec: Vec<(f64, f64)> =
@@ -300,123 +281,148 @@ fn samples_from(z: &[Complex<f64>], m: usize) -> Vec<f64> {
     Fft::new().inverse(&spec, m)
 }
 
-/// z(t) = Re Z_0 + 2 Re sum_k Z_k e^{i k w t} at time t (s) from the coefficients of [`fourier_output`]
-/// (w in rad/s): one complex multiplication per harmonic.
-fn fourier_value(z: &[Complex<f64>], omega: f64, t: f64) -> f64 {
-    let step = Complex::from_polar(1.0, omega * t);
-    let mut e = Complex::new(1.0, 0.0);
-    let mut acc = z.first().map_or(0.0, |c| c.re);
-    for c in z.iter().skip(1) {
-        e *= step;
-        acc += 2.0 * (c * e).re;
-    }
-    acc
-}
-
-/// The extreme of the output `f` (a function of time in s) near sample `i` of `samples` (equally spaced
-/// over `period` s; sign +1 for a maximum, -1 for a minimum): golden-section search between the
-/// neighbouring samples on the exact solution, so peak-to-peak is not read off a grid.
-fn refine_extreme(f: &dyn Fn(f64) -> f64, period: f64, samples: &[f64], i: usize, sign: f64) -> f64 {
-    let m = samples.len();
-    let dt = period / m as f64;
-    let f = |t: f64| sign * f(t);
-    let (mut a, mut b) = ((i as f64 - 1.0) * dt, (i as f64 + 1.0) * dt);
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
-    let (mut fc, mut fd) = (f(c), f(d));
-    for _ in 0..40 {
-        if fc > fd {
-            b = d;
-            (d, fd) = (c, fc);
-            c = b - r * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            (c, fc) = (d, fd);
-            d = a + r * (b - a);
-            fd = f(d);
+/// The output quantity as a solver probe (a linear function of x or of x').
+pub fn probe(q: &OutputQuantity, n: usize) -> Probe {
+    match q {
+        OutputQuantity::Linear { weights, .. } => Probe { weights: weights.clone(), derivative: false },
+        OutputQuantity::Derivative { index, .. } => {
+            Probe { weights: (0..n).map(|i| if i == *index { 1.0 } else { 0.0 }).collect(), derivative: true }
         }
     }
-    sign * fc.max(fd).max(sign * samples[i])
+}
+
+/// |a - b| / scale, 0 when both are 0.
+fn relative(diff: f64, scale: f64) -> f64 {
+    if diff == 0.0 { 0.0 } else { diff / scale.max(f64::MIN_POSITIVE) }
+}
+
+/// The printed lines, RMS and extremes of the scene's output and their estimated errors: the change of each
+/// between the printed solution and the one it was compared with (times the solver's factor), plus the
+/// rounding of the state (`SteadyState::rounding`) carried to the output.
+fn printed_response(scene: &Scene, steady: &SteadyState, kmax: usize) -> (Response, QuantityErrors) {
+    let sys = scene.system();
+    let probe = probe(&scene.output.quantity, sys.dim());
+    let d = solver::steady::state_scales(sys);
+    let tol = scene.solver.tolerance;
+    let main = response::response(sys, &steady.trajectory, steady.period_s, &probe, kmax, &d, tol);
+    let amps = main.amplitudes();
+    let top = amps.iter().fold(0.0f64, |a, v| a.max(*v));
+    let p2p = main.max - main.min;
+    let rounding = if steady.rounding.is_finite() { steady.rounding * main.gain } else { f64::INFINITY };
+    let (mut orders, mut rms, mut peak) =
+        (relative(rounding, top), relative(rounding, main.rms), relative(2.0 * rounding, p2p));
+    match &steady.comparison {
+        Some(c) => {
+            let other = response::response(sys, &c.trajectory, steady.period_s, &probe, kmax, &d, tol);
+            let lines = main.lines.iter().zip(&other.lines).map(|(a, b)| 2.0 * (a - b).norm()).fold(0.0, f64::max);
+            orders += c.factor * relative(lines, top);
+            rms += c.factor * relative((main.rms - other.rms).abs(), main.rms);
+            peak += c.factor * relative((p2p - (other.max - other.min)).abs(), p2p);
+        }
+        None => (orders, rms, peak) = (f64::NAN, f64::NAN, f64::NAN),
+    }
+    let errors = QuantityErrors {
+        state: steady.state_error,
+        monodromy: steady.multiplier_error,
+        multipliers: steady.rho_error,
+        orders,
+        rms,
+        peak_to_peak: if main.extremes_complete { peak } else { f64::INFINITY },
+    };
+    (main, errors)
+}
+
+/// Highest line index of a scene over the period `period_s`.
+fn highest_line(scene: &Scene, period_s: f64) -> usize {
+    (scene.output.max_order * period_s * scene.output.base_hz + 1e-9).floor() as usize
+}
+
+/// Output samples over one period at m equally spaced times (for the signal and the figures).
+fn period_table(scene: &Scene, steady: &SteadyState, kmax: usize) -> Vec<f64> {
+    let sys = scene.system();
+    let period = steady.period_s;
+    match &steady.trajectory {
+        Trajectory::Fourier(sol) => {
+            let m = samples_per_period(kmax.max(sys.max_harmonic()).max(sol.harmonics / 4));
+            let z = fourier_output(&scene.output.quantity, sol, sol.harmonics.min(m / 2).max(kmax));
+            samples_from(&z, m)
+        }
+        Trajectory::Grid { .. } => {
+            let m = samples_per_period(kmax.max(sys.max_harmonic()));
+            let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
+            output_at(scene, steady, &times)
+        }
+    }
+}
+
+/// Folds the printed quantities' errors into the steady state's estimate and trust.
+fn judge(steady: &mut SteadyState, errors: &QuantityErrors, tolerance: f64, warnings: bool) {
+    let worst = errors.orders.max(errors.rms).max(errors.peak_to_peak);
+    let worst = if worst.is_nan() { f64::INFINITY } else { worst };
+    steady.error_estimate = steady.error_estimate.max(worst);
+    if worst > tolerance && steady.trusted {
+        steady.trusted = false;
+        if warnings {
+            steady.warnings.push(format!(
+                "the output's lines, rms or peak-to-peak are estimated to {worst:.1e} relative, above the tolerance"
+            ));
+        }
+    }
 }
 
 /// The steady state, the output over one period and the order spectrum of [`simulate`], without its RMS
-/// and refined peak-to-peak (what a sweep needs: the extremes' golden-section search on the exact solution
-/// was an eighth of a sweep's time).
+/// and peak-to-peak (what a sweep needs).
 ///
 /// # Errors
 /// Solver failures.
 pub fn solve_with_orders(scene: &Scene) -> Result<(SteadyState, Vec<f64>, Vec<OrderLine>), Error> {
-    let sys = scene.system();
-    let mut steady = solver::solve(sys, &scene.solver)?;
-    let period = steady.period_s;
-    let revs = period * scene.output.base_hz;
-    let kmax = (scene.output.max_order * revs + 1e-9).floor() as usize;
-    let hill_h = match &steady.trajectory {
-        Trajectory::Fourier(sol) => sol.harmonics,
-        Trajectory::Grid { .. } => 0,
-    };
-    let m = samples_per_period(kmax.max(sys.max_harmonic()).max(hill_h / 4));
-    let (period_samples, amps) = match &steady.trajectory {
-        Trajectory::Fourier(sol) => {
-            let z = fourier_output(&scene.output.quantity, sol, kmax.max(hill_h).min(m / 2).max(kmax));
-            (samples_from(&z, m), amplitudes(&z))
-        }
-        Trajectory::Grid { .. } => {
-            let times: Vec<f64> = (0..m).map(|i| period * i as f64 / m as f64).collect();
-            let samples = output_at(scene, &steady, &times);
-            let amps = match stepped_output(scene, &steady, kmax.min(m / 2)) {
-                Some(z) => amplitudes(&z),
-                None => {
-                    let a = periodic_amplitudes(&samples);
-                    // aliasing of a DFT of samples: the change when the samples are halved
-                    let half: Vec<f64> = samples.iter().step_by(2).copied().collect();
-                    let b = periodic_amplitudes(&half);
-                    let top = a.iter().skip(1).fold(0.0f64, |x, v| x.max(*v)).max(f64::MIN_POSITIVE);
-                    let alias = (1..=kmax.min(m / 4)).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max) / top;
-                    steady.state_error = steady.state_error.max(alias);
-                    steady.error_estimate = steady.error_estimate.max(alias);
-                    a
-                }
-            };
-            (samples, amps)
-        }
-    };
-    let orders = (0..=kmax.min(amps.len() - 1))
-        .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
-        .collect();
-    Ok((steady, period_samples, orders))
+    let sim = simulate(scene)?;
+    Ok((sim.steady, sim.period_samples, sim.orders))
 }
 
-/// Solves the scene and computes its output over one period and its order spectrum.
+/// Solves the scene and computes its output over one period, its order spectrum, RMS and peak-to-peak.
 ///
-/// The orders come from the solver's own representation: the exact Fourier coefficients of harmonic
-/// balance, or fourth-order quadrature on the step grid of a time-stepping method, never from a DFT of
-/// samples that would alias a kinked output (a DFT of samples remains only for derivative outputs of
-/// time-stepped solutions, which the error estimate then includes). Peak-to-peak is refined between
-/// samples on the exact solution.
+/// Every printed number comes from the solution itself, not from samples of it: the exact Fourier
+/// coefficients of harmonic balance, exact integrals over the pieces of piecewise-constant coefficients,
+/// or quadrature fine enough for the highest line on the dense output of a time-stepping method
+/// ([`response::response`]); extremes from a global search refined on the solution. Each has its own
+/// error estimate ([`QuantityErrors`]), folded into `error_estimate` and the trust.
 ///
 /// # Errors
 /// Solver failures.
 pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
-    let (steady, period_samples, orders) = solve_with_orders(scene)?;
-    let m = period_samples.len();
-    let rms = (period_samples.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt();
-    let argmax = (0..m).max_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
-    let argmin = (0..m).min_by(|&a, &b| period_samples[a].total_cmp(&period_samples[b])).unwrap_or(0);
-    // the output as a function of time: from the exact coefficients of harmonic balance (a sum per
-    // point), else the time-stepped state advanced from its nearest grid node
-    let value: Box<dyn Fn(f64) -> f64 + '_> = match &steady.trajectory {
-        Trajectory::Fourier(sol) => {
-            let z = fourier_output(&scene.output.quantity, sol, sol.harmonics);
-            Box::new(move |t| fourier_value(&z, sol.omega, t))
+    let sys = scene.system();
+    let tolerance = scene.solver.tolerance;
+    let mut opts = scene.solver.clone();
+    let (mut steady, resp, errors) = loop {
+        let steady = solver::solve(sys, &opts)?;
+        let kmax = highest_line(scene, steady.period_s);
+        let (resp, errors) = printed_response(scene, &steady, kmax);
+        let worst = errors.orders.max(errors.rms).max(errors.peak_to_peak);
+        // the solver's loop meets the tolerance on the state and the monodromy; a line, the rms or the
+        // peak-to-peak relative to its own size can need more: solve again with the tolerance tightened by
+        // what they missed (twice at most: the estimates scale with the solver's)
+        let retry = steady.trusted
+            && worst > tolerance
+            && worst.is_finite()
+            && opts.steps.is_none()
+            && opts.harmonics.is_none()
+            && opts.tolerance > tolerance / 1e3;
+        if !retry {
+            break (steady, resp, errors);
         }
-        Trajectory::Grid { .. } => Box::new(|t| output_at(scene, &steady, &[t])[0]),
+        opts.tolerance *= (0.5 * tolerance / worst).max(1e-3);
     };
-    let hi = refine_extreme(&value, steady.period_s, &period_samples, argmax, 1.0);
-    let lo = refine_extreme(&value, steady.period_s, &period_samples, argmin, -1.0);
-    drop(value);
-    Ok(Simulation { steady, period_samples, orders, rms, peak_to_peak: hi - lo })
+    judge(&mut steady, &errors, tolerance, true);
+    let period = steady.period_s;
+    let revs = period * scene.output.base_hz;
+    let kmax = highest_line(scene, period);
+    let period_samples = period_table(scene, &steady, kmax);
+    let amps = resp.amplitudes();
+    let orders = (0..=kmax)
+        .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
+        .collect();
+    Ok(Simulation { steady, period_samples, orders, rms: resp.rms, peak_to_peak: resp.max - resp.min, errors })
 }
 
 #[cfg(test)]

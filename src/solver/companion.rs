@@ -41,6 +41,9 @@ pub(super) struct Companion {
     pub error: f64,
     /// RK4 steps taken in all.
     pub steps: usize,
+    /// The table's higher-order value raised to the same power: the multipliers' change to it estimates
+    /// their error.
+    pub better: DMatrix<f64>,
 }
 
 /// `rate` is the largest |eigenvalue| of P(t) and `d` the state scales of `sys`
@@ -62,12 +65,13 @@ pub(super) fn companion_monodromy(
     let mut tol = opts.tolerance / d.len() as f64;
     let mut table = Romberg::new(&hom, rate, d)?;
     loop {
-        let (phi_h, est) = table.refine_to(tol, opts.max_steps)?;
+        let (phi_h, est, better_h) = table.refine_to(tol, opts.max_steps)?;
         let (phi, error) = power_with_error(&phi_h, est, k, d);
         // the powers of a growing (unstable or non-normal) Phi_h amplify its error beyond k-fold: tighten
         // the companion's tolerance by what the powers cost (rounding caps the tightening)
         if error <= opts.tolerance || tol < 1e-14 {
-            return Ok(Companion { monodromy: phi, error, steps: table.total });
+            let better = (0..k).fold(DMatrix::identity(d.len(), d.len()), |acc, _| &better_h * acc);
+            return Ok(Companion { monodromy: phi, error, steps: table.total, better });
         }
         tol = est * 0.5 * opts.tolerance / error;
     }
@@ -175,11 +179,11 @@ impl<'a> Romberg<'a> {
     }
 
     /// Doubles the steps until the estimate meets `tol`; returns the best monodromy and its estimated error.
-    fn refine_to(&mut self, tol: f64, max_steps: usize) -> Result<(DMatrix<f64>, f64), SolverError> {
+    fn refine_to(&mut self, tol: f64, max_steps: usize) -> Result<(DMatrix<f64>, f64, DMatrix<f64>), SolverError> {
         loop {
             if let Some((best, est)) = &self.best {
                 if *est <= tol {
-                    return Ok((best.clone(), *est));
+                    return Ok((best.clone(), *est, self.row[self.row.len() - 1].clone()));
                 }
                 if self.m >= max_steps {
                     return Err(SolverError::ToleranceNotReached {

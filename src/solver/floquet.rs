@@ -36,7 +36,7 @@ impl Floquet {
 
 /// Stability warnings shared by all solvers: marginal (|rho|max = 1 within `accuracy`, then marked not
 /// stable), unstable, a multiplier near +1, nearly repeated multipliers.
-pub(super) fn floquet_warnings(floquet: &mut Floquet, accuracy: f64, phi_error: f64, warnings: &mut Vec<String>) {
+pub(super) fn floquet_warnings(floquet: &mut Floquet, accuracy: f64, rho_error: f64, warnings: &mut Vec<String>) {
     if (floquet.rho_max - 1.0).abs() <= accuracy {
         // on the unit circle within the accuracy: bounded at best, never asymptotically stable
         floquet.stable = false;
@@ -55,26 +55,82 @@ pub(super) fn floquet_warnings(floquet: &mut Floquet, accuracy: f64, phi_error: 
             warnings.push(format!("a Floquet multiplier lies within {r:.1e} of +1 (near resonance)"));
         }
     }
-    repeated_warning(floquet, phi_error, warnings);
+    repeated_warning(floquet, rho_error, warnings);
 }
 
-/// Nearly repeated multipliers (as at a parametric-resonance boundary) are sensitive like the square root of
-/// the monodromy error: say how far their values can be trusted.
-fn repeated_warning(f: &Floquet, phi_error: f64, warnings: &mut Vec<String>) {
+/// Nearly repeated multipliers (as at a parametric-resonance boundary) can be sensitive like the square root
+/// of the monodromy error: say how far their values can be trusted (`rho_error`, relative to max(|rho|max,
+/// 1)).
+fn repeated_warning(f: &Floquet, rho_error: f64, warnings: &mut Vec<String>) {
     let m = &f.multipliers;
     let scale = f.rho_max.max(f64::MIN_POSITIVE);
     for i in 0..m.len() {
         for j in i + 1..m.len() {
             if (m[i] - m[j]).norm() < 1e-3 * scale && m[i].norm() > 1e-6 * scale {
-                let spread = phi_error.max(f64::EPSILON).sqrt() * scale;
+                let spread = rho_error * scale;
                 warnings.push(format!(
-                    "multipliers {i} and {j} nearly coincide ({:.6}{:+.6}i): near a stability boundary their values are only good to about {spread:.1e}; the monodromy itself meets the tolerance",
+                    "multipliers {i} and {j} nearly coincide ({:.6}{:+.6}i): near a stability boundary their values are only good to about {spread:.1e}",
                     m[i].re, m[i].im
                 ));
                 return;
             }
         }
     }
+}
+
+/// Says so when the multipliers' estimated error is above the tolerance (the result is then not trusted).
+pub(super) fn untrusted_multipliers(rho_error: f64, tolerance: f64, warnings: &mut Vec<String>) {
+    if rho_error > tolerance {
+        warnings.push(format!(
+            "the multipliers are only good to about {rho_error:.1e} (relative to max(|rho|max, 1)), above the tolerance: nearly repeated multipliers move like the square root of the monodromy's error"
+        ));
+    }
+}
+
+/// Departure from normality of a (balanced) monodromy `b` with multipliers `rho`: sqrt(||b||_F^2 -
+/// sum |rho|^2), the size of the strictly upper part of its Schur form (Henrici). A nearly repeated pair
+/// moves like the square root of a perturbation only when this is large against their distance.
+pub fn departure_from_normality(b: &DMatrix<f64>, rho: &[Complex<f64>]) -> f64 {
+    let f2: f64 = b.iter().map(|v| v * v).sum();
+    let r2: f64 = rho.iter().map(|r| r.norm_sqr()).sum();
+    (f2 - r2).max(0.0).sqrt()
+}
+
+/// Estimated error of the multipliers of `printed` relative to max(|rho|max, 1), from the change of each to
+/// its nearest multiplier of `other` (the same system at another resolution). `factors` turn the change into
+/// the printed one's error: the first for a multiplier that moves linearly with the monodromy's error, the
+/// second for a nearly repeated one (within 1e-3 of another) of a non-normal monodromy (`departure`, see
+/// [`departure_from_normality`], above ten times their distance), which moves like its square root.
+/// `rounding` is the relative rounding of the monodromy (of its own size `phi_size`): a simple multiplier
+/// inherits it, such a pair at distance s inherits min(sqrt(r departure), r departure / s) more (the
+/// perturbation of a 2 x 2 Schur block [rho1 t; 0 rho2]).
+pub fn multiplier_change(
+    printed: &Floquet,
+    other: &Floquet,
+    factors: (f64, f64),
+    rounding: f64,
+    departure: f64,
+    phi_size: f64,
+) -> f64 {
+    let m = &printed.multipliers;
+    let scale = printed.rho_max.max(1.0);
+    let r_abs = rounding * phi_size;
+    let mut worst: f64 = 0.0;
+    for (i, r) in m.iter().enumerate() {
+        let change = other.multipliers.iter().map(|s| (s - r).norm()).fold(f64::INFINITY, f64::min);
+        let change = if change.is_finite() { change } else { 0.0 };
+        let gap =
+            m.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, s)| (s - r).norm()).fold(f64::INFINITY, f64::min);
+        let repeated = gap < 1e-3 * r.norm() && departure > 10.0 * gap;
+        let factor = if repeated { factors.1 } else { factors.0 };
+        let own = if repeated {
+            r_abs + (r_abs * departure).sqrt().min(r_abs * departure / gap.max(f64::MIN_POSITIVE))
+        } else {
+            r_abs
+        };
+        worst = worst.max((factor * change + own) / scale);
+    }
+    worst
 }
 
 /// ", a multiplier near +1 (within D)" when one is (D < 1e-3), else nothing: a large cond(I - Phi) is

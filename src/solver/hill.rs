@@ -348,6 +348,34 @@ pub fn solve(
     tolerance: f64,
     max_harmonics: usize,
 ) -> Result<(HillSolution, f64, f64), SolverError> {
+    solve_compared(form, max_harmonic, tolerance, max_harmonics).map(|r| (r.solution, r.estimate, r.rounding))
+}
+
+/// A harmonic-balance solution with the smaller truncation it was compared with.
+pub struct Compared {
+    /// The solution.
+    pub solution: HillSolution,
+    /// Its estimated truncation error ([`difference`] measure).
+    pub estimate: f64,
+    /// Its rounding error (see [`solve_order`]).
+    pub rounding: f64,
+    /// The solution of the previous (smaller) truncation.
+    pub previous: HillSolution,
+    /// `estimate` over the difference of the two: what turns the change of any quantity between them into
+    /// the solution's error.
+    pub factor: f64,
+}
+
+/// [`solve`], keeping the previous truncation for estimates of derived quantities.
+///
+/// # Errors
+/// Singular classes, or the tolerance not reached.
+pub fn solve_compared(
+    form: &FourierForm,
+    max_harmonic: usize,
+    tolerance: f64,
+    max_harmonics: usize,
+) -> Result<Compared, SolverError> {
     let mut h = max_harmonic.max(8);
     // the rounding is measured once, at the first (smallest) truncation: it comes from the low, nearly
     // resonant harmonics, which every larger truncation holds alike, while the harmonics added later are
@@ -373,7 +401,8 @@ pub fn solve(
         };
         // a change at the rounding level is rounding: more harmonics cannot lower it
         if est <= tolerance || change <= 4.0 * rounding {
-            return Ok((next, est, rounding));
+            let factor = if change > 0.0 { est / change } else { 1.0 };
+            return Ok(Compared { solution: next, estimate: est, rounding, previous: prev, factor });
         }
         last_change = Some(change);
         if next_h >= max_harmonics {
@@ -417,7 +446,7 @@ pub(super) fn solve_steady(
             "harmonic balance needs Fourier-series coefficients; this scene has jumps (use rk4 or auto)".into(),
         )
     })?;
-    let (sol, truncation, rounding) = match opts.harmonics {
+    let (sol, truncation, rounding, previous, factor) = match opts.harmonics {
         Some(h) if h < sys.max_harmonic() => {
             return Err(SolverError::Unsupported(format!(
                 "solver.harmonics = {h} is below the highest harmonic of the scene's coefficients ({}): the truncated system cannot represent them",
@@ -429,15 +458,25 @@ pub(super) fn solve_steady(
             let (sol, rounding) = solve_order(&form, h)?;
             let (finer, _) = solve_order(&form, (h * 5).div_ceil(4).max(h + 1))?;
             let est = difference(&sol, &finer);
-            (sol, est, rounding)
+            (sol, est, rounding, finer, 1.0)
         }
-        None => solve(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?,
+        None => {
+            let c = solve_compared(&form, sys.max_harmonic(), opts.tolerance, 1 << 20)?;
+            (c.solution, c.estimate, c.rounding, c.previous, c.factor)
+        }
     };
     let d = super::steady::state_scales(sys);
     let companion = companion_monodromy(sys, opts, rate, &d)?;
     let (monodromy, phi_err, companion_steps) = (companion.monodromy, companion.error, companion.steps);
     let period = sys.period_s();
     let floquet = Floquet::from_monodromy(&monodromy, period)?;
+    // the companion's better (higher-order) monodromy: the change of each multiplier to it is that
+    // multiplier's error (twice, as for the monodromy), whether it moves linearly or like a square root
+    let better = Floquet::from_monodromy(&companion.better, period)?;
+    let b = DMatrix::from_fn(sys.dim(), sys.dim(), |i, j| monodromy[(i, j)] * d[j] / d[i]);
+    let departure = super::floquet::departure_from_normality(&b, &floquet.multipliers);
+    let rho_error =
+        super::floquet::multiplier_change(&floquet, &better, (2.0, 2.0), 100.0 * f64::EPSILON, departure, b.amax());
     let n = sys.dim();
     let a = DMatrix::identity(n, n) - &monodromy;
     // reported, not judged: harmonic balance never solves with I - Phi; its own system's rounding is
@@ -448,7 +487,7 @@ pub(super) fn solve_steady(
     let mut warnings = Vec::new();
     let floor = 100.0 * f64::EPSILON;
     let (state_error, multiplier_error) = ((truncation + rounding).max(floor), phi_err.max(floor));
-    let estimate = state_error.max(multiplier_error);
+    let estimate = state_error.max(multiplier_error).max(rho_error);
     let mut trusted = estimate <= opts.tolerance;
     if rounding > opts.tolerance {
         trusted = false;
@@ -458,7 +497,8 @@ pub(super) fn solve_steady(
         ));
     }
     let mut floquet = floquet;
-    floquet_warnings(&mut floquet, opts.tolerance.max(phi_err), phi_err, &mut warnings);
+    floquet_warnings(&mut floquet, opts.tolerance.max(phi_err).max(rho_error), rho_error, &mut warnings);
+    super::floquet::untrusted_multipliers(rho_error, opts.tolerance, &mut warnings);
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     Ok(SteadyState {
         method: Method::Hill,
@@ -483,5 +523,8 @@ pub(super) fn solve_steady(
         trusted,
         warnings,
         trajectory: Trajectory::Fourier(sol),
+        comparison: Some(super::steady::Comparison { trajectory: Trajectory::Fourier(previous), factor }),
+        rounding,
+        rho_error,
     })
 }

@@ -18,6 +18,7 @@ pub mod floquet;
 pub mod hill;
 pub mod magnus;
 pub mod quasi;
+pub mod response;
 pub mod rk4;
 pub mod steady;
 

@@ -60,29 +60,61 @@ pub struct SteadyState {
     pub warnings: Vec<String>,
     /// The solution over one period.
     pub trajectory: Trajectory,
+    /// A solution at another resolution whose difference from `trajectory` estimates the error of any
+    /// quantity computed from it (lines, RMS, extremes); `None` for a single run.
+    pub comparison: Option<Comparison>,
+    /// Relative error of the balanced state that rounding may add, included in `state_error`: cond(I -
+    /// Phi) eps sqrt(steps) for a step-based solve (plus the product's own rounding floor), the
+    /// iterative-refinement correction for harmonic balance.
+    pub rounding: f64,
+    /// Estimated error of the printed multipliers relative to max(|rho|max, 1): the change of each multiplier
+    /// between the two resolutions scaled as it converges (linearly in the monodromy error, or like its
+    /// square root for nearly repeated multipliers), plus the rounding of Phi so amplified.
+    pub rho_error: f64,
+}
+
+/// The second solution of an error estimate: the error of a quantity q computed from the printed solution
+/// is about `factor` |q(printed) - q(other)|.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    /// The other solution.
+    pub trajectory: Trajectory,
+    /// Factor from the difference to the printed solution's error.
+    pub factor: f64,
 }
 
 impl SteadyState {
     /// Samples the state at `times` (s, any real; reduced modulo T) into `out` (n per time).
     pub fn states_at(&self, sys: &dyn PeriodicSystem, times: &[f64], out: &mut Vec<f64>) {
-        let n = sys.dim();
-        let mut st = rk4::Stepper::new(sys);
-        let mut x = vec![0.0; n];
-        out.clear();
-        out.reserve(times.len() * n);
-        for &t in times {
-            let tau = t.rem_euclid(self.period_s);
-            match &self.trajectory {
-                Trajectory::Grid { grid, states, scheme } => {
-                    if *scheme != rk4::Scheme::Rk4 {
-                        st = rk4::Stepper::with_scheme(sys, *scheme);
-                    }
-                    rk4::state_at(&mut st, grid, states, tau, &mut x)
-                }
-                Trajectory::Fourier(h) => h.state(tau, &mut x),
-            }
-            out.extend_from_slice(&x);
+        trajectory_states(sys, &self.trajectory, self.period_s, times, out);
+    }
+}
+
+/// Samples the state of `trajectory` (period `period_s`) at `times` (s, any real; reduced modulo T) into
+/// `out` (n per time).
+pub fn trajectory_states(
+    sys: &dyn PeriodicSystem,
+    trajectory: &Trajectory,
+    period_s: f64,
+    times: &[f64],
+    out: &mut Vec<f64>,
+) {
+    let n = sys.dim();
+    let scheme = match trajectory {
+        Trajectory::Grid { scheme, .. } => *scheme,
+        Trajectory::Fourier(_) => rk4::Scheme::Rk4,
+    };
+    let mut st = rk4::Stepper::with_scheme(sys, scheme);
+    let mut x = vec![0.0; n];
+    out.clear();
+    out.reserve(times.len() * n);
+    for &t in times {
+        let tau = t.rem_euclid(period_s);
+        match trajectory {
+            Trajectory::Grid { grid, states, .. } => rk4::state_at(&mut st, grid, states, tau, &mut x),
+            Trajectory::Fourier(h) => h.state(tau, &mut x),
         }
+        out.extend_from_slice(&x);
     }
 }
 
@@ -109,6 +141,15 @@ fn attempt(sys: &dyn PeriodicSystem, grid: &rk4::Grid, scheme: rk4::Scheme, d: &
     }
     let states = rk4::trajectory_with(sys, grid, &x0, scheme);
     Ok(Attempt { run, floquet, x0, states, cond })
+}
+
+/// [`multiplier_change`](super::floquet::multiplier_change) of `printed` against `other` on the balanced
+/// monodromy.
+fn rho_change(printed: &Attempt, other: &Attempt, factors: (f64, f64), rounding: f64, d: &[f64]) -> f64 {
+    let n = d.len();
+    let b = DMatrix::from_fn(n, n, |i, j| printed.run.monodromy[(i, j)] * d[j] / d[i]);
+    let departure = super::floquet::departure_from_normality(&b, &printed.floquet.multipliers);
+    super::floquet::multiplier_change(&printed.floquet, &other.floquet, factors, rounding, departure, b.amax())
 }
 
 /// One RK4 run of `steps` steps (breakpoints on step ends) without the step-doubling estimate: the periodic
@@ -144,6 +185,9 @@ pub fn solve_once(sys: &dyn PeriodicSystem, steps: usize) -> Result<SteadyState,
         trusted: false,
         warnings: vec!["one run of fixed steps: no error estimate".into()],
         trajectory: Trajectory::Grid { grid, states: run.states, scheme: rk4::Scheme::Rk4 },
+        comparison: None,
+        rounding: f64::NAN,
+        rho_error: f64::NAN,
     })
 }
 
@@ -246,7 +290,9 @@ pub(super) fn solve_steps(
     let d = state_scales(sys);
     let limit = (period * rate / RK4_STABILITY_LIMIT).ceil() as usize;
     let mut warnings = Vec::new();
-    let (grid, fine, estimate) = if let Some(steps) = opts.steps {
+    // (printed grid, printed attempt, its estimated changes, the other grid and attempt, factor from their
+    // difference to the printed one's error, the same for multipliers in the linear and square-root regimes)
+    let (grid, fine, estimate, other_grid, other, factors) = if let Some(steps) = opts.steps {
         if steps < limit && scheme == rk4::Scheme::Rk4 {
             warnings.push(format!(
                 "{steps} steps is below the explicit RK4 stability limit of {limit} steps (h |lambda|max > {RK4_STABILITY_LIMIT}): the result is not trustworthy"
@@ -267,7 +313,10 @@ pub(super) fn solve_steps(
         let fine = attempt(sys, &grid.refined(), scheme, &d).map_err(explain)?;
         // error of the coarse result: |x_m - x_2m| (1 + 1/15)
         let est = difference(&coarse, &fine, &d).scaled(16.0 / 15.0);
-        (grid, coarse, est)
+        // the coarse result is printed: its error is |x_m - x_2m| / (1 - 2^-4), or / (1 - 2^-2) for a
+        // multiplier that moves like the square root of the monodromy's error
+        let fine_grid = grid.refined();
+        (grid, coarse, est, fine_grid, fine, (16.0 / 15.0, 4.0 / 3.0))
     } else {
         // an explicit scheme must start above its stability limit; Magnus is A-stable
         let stable_start = if scheme == rk4::Scheme::Rk4 { 2 * limit } else { 0 };
@@ -277,6 +326,7 @@ pub(super) fn solve_steps(
             stable_start.max(4 * sys.max_harmonic()).max(64).max(2 * (breaks.len() + 1))
         };
         let mut previous = f64::INFINITY;
+        let mut met_at: Option<usize> = None;
         loop {
             let grid = rk4::Grid::new(period, &breaks, m);
             let coarse = attempt(sys, &grid, scheme, &d)?;
@@ -295,13 +345,25 @@ pub(super) fn solve_steps(
                 });
             }
             let change = difference(&coarse, &fine, &d).scaled(2.0 / 15.0);
-            let est = change.max();
-            if est <= opts.tolerance {
-                break (fine_grid, fine, change);
+            // the multipliers too: near a stability boundary their error exceeds the monodromy's
+            let floor = 10.0 * f64::EPSILON * (fine_grid.steps() as f64).sqrt();
+            let rho = rho_change(&fine, &coarse, (2.0 / 15.0, (2.0f64 / 15.0).sqrt()), floor, &d);
+            // the state and the monodromy must meet the tolerance; the multipliers get at most 16 times the
+            // steps that met it (beyond, the result is printed with its honest, larger multiplier error)
+            if met_at.is_none() && change.max() <= opts.tolerance {
+                met_at = Some(fine_grid.steps());
+            }
+            let est = if met_at.is_some() { rho.max(change.max()) } else { change.max() };
+            let stalled = est > 0.5 * previous && est < 1e-10;
+            let enough = met_at
+                .is_some_and(|s| fine_grid.steps() >= 16 * s || stalled || 2 * fine_grid.steps() > opts.max_steps);
+            if est <= opts.tolerance || enough {
+                // the fine result is printed: twice the Richardson factor 1/15 (or 1/3 for a multiplier that
+                // moves like the square root of the monodromy's error: sqrt(2/15) covers it)
+                break (fine_grid, fine, change, grid, coarse, (2.0 / 15.0, (2.0f64 / 15.0).sqrt()));
             }
             // a fourth-order change shrinks 16-fold per doubling; one that no longer halves is rounding, which
             // more steps only make worse: stop at once instead of running to the step cap
-            let stalled = est > 0.5 * previous && est < 1e-10;
             previous = est;
             if fine_grid.steps() >= opts.max_steps || stalled {
                 return Err(SolverError::ToleranceNotReached {
@@ -321,10 +383,11 @@ pub(super) fn solve_steps(
     // a zero periodic solution (no forcing) has nothing for rounding to spoil
     let roundoff = if fine.x0.amax() > 0.0 { fine.cond * f64::EPSILON * (grid.steps() as f64).sqrt() } else { 0.0 };
     // the reported error bounds the product's own rounding too (an exact scheme's step-doubling change can
-    // be below it); the amplification by cond(I - Phi) is judged separately just below
+    // be below it), and the rounding of the (I - Phi) solve amplified by its conditioning
     let floor = 10.0 * f64::EPSILON * (grid.steps() as f64).sqrt();
-    let (state_error, multiplier_error) = (estimate.state.max(floor), estimate.monodromy.max(floor));
-    let estimate = state_error.max(multiplier_error);
+    let (state_error, multiplier_error) = (estimate.state.max(floor) + roundoff, estimate.monodromy.max(floor));
+    let rho_error = rho_change(&fine, &other, factors, floor, &d);
+    let estimate = state_error.max(multiplier_error).max(rho_error);
     let mut trusted = estimate <= opts.tolerance && roundoff <= opts.tolerance;
     if roundoff > opts.tolerance {
         warnings.push(format!(
@@ -344,7 +407,8 @@ pub(super) fn solve_steps(
         trusted = false;
     }
     let mut floquet = fine.floquet;
-    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), multiplier_error, &mut warnings);
+    floquet_warnings(&mut floquet, opts.tolerance.max(estimate), rho_error, &mut warnings);
+    super::floquet::untrusted_multipliers(rho_error, opts.tolerance, &mut warnings);
     Ok(SteadyState {
         method: if scheme == rk4::Scheme::Rk4 { Method::Rk4 } else { Method::Magnus },
         reason: reason.to_string(),
@@ -361,5 +425,11 @@ pub(super) fn solve_steps(
         trusted,
         warnings,
         trajectory: Trajectory::Grid { grid, states: fine.states, scheme },
+        comparison: Some(Comparison {
+            trajectory: Trajectory::Grid { grid: other_grid, states: other.states, scheme },
+            factor: factors.0,
+        }),
+        rounding: roundoff + floor,
+        rho_error,
     })
 }

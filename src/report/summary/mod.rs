@@ -35,6 +35,25 @@ pub struct Simulation {
     pub rms: f64,
     /// Peak-to-peak over one period, output unit.
     pub peak_to_peak: f64,
+    /// Estimated error of each printed quantity.
+    pub errors: QuantityErrors,
+}
+
+/// Estimated relative error of each printed quantity of `simulate` (`error_estimate` is the largest).
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct QuantityErrors {
+    /// Periodic state, relative to the largest balanced state over the period (rounding included).
+    pub state: f64,
+    /// Balanced monodromy, relative to max(|Phi|, 1).
+    pub monodromy: f64,
+    /// Multipliers, relative to max(|rho|max, 1).
+    pub multipliers: f64,
+    /// Line amplitudes (`orders`), relative to the largest line.
+    pub orders: f64,
+    /// RMS, relative to itself.
+    pub rms: f64,
+    /// Peak-to-peak, relative to itself (infinite when the extreme search could not cover the period).
+    pub peak_to_peak: f64,
 }
 
 /// One point of a parameter sweep, for the stability map.
@@ -247,6 +266,8 @@ pub struct SimulateSummary {
     pub rms: f64,
     /// Peak-to-peak over one period.
     pub peak_to_peak: f64,
+    /// Estimated relative error of each printed quantity.
+    pub errors: QuantityErrors,
     /// Written signal file, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub signal_file: Option<String>,
@@ -264,6 +285,7 @@ impl SimulateSummary {
             orders: sim.orders.clone(),
             rms: sim.rms,
             peak_to_peak: sim.peak_to_peak,
+            errors: sim.errors,
             signal_file: None,
         }
     }
