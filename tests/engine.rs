@@ -361,6 +361,8 @@ fn every_bundled_scene_meets_three_tolerances_without_refusal() {
     let mut paths: Vec<_> = std::fs::read_dir(repo("data/scenes")).unwrap().map(|e| e.unwrap().path()).collect();
     paths.sort();
     assert!(paths.len() >= 10);
+    // gear-train scenes have their own solver path and checks (tests/gear_train.rs)
+    paths.retain(|p| read_json(p.to_str().unwrap())["model"] != "gear_train");
     for p in &paths {
         for tol in [1e-6, 1e-8, 1e-10] {
             let mut v = read_json(p.to_str().unwrap());
