@@ -574,7 +574,10 @@ where
         }
     };
     let y_fmt = |v: &f64| if chart.y_whole && (v - v.round()).abs() > 1e-9 { String::new() } else { fmt_tick(*v) };
+    // at most one x tick label per 90 px of plot: wider ones ("-0.0015") would run into each other
+    let x_ticks = (c.plotting_area().dim_in_pixel().0 / 90).max(2) as usize;
     let mut mesh = c.configure_mesh();
+    mesh.x_labels(x_ticks);
     mesh.x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .axis_desc_style(("sans-serif", AXIS_PX))
@@ -854,8 +857,8 @@ fn fmt_tick(v: f64) -> String {
     if a < 1e-12 {
         "0".into()
     } else if (9.999e-4..1e5).contains(&a) {
-        let s = format!("{v:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
+        // four significant digits: 0.0015 and 0.002 stay apart, a tick at 12250 is not rounded
+        super::format::sig(v, 4)
     } else {
         format!("{v:.0e}")
     }
