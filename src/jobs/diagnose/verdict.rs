@@ -155,7 +155,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
 
 /// A number with four significant digits, in plain or scientific notation by size.
 fn num(v: f64) -> String {
-    if v != 0.0 && (v.abs() < 1e-2 || v.abs() >= 1e5) { format!("{v:.3e}") } else { format!("{v:.4}") }
+    crate::report::format::num(v)
 }
 
 fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
@@ -183,7 +183,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
                 state,
                 local: name != "NA4",
                 ratio: now / nominal,
-                text: format!("{} (channel {}): {name} = {now:.3}: {why}", g.gear, g.channel),
+                text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
         }
     }
