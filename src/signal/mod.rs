@@ -6,6 +6,7 @@ pub mod envelope;
 pub mod indicators;
 pub mod interpolate;
 pub mod order_map;
+pub mod planetary;
 pub mod spectrum;
 pub mod speed;
 pub mod tsa;
