@@ -118,6 +118,14 @@ fn input_error(scene: &TrainScene, e: impl std::fmt::Display) -> Error {
 pub fn run(job: &SimulateJob) -> Result<TrainSummary, Error> {
     crate::io::begin_run();
     let scene = TrainScene::load(&job.scene.display().to_string())?;
+    if job.report.is_some() {
+        return Err(JobError::Input {
+            file: scene.file.clone(),
+            message: "report images are not drawn for gear_train scenes yet (the JSON summary and the recording are)"
+                .into(),
+        }
+        .into());
+    }
     if let Some(out) = &job.output {
         crate::io::check_output(out)?;
     }
