@@ -238,7 +238,7 @@ pub fn mesh_comb_period<T: Sample>(
 ) -> Result<(f64, f64), SignalError> {
     // bins of an eighth of the shaft frequency resolve the sidebands; longer segments smear under a
     // fluctuating speed
-    let segment = ((8.0 * nominal).ceil() as usize).next_power_of_two().max(256);
+    let segment = ((8.0 * nominal).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256);
     if x.len() < segment {
         return Err(SignalError::TooShort { what: "mesh comb spectrum".into(), needed: segment, got: x.len() });
     }
@@ -265,8 +265,8 @@ pub fn mesh_comb_period<T: Sample>(
         .fold((f0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
     // refined on the first harmonic's own peak: the bin's centre of mass around it
     let b = best_f * z as f64 * n as f64;
-    let i = b.round() as usize;
-    let refined = if i >= 1 && i + 1 < amp.len() {
+    let i = if b.is_finite() && b >= 0.0 { b.round() as usize } else { usize::MAX };
+    let refined = if i >= 1 && i.saturating_add(1) < amp.len() {
         let w = [amp[i - 1], amp[i], amp[i + 1]];
         let centre = (i as f64 - 1.0) * w[0] + i as f64 * w[1] + (i as f64 + 1.0) * w[2];
         let f = centre / w.iter().sum::<f64>().max(f64::MIN_POSITIVE) / n as f64 / z as f64;
@@ -337,8 +337,12 @@ pub fn teeth_candidates_from<T: Sample>(
     // a line stands when a local maximum of the spectrum within a bin of it is that far over the floor (the
     // slope of a hump smeared by the speed's wander is not a line of its own)
     let stands = |f: f64| -> bool {
-        let i = (f * n as f64).round() as usize;
-        if i < 3 || i + 3 >= amp.len() {
+        let b = f * n as f64;
+        if !(b.is_finite() && b >= 3.0) {
+            return false;
+        }
+        let i = b.round() as usize;
+        if i.saturating_add(3) >= amp.len() {
             return false;
         }
         (i - 1..=i + 1).any(|j| {
