@@ -314,14 +314,26 @@ fn period_table(scene: &Scene, steady: &SteadyState, kmax: usize) -> Vec<f64> {
     }
 }
 
-/// The steady state, the output over one period and the order spectrum of [`simulate`], without its RMS
-/// and peak-to-peak (what a sweep needs).
+/// The steady state and the order spectrum of [`simulate`] (the same lines), without the second solution's
+/// estimates or the samples over a period (the middle value is empty): what a sweep needs.
 ///
 /// # Errors
 /// Solver failures.
 pub fn solve_with_orders(scene: &Scene) -> Result<(SteadyState, Vec<f64>, Vec<OrderLine>), Error> {
-    let sim = simulate(scene)?;
-    Ok((sim.steady, sim.period_samples, sim.orders))
+    // one response of the printed solution (a sweep prints lines and trust, not their estimates)
+    let sys = scene.system();
+    let steady = solver::solve(sys, &scene.solver)?;
+    let period = steady.period_s;
+    let kmax = highest_line(scene, period);
+    let d = solver::steady::state_scales(sys);
+    let probe = probe(&scene.output.quantity, sys.dim());
+    let resp = response::response(sys, &steady.trajectory, period, &probe, kmax, &d, scene.solver.tolerance);
+    let revs = period * scene.output.base_hz;
+    let amps = resp.amplitudes();
+    let orders = (0..=kmax)
+        .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
+        .collect();
+    Ok((steady, Vec::new(), orders))
 }
 
 /// Solves the scene and computes its output over one period, its order spectrum, RMS and peak-to-peak.
