@@ -303,11 +303,10 @@ fn baselines_that_do_not_fit_are_refused_or_warned() {
 
 /// 2 s of a 30 Hz mesh-like signal at 10 kHz with mild noise (deterministic).
 fn rec_samples() -> Vec<f64> {
-    let mut state = 12345u64;
+    let mut rng = Rng::new(12345);
     (0..20_000)
         .map(|i| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            let noise = ((state >> 33) as f64 / (1u64 << 31) as f64) - 0.5;
+            let noise = rng.centered();
             let th = std::f64::consts::TAU * 30.0 * i as f64 / 1e4;
             (14.0 * th).sin() + 0.2 * (13.0 * th).sin() + 0.1 * th.sin() + 0.05 * noise
         })

@@ -5,11 +5,11 @@ use super::JobError;
 use super::synth::{self, SignalInfo};
 use crate::Error;
 use crate::model::OutputQuantity;
-use crate::report::summary::{OrderLine, QuantityErrors, SimulateSummary, Simulation, StabilitySummary, to_json_line};
+use crate::report::summary::{OrderLine, SimulateSummary, Simulation, StabilitySummary, to_json_line};
 use crate::scene::Scene;
 use crate::signal::spectrum::Fft;
 use crate::solver::hill::HillSolution;
-use crate::solver::response::{self, Probe, Response};
+use crate::solver::response::{self, Probe};
 use crate::solver::{self, SteadyState, Trajectory};
 use nalgebra::Complex;
 use std::path::PathBuf;
@@ -291,47 +291,6 @@ pub fn probe(q: &OutputQuantity, n: usize) -> Probe {
     }
 }
 
-/// |a - b| / scale, 0 when both are 0.
-fn relative(diff: f64, scale: f64) -> f64 {
-    if diff == 0.0 { 0.0 } else { diff / scale.max(f64::MIN_POSITIVE) }
-}
-
-/// The printed lines, RMS and extremes of the scene's output and their estimated errors: the change of each
-/// between the printed solution and the one it was compared with (times the solver's factor), plus the
-/// rounding of the state (`SteadyState::rounding`) carried to the output.
-fn printed_response(scene: &Scene, steady: &SteadyState, kmax: usize) -> (Response, QuantityErrors) {
-    let sys = scene.system();
-    let probe = probe(&scene.output.quantity, sys.dim());
-    let d = solver::steady::state_scales(sys);
-    let tol = scene.solver.tolerance;
-    let main = response::response(sys, &steady.trajectory, steady.period_s, &probe, kmax, &d, tol);
-    let amps = main.amplitudes();
-    let top = amps.iter().fold(0.0f64, |a, v| a.max(*v));
-    let p2p = main.max - main.min;
-    let rounding = if steady.rounding.is_finite() { steady.rounding * main.gain } else { f64::INFINITY };
-    let (mut orders, mut rms, mut peak) =
-        (relative(rounding, top), relative(rounding, main.rms), relative(2.0 * rounding, p2p));
-    match &steady.comparison {
-        Some(c) => {
-            let other = response::response(sys, &c.trajectory, steady.period_s, &probe, kmax, &d, tol);
-            let lines = main.lines.iter().zip(&other.lines).map(|(a, b)| 2.0 * (a - b).norm()).fold(0.0, f64::max);
-            orders += c.factor * relative(lines, top);
-            rms += c.factor * relative((main.rms - other.rms).abs(), main.rms);
-            peak += c.factor * relative((p2p - (other.max - other.min)).abs(), p2p);
-        }
-        None => (orders, rms, peak) = (f64::NAN, f64::NAN, f64::NAN),
-    }
-    let errors = QuantityErrors {
-        state: steady.state_error,
-        monodromy: steady.multiplier_error,
-        multipliers: steady.rho_error,
-        orders,
-        rms,
-        peak_to_peak: if main.extremes_complete { peak } else { f64::INFINITY },
-    };
-    (main, errors)
-}
-
 /// Highest line index of a scene over the period `period_s`.
 fn highest_line(scene: &Scene, period_s: f64) -> usize {
     (scene.output.max_order * period_s * scene.output.base_hz + 1e-9).floor() as usize
@@ -355,29 +314,26 @@ fn period_table(scene: &Scene, steady: &SteadyState, kmax: usize) -> Vec<f64> {
     }
 }
 
-/// Folds the printed quantities' errors into the steady state's estimate and trust.
-fn judge(steady: &mut SteadyState, errors: &QuantityErrors, tolerance: f64, warnings: bool) {
-    let worst = errors.orders.max(errors.rms).max(errors.peak_to_peak);
-    let worst = if worst.is_nan() { f64::INFINITY } else { worst };
-    steady.error_estimate = steady.error_estimate.max(worst);
-    if worst > tolerance && steady.trusted {
-        steady.trusted = false;
-        if warnings {
-            steady.warnings.push(format!(
-                "the output's lines, rms or peak-to-peak are estimated to {worst:.1e} relative, above the tolerance"
-            ));
-        }
-    }
-}
-
-/// The steady state, the output over one period and the order spectrum of [`simulate`], without its RMS
-/// and peak-to-peak (what a sweep needs).
+/// The steady state and the order spectrum of [`simulate`] (the same lines), without the second solution's
+/// estimates or the samples over a period (the middle value is empty): what a sweep needs.
 ///
 /// # Errors
 /// Solver failures.
 pub fn solve_with_orders(scene: &Scene) -> Result<(SteadyState, Vec<f64>, Vec<OrderLine>), Error> {
-    let sim = simulate(scene)?;
-    Ok((sim.steady, sim.period_samples, sim.orders))
+    // one response of the printed solution (a sweep prints lines and trust, not their estimates)
+    let sys = scene.system();
+    let steady = solver::solve(sys, &scene.solver)?;
+    let period = steady.period_s;
+    let kmax = highest_line(scene, period);
+    let d = solver::steady::state_scales(sys);
+    let probe = probe(&scene.output.quantity, sys.dim());
+    let resp = response::response(sys, &steady.trajectory, period, &probe, kmax, &d, scene.solver.tolerance);
+    let revs = period * scene.output.base_hz;
+    let amps = resp.amplitudes();
+    let orders = (0..=kmax)
+        .map(|k| OrderLine { order: k as f64 / revs, frequency_hz: k as f64 / period, amplitude: amps[k] })
+        .collect();
+    Ok((steady, Vec::new(), orders))
 }
 
 /// Solves the scene and computes its output over one period, its order spectrum, RMS and peak-to-peak.
@@ -386,34 +342,15 @@ pub fn solve_with_orders(scene: &Scene) -> Result<(SteadyState, Vec<f64>, Vec<Or
 /// coefficients of harmonic balance, exact integrals over the pieces of piecewise-constant coefficients,
 /// or quadrature fine enough for the highest line on the dense output of a time-stepping method
 /// ([`response::response`]); extremes from a global search refined on the solution. Each has its own
-/// error estimate ([`QuantityErrors`]), folded into `error_estimate` and the trust.
+/// error estimate ([`response::Estimates`]), folded into `error_estimate` and the trust.
 ///
 /// # Errors
 /// Solver failures.
 pub fn simulate(scene: &Scene) -> Result<Simulation, Error> {
     let sys = scene.system();
-    let tolerance = scene.solver.tolerance;
-    let mut opts = scene.solver.clone();
-    let (mut steady, resp, errors) = loop {
-        let steady = solver::solve(sys, &opts)?;
-        let kmax = highest_line(scene, steady.period_s);
-        let (resp, errors) = printed_response(scene, &steady, kmax);
-        let worst = errors.orders.max(errors.rms).max(errors.peak_to_peak);
-        // the solver's loop meets the tolerance on the state and the monodromy; a line, the rms or the
-        // peak-to-peak relative to its own size can need more: solve again with the tolerance tightened by
-        // what they missed (twice at most: the estimates scale with the solver's)
-        let retry = steady.trusted
-            && worst > tolerance
-            && worst.is_finite()
-            && opts.steps.is_none()
-            && opts.harmonics.is_none()
-            && opts.tolerance > tolerance / 1e3;
-        if !retry {
-            break (steady, resp, errors);
-        }
-        opts.tolerance *= (0.5 * tolerance / worst).max(1e-3);
-    };
-    judge(&mut steady, &errors, tolerance, true);
+    let probe = probe(&scene.output.quantity, sys.dim());
+    let kmax = |period_s: f64| highest_line(scene, period_s);
+    let (steady, resp, errors) = response::solve_response(sys, &scene.solver, &probe, &kmax)?;
     let period = steady.period_s;
     let revs = period * scene.output.base_hz;
     let kmax = highest_line(scene, period);

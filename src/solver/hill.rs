@@ -474,7 +474,7 @@ pub(super) fn solve_steady(
     // multiplier's error (twice, as for the monodromy), whether it moves linearly or like a square root
     let better = Floquet::from_monodromy(&companion.better, period)?;
     let b = DMatrix::from_fn(sys.dim(), sys.dim(), |i, j| monodromy[(i, j)] * d[j] / d[i]);
-    let departure = super::floquet::departure_from_normality(&b, &floquet.multipliers);
+    let departure = super::floquet::departure_from_normality(&b);
     let rho_error =
         super::floquet::multiplier_change(&floquet, &better, (2.0, 2.0), 100.0 * f64::EPSILON, departure, b.amax());
     let n = sys.dim();

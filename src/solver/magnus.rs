@@ -27,7 +27,12 @@ impl Stepper<'_> {
         self.sys.eval(ta + h * (0.5 + c), Side::Right, &mut self.p[1], &mut self.f[1]);
         let (a1, a2) = (self.augmented(0), self.augmented(1));
         let omega = (&a1 + &a2) * (0.5 * h) + (&a2 * &a1 - &a1 * &a2) * (3f64.sqrt() * h * h / 12.0);
-        let e = omega.exp();
+        // exponentiated balanced (a similarity by powers of 2): a gear's Omega mixes metres and metres per
+        // second (entries 1e-3 against 4e4), and the exponential of the unbalanced matrix lost three digits
+        let mut balanced = omega;
+        let d = super::eigen::balance(&mut balanced);
+        let eb = balanced.exp();
+        let e = DMatrix::from_fn(eb.nrows(), eb.ncols(), |i, j| eb[(i, j)] * d[i] / d[j]);
         let n = self.n;
         let mut col = vec![0.0; n];
         for (j, &sj) in s.iter().enumerate() {

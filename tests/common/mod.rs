@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 #![allow(clippy::needless_range_loop)] // matrix maths reads best with indices
 
+pub mod check;
 pub mod gearbox_gen;
 
 use std::path::{Path, PathBuf};
@@ -130,4 +131,28 @@ pub fn ltp_scene(period: f64, mass: &str, damping: &str, stiffness: &str, forcin
     format!(
         r#"{{"model": "ltp", "ltp": {{"period_s": {period}, "mass": {mass}, "damping": {damping}, "stiffness": {stiffness}, "forcing": {forcing}}}, "solver": {solver}}}"#
     )
+}
+
+/// The tests' one seeded random generator (a 64-bit LCG, Knuth's MMIX constants): reproducible noise and
+/// random inputs without a dependency.
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator from `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+    /// The next 64-bit state.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0
+    }
+    /// Uniform in [-0.5, 0.5) from the state's top 31 bits.
+    pub fn centered(&mut self) -> f64 {
+        ((self.next_u64() >> 33) as f64 / (1u64 << 31) as f64) - 0.5
+    }
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
 }

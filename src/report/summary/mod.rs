@@ -39,22 +39,8 @@ pub struct Simulation {
     pub errors: QuantityErrors,
 }
 
-/// Estimated relative error of each printed quantity of `simulate` (`error_estimate` is the largest).
-#[derive(Serialize, Debug, Clone, Copy)]
-pub struct QuantityErrors {
-    /// Periodic state, relative to the largest balanced state over the period (rounding included).
-    pub state: f64,
-    /// Balanced monodromy, relative to max(|Phi|, 1).
-    pub monodromy: f64,
-    /// Multipliers, relative to max(|rho|max, 1).
-    pub multipliers: f64,
-    /// Line amplitudes (`orders`), relative to the largest line.
-    pub orders: f64,
-    /// RMS, relative to itself.
-    pub rms: f64,
-    /// Peak-to-peak, relative to itself (infinite when the extreme search could not cover the period).
-    pub peak_to_peak: f64,
-}
+/// Estimated relative error of each printed quantity of `simulate`.
+pub use crate::solver::response::Estimates as QuantityErrors;
 
 /// One point of a parameter sweep, for the stability map.
 #[derive(Clone, Debug, serde::Serialize)]
