@@ -278,7 +278,7 @@ pub fn mesh_comb_period<T: Sample>(
     Ok((1.0 / refined, 20.0 * (best / harmonics / median).log10()))
 }
 
-/// One candidate shaft of [`teeth_candidates`].
+/// One candidate shaft of [`teeth_candidates_from`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShaftCandidate {
     /// The pinion's period, samples.
@@ -303,7 +303,7 @@ const LINE_OVER_FLOOR: f64 = 2.0;
 /// Without a speed, with the teeth known: a line F of the spectrum (`seed`, cycles per sample, or each of
 /// the six most prominent lines) is a harmonic h of the mesh of `zp` teeth, so the pinion turns at
 /// F / (h zp) for some h = 1..=8. Each candidate is scored by the lines it predicts (mesh harmonics 1..=4,
-/// the pinion's +-1 and +-2 sidebands and the wheel's +-1 around each) that stand [`LINE_OVER_FLOOR`] times
+/// the pinion's +-1 and +-2 sidebands and the wheel's +-1 around each) that stand twice
 /// over the spectrum's local median as local maxima; a finer candidate of the same seed is preferred when
 /// the lines only it predicts stand far more often than chance. Best first. On a record resampled on the
 /// angle of a tracked mesh harmonic that harmonic is a sharp line at a known place (the seed) whatever the

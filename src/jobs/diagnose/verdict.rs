@@ -231,7 +231,7 @@ fn unscored(d: &Diagnosis, g: &GearIndicators, reference: Option<&Reference>) ->
 }
 
 /// Verdict against the statistical baseline of the same machine, or on absolute limits without one. A gear
-/// that cannot be scored (see [`unscored`]) is never taken for healthy: when no judged gear shows a fault,
+/// that cannot be scored (no comparable block, a number that is not one, a gear the baseline lacks) is never taken for healthy: when no judged gear shows a fault,
 /// the recording is [`VerdictState::NotJudged`] with the reasons.
 pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
     judge_levels(d, reference, t, true);
