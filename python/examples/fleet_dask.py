@@ -33,8 +33,10 @@ def profile_file(text: str) -> str:
 
     name = os.path.join(tempfile.gettempdir(), "gearvib-profile-" + hashlib.sha256(text.encode()).hexdigest()[:16] + ".json")
     if not os.path.exists(name):
-        tmp = name + ".%d.tmp" % os.getpid()
-        with open(tmp, "w") as f:
+        # workers may be threads of one process: a temporary name of its own for each, renamed into place
+        # (the same text, so whichever rename lands last leaves the same file)
+        fd, tmp = tempfile.mkstemp(dir=tempfile.gettempdir(), prefix="gearvib-profile-", suffix=".tmp")
+        with os.fdopen(fd, "w") as f:
             f.write(text)
         os.replace(tmp, name)
     return name
