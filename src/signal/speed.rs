@@ -278,7 +278,7 @@ pub fn mesh_comb_period<T: Sample>(
     Ok((1.0 / refined, 20.0 * (best / harmonics / median).log10()))
 }
 
-/// One candidate shaft of [`teeth_candidates_from`].
+/// One candidate shaft of [`teeth_candidates`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShaftCandidate {
     /// The pinion's period, samples.
@@ -300,23 +300,32 @@ pub struct ShaftCandidate {
 /// per bin.
 const LINE_OVER_FLOOR: f64 = 2.0;
 
-/// Without a speed, with the teeth known: a line F of the spectrum (`seed`, cycles per sample, or each of
-/// the six most prominent lines) is a harmonic h of the mesh of `zp` teeth, so the pinion turns at
-/// F / (h zp) for some h = 1..=8. Each candidate is scored by the lines it predicts (mesh harmonics 1..=4,
-/// the pinion's +-1 and +-2 sidebands and the wheel's +-1 around each) that stand twice
-/// over the spectrum's local median as local maxima; a finer candidate of the same seed is preferred when
-/// the lines only it predicts stand far more often than chance. Best first. On a record resampled on the
-/// angle of a tracked mesh harmonic that harmonic is a sharp line at a known place (the seed) whatever the
-/// speed did.
+/// The lines (cycles per sample) a pinion turning at `f` with `zp` and `zw` teeth predicts: its mesh
+/// harmonics 1..=4 below 0.45, each with the pinion's +-1 and +-2 sidebands and the wheel's +-1.
+fn predicted_lines(f: f64, zp: usize, zw: usize) -> Vec<f64> {
+    let fw = f * zp as f64 / zw as f64;
+    (1..=4)
+        .map(|k| (k * zp) as f64 * f)
+        .filter(|m| m + 2.0 * f < 0.45)
+        .flat_map(|m| [0.0, f, -f, 2.0 * f, -2.0 * f, fw, -fw].map(|d| m + d))
+        .collect()
+}
+
+/// Without a speed, with the teeth known: the line `seed` (cycles per sample) is a harmonic h of the mesh
+/// of `zp` teeth, so the pinion turns at seed / (h zp) for some h = 1..=8. Each candidate is scored by the
+/// lines it predicts (mesh harmonics 1..=4 with the pinion's +-1, +-2 and the wheel's +-1 sidebands) that stand twice over the spectrum's local median as local
+/// maxima; a finer candidate is preferred when the lines only it predicts stand far more often than
+/// chance. Best first. On a record resampled on the angle of a tracked mesh harmonic that harmonic is a
+/// sharp line at a known place (the seed) whatever the speed did.
 ///
 /// # Errors
 /// Too short a record for a resolving spectrum.
-pub fn teeth_candidates_from<T: Sample>(
+pub fn teeth_candidates<T: Sample>(
     fft: &mut Fft,
     x: &[T],
     zp: usize,
     zw: usize,
-    seed: Option<f64>,
+    seed: f64,
 ) -> Result<Vec<ShaftCandidate>, SignalError> {
     // 16 segments or more: a speed that wanders by a percent smears a line over many bins of a long
     // segment, and the averaging steadies the floor
@@ -353,91 +362,43 @@ pub fn teeth_candidates_from<T: Sample>(
                 && amp[j] >= amp[j + 2]
         })
     };
-    // the most prominent lines above 0.5 % of the sample rate (a fan tone, the mains or a resonance can be
-    // the most prominent one, so each of the six first is a seed), at least 1 % apart
-    let lo = ((0.005 * n as f64) as usize).max(2);
-    let hi = ((0.45 * n as f64) as usize).min(amp.len() - 1);
-    let mut peaks: Vec<(usize, f64)> = (lo..hi)
-        .filter(|&i| amp[i] >= amp[i - 1] && amp[i] >= amp[i + 1])
-        .map(|i| (i, amp[i] / floor(i)))
-        .filter(|p| p.1 >= LINE_OVER_FLOOR)
-        .collect();
-    peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let mut seeds: Vec<usize> = seed.map(|f| vec![(f * n as f64).round() as usize]).unwrap_or_default();
-    for (i, _) in peaks.into_iter().filter(|_| seed.is_none()) {
-        if seeds.iter().all(|&s| (i as f64 / s as f64 - 1.0).abs() > 0.01) {
-            seeds.push(i);
-        }
-        if seeds.len() == 6 {
-            break;
-        }
-    }
     let mut out: Vec<ShaftCandidate> = Vec::new();
-    for &peak in &seeds {
-        let line = peak as f64 / n as f64;
-        for h in 1..=8 {
-            let f = line / (h * zp) as f64;
-            if out.iter().any(|c| (c.period_samples * f - 1.0).abs() < 0.002) {
-                continue;
-            }
-            let fw = f * zp as f64 / zw as f64;
-            // the wheel's sidebands must be resolved from the mesh line: two bins at least
-            if fw * (n as f64) < 2.0 {
-                continue;
-            }
-            let mut predicted = 0;
-            let mut standing = 0;
-            for k in 1..=4 {
-                let mesh = (k * zp) as f64 * f;
-                if mesh + 2.0 * f >= 0.45 {
-                    break;
-                }
-                for df in [0.0, f, -f, 2.0 * f, -2.0 * f, fw, -fw] {
-                    predicted += 1;
-                    standing += usize::from(stands(mesh + df));
-                }
-            }
-            if predicted > 0 {
-                out.push(ShaftCandidate {
-                    period_samples: 1.0 / f,
-                    harmonic: h,
-                    standing,
-                    predicted,
-                    score: standing as f64 - 0.5 * (predicted - standing) as f64,
-                });
-            }
+    for h in 1..=8 {
+        let f = seed / (h * zp) as f64;
+        // the wheel's sidebands must be resolved from the mesh line: two bins at least
+        if f * zp as f64 / zw as f64 * (n as f64) < 2.0 {
+            continue;
+        }
+        let lines = predicted_lines(f, zp, zw);
+        let standing = lines.iter().filter(|&&l| stands(l)).count();
+        if !lines.is_empty() {
+            out.push(ShaftCandidate {
+                period_samples: 1.0 / f,
+                harmonic: h,
+                standing,
+                predicted: lines.len(),
+                score: standing as f64 - 0.5 * (lines.len() - standing) as f64,
+            });
         }
     }
     out.sort_by(|a, b| b.score.total_cmp(&a.score));
     // a candidate h predicts a subset of the lines of a finer one m h (every m-th mesh line, wider
     // sidebands), so the best score can go to a coarse one when the fine lines are weak: a finer candidate
-    // of the same seed wins when the lines only it predicts stand far more often than chance (a third of
+    // wins when the lines only it predicts stand far more often than chance (a third of
     // them, against well under one in ten on noise)
     if let Some(first) = out.first().cloned() {
-        let seed_of = |c: &ShaftCandidate| 1.0 / (c.period_samples * (c.harmonic * zp) as f64);
-        let lines = |c: &ShaftCandidate| -> Vec<f64> {
-            let f = 1.0 / c.period_samples;
-            let fw = f * zp as f64 / zw as f64;
-            (1..=4)
-                .map(|k| (k * zp) as f64 * f)
-                .filter(|m| m + 2.0 * f < 0.45)
-                .flat_map(|m| [0.0, f, -f, 2.0 * f, -2.0 * f, fw, -fw].map(|d| m + d))
-                .collect()
-        };
+        let lines = |c: &ShaftCandidate| predicted_lines(1.0 / c.period_samples, zp, zw);
         let mut chosen = first;
         loop {
             let coarse = lines(&chosen);
             let finer = out.iter().find(|c| {
-                c.harmonic > chosen.harmonic
-                    && c.harmonic % chosen.harmonic == 0
-                    && (seed_of(c) / seed_of(&chosen) - 1.0).abs() < 1e-6
-                    && {
-                        let extra: Vec<f64> = lines(c)
-                            .into_iter()
-                            .filter(|l| coarse.iter().all(|m| ((l - m) * n as f64).abs() > 1.5))
-                            .collect();
-                        !extra.is_empty() && 3 * extra.iter().filter(|&&l| stands(l)).count() >= extra.len()
-                    }
+                c.harmonic > chosen.harmonic && c.harmonic % chosen.harmonic == 0 && {
+                    let extra: Vec<f64> = lines(c)
+                        .into_iter()
+                        .filter(|l| coarse.iter().all(|m| ((l - m) * n as f64).abs() > 1.5))
+                        .collect();
+                    !extra.is_empty() && 3 * extra.iter().filter(|&&l| stands(l)).count() >= extra.len()
+                }
             });
             match finer {
                 Some(c) => chosen = c.clone(),

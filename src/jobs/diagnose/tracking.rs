@@ -180,12 +180,12 @@ const CLOSE_CANDIDATES: f64 = 0.8;
 /// Without a speed but with the teeth: which harmonic of the pinion's mesh the tracked line is. On the
 /// record resampled on the line's angle (`y`, [`MESH_CYCLE_POINTS`] points per tracked cycle of `cycle`
 /// samples) the line is sharp whatever the speed did, and each harmonic h = 1..=8 predicts its own mesh
-/// lines and sidebands ([`speed::teeth_candidates_from`]); the pinion revolution is zp h tracked cycles
+/// lines and sidebands ([`speed::teeth_candidates`]); the pinion revolution is zp h tracked cycles
 /// for the best. The candidates and their evidence go into the note, and a close second is said to be
 /// close with what would decide. `None` when no candidate has [`MIN_STANDING_LINES`] standing lines.
 fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, zw: usize) -> Option<MeshShaft> {
     let p = MESH_CYCLE_POINTS as f64;
-    let best = speed::teeth_candidates_from(fft, y, zp, zw, Some(1.0 / p)).ok()?;
+    let best = speed::teeth_candidates(fft, y, zp, zw, 1.0 / p).ok()?;
     let top = best.first()?;
     if top.standing < MIN_STANDING_LINES || top.score <= 0.0 {
         return None;
@@ -503,10 +503,9 @@ pub(super) fn track(
         return Ok(match tracked {
             // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip
             // a cycle in noise, which a pulse train never does)
-            (map, Tracking::MeshPhase, Some(snr), z)
-                if snr >= CLEAR_LINE_DB && map.revolutions() >= nominal.revolutions().saturating_sub(2) =>
+            (map, Tracking::MeshPhase, snr @ Some(db), z)
+                if db >= CLEAR_LINE_DB && map.revolutions() >= nominal.revolutions().saturating_sub(2) =>
             {
-                let snr = Some(snr);
                 (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
             }
             _ => {
