@@ -151,8 +151,6 @@ struct GearReference {
     floor: f64,
     /// Median TSA RMS of the blocks (scale for near-zero amplitudes).
     rms: f64,
-    /// Mean over the baseline files of the RMS of the whole-record TSA's residual signal.
-    residual_rms: f64,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -250,13 +248,11 @@ fn value(block: &Block, key: &str) -> f64 {
 pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Error> {
     let mut pooled: BTreeMap<(Shaft, usize), Vec<&Block>> = BTreeMap::new();
     let mut revs: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
-    let mut residual: BTreeMap<(Shaft, usize), Vec<f64>> = BTreeMap::new();
     for d in baselines {
         for g in &d.gears {
             let key = (g.gear.baseline_key(), g.channel);
             pooled.entry(key).or_default().extend(&g.blocks);
             *revs.entry(key).or_default() += g.revolutions;
-            residual.entry(key).or_default().push(crate::signal::indicators::rms(&g.residual));
         }
     }
     let mut gears = BTreeMap::new();
@@ -304,23 +300,12 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
             stats.insert(k.to_string(), Stat::of(&values, scale));
         }
         let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
-        let residual_rms = residual[&key].iter().sum::<f64>() / residual[&key].len() as f64;
-        gears.insert(key, GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms, residual_rms });
+        gears.insert(key, GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms });
     }
     Ok(Reference { gears, files: baselines.len() })
 }
 
 impl Reference {
-    /// How much the residual signal of the whole-record TSA of `g` has grown against the baseline's (RMS
-    /// ratio): which gear carries a fault. A local fault is synchronous with its own gear, so its full
-    /// average keeps it while the other gear's average spreads it over many revolutions and attenuates it;
-    /// block indicators of 8 revolutions cannot tell the two apart as well.
-    pub fn residual_growth(&self, g: &GearIndicators) -> f64 {
-        self.gears
-            .get(&(g.gear.baseline_key(), g.channel))
-            .map_or(f64::NAN, |r| crate::signal::indicators::rms(&g.residual) / r.residual_rms.max(f64::MIN_POSITIVE))
-    }
-
     /// Whether the reference holds the gear and channel of `g`.
     pub fn covers(&self, g: &GearIndicators) -> bool {
         self.gears.contains_key(&(g.gear.baseline_key(), g.channel))

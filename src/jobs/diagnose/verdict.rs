@@ -240,61 +240,61 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
 /// [`judge`], with `levels` false when absolute levels do not compare with the baseline's (one side's
 /// unit unknown): the level-dependent indicators are scored but do not decide.
 pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds, levels: bool) {
-    // (gear, channel, triggers, weight of the gear's evidence)
-    let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>, f64)> = Vec::new();
+    // (gear, channel, triggers)
+    let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>)> = Vec::new();
     let mut not_judged = Vec::new();
     d.scores.clear();
     let gears = d.gears.clone();
     for g in &gears {
-        let (trig, weight) = match reference {
-            Some(r) if r.covers(g) => {
-                (against_baseline(d, g, r, levels), if levels { r.residual_growth(g) } else { f64::NAN })
-            }
-            Some(_) => (Vec::new(), f64::NAN),
-            None => {
-                let trig = absolute(g, t);
-                let w = trig.iter().map(|t| t.ratio).fold(0.0, f64::max);
-                (trig, w)
-            }
+        let trig = match reference {
+            Some(r) if r.covers(g) => against_baseline(d, g, r, levels),
+            Some(_) => Vec::new(),
+            None => absolute(g, t),
         };
         if let Some(why) = unscored(d, g, reference) {
             not_judged.push(why);
         }
-        per_gear.push((g.gear, g.channel, trig, weight));
+        per_gear.push((g.gear, g.channel, trig));
     }
-    // the gear: the worst state, and among equal states the one whose residual grew most (with a baseline)
-    // or whose strongest indicator is furthest beyond its limit (without)
     // the gear: the worst state; among equal states the one whose own average holds an impulse (FM4, M6A:
     // a local fault is whole in its own gear's average, smeared in the other's), then the one whose
     // strongest indicator moved furthest (spreads against a baseline, times its healthy value without)
-    let key = |g: &(Shaft, usize, Vec<Trigger>, f64)| {
-        let local = g.2.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
-        let strongest = g.2.iter().map(|x| x.ratio).fold(0.0, f64::max);
-        (gear_state(&g.2, t), local, strongest)
+    let weight = |trig: &[Trigger]| -> (f64, f64) {
+        let local = trig.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
+        (local, trig.iter().map(|x| x.ratio).fold(0.0, f64::max))
     };
+    let key = |g: &(Shaft, usize, Vec<Trigger>)| (gear_state(&g.2, t), weight(&g.2));
     let worst = per_gear.iter().max_by(|a, b| {
-        let (ka, kb) = (key(a), key(b));
-        ka.0.cmp(&kb.0).then((ka.1 > 0.0).cmp(&(kb.1 > 0.0))).then(ka.2.total_cmp(&kb.2))
+        let ((sa, (la, xa)), (sb, (lb, xb))) = (key(a), key(b));
+        sa.cmp(&sb).then((la > 0.0).cmp(&(lb > 0.0))).then(xa.total_cmp(&xb))
     });
     let mut reasons = Vec::new();
     let mut cross_talk = Vec::new();
     let (state, gear) = match worst {
-        Some((gear, channel, trig, weight)) if gear_state(trig, t) > VerdictState::Healthy => {
+        Some((gear, channel, trig)) if gear_state(trig, t) > VerdictState::Healthy => {
             // the deciding gear's reasons, strongest first; the other shafts' triggers are its cross-talk
             // (a local fault is synchronous with its own gear, so its own average keeps it whole while the
-            // other gear's average holds it smeared: the gear whose evidence is heaviest carries the fault)
+            // other gear's average holds it smeared)
             let mut own: Vec<&Trigger> = per_gear.iter().filter(|g| g.0 == *gear).flat_map(|g| &g.2).collect();
             own.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
             reasons.extend(own.iter().take(t.max_reasons).map(|t| t.text.clone()));
             reasons.extend(not_judged.iter().map(|w| format!("not judged: {w}")));
-            for (other, _, trig, w) in per_gear.iter().filter(|g| g.0 != *gear && !g.2.is_empty()) {
-                let mut trig: Vec<&Trigger> = trig.iter().collect();
-                trig.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+            let unit = if reference.is_some() { "spreads" } else { "times its healthy value" };
+            let (own_local, own_max) = weight(trig);
+            for (other, _, trig) in per_gear.iter().filter(|g| g.0 != *gear && !g.2.is_empty()) {
+                let strongest = trig.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
+                let (local, max) = weight(trig);
+                let why = if own_local > 0.0 {
+                    format!(
+                        "the {gear}'s own average holds the impulse (FM4/M6A {own_local:.1} {unit}, the {other}'s {local:.1})"
+                    )
+                } else {
+                    format!("the {gear}'s indicators moved further ({own_max:.1} {unit}, the {other}'s {max:.1})")
+                };
                 cross_talk.push(format!(
-                    "the {other}'s indicators moved too ({}), less than the {gear}'s ({}): its average holds the {gear}'s fault smeared over its own revolutions, which is cross-talk, not a second fault",
-                    trig.first().map_or(String::new(), |t| t.text.split_once(": ").map_or(t.text.as_str(), |x| x.1).to_string()),
-                    evidence_weight(*weight, reference.is_some()),
-                ) + &format!(" (its own weight {})", evidence_weight(*w, reference.is_some())));
+                    "the {other}'s indicators moved too ({}): its average holds the {gear}'s fault smeared over its own revolutions, which is cross-talk, not a second fault: {why}",
+                    strongest.map_or(String::new(), |t| t.text.split_once(": ").map_or(t.text.as_str(), |x| x.1).to_string()),
+                ));
             }
             if let Some(g) = d.gears.iter().find(|g| g.gear == *gear && g.channel == *channel) {
                 d.indicators = g.indicators.clone();
@@ -332,18 +332,6 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     d.verdict = Verdict::new(state, gear, reasons);
     d.verdict.cross_talk = cross_talk;
     place_tooth(d);
-}
-
-/// How heavy a gear's evidence is, in words: with a baseline the growth of its whole-record residual
-/// against the baseline's, without one its strongest indicator against its healthy value.
-fn evidence_weight(w: f64, baseline: bool) -> String {
-    if !w.is_finite() {
-        "not measured".into()
-    } else if baseline {
-        format!("residual {w:.2} times the baseline's")
-    } else {
-        format!("strongest indicator {w:.2} times its healthy value")
-    }
 }
 
 /// How many times its share of the revolution's energy one pitch of the difference signal must hold for
