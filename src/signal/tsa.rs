@@ -145,9 +145,19 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
     let revs = revolutions_of(map, ratio);
     if revs < min_revs {
         let per_rev = map.mean_period_samples() / ratio;
+        let needed = (min_revs as f64 * per_rev).ceil() as usize + 2;
+        if needed <= x.len() {
+            // the record is long enough but the angle does not cover it (a tracked angle ends where the
+            // line could be followed, a pulse train at its first and last pulse): say so, not "too short"
+            let (a, b) = (map.sample_at(0.0), map.sample_at(map.revolutions() as f64));
+            return Err(SignalError::Invalid(format!(
+                "time-synchronous average: {revs} whole revolutions of {per_rev:.1} samples lie within the followed angle (samples {a:.0} to {b:.0} of {}), {min_revs} are needed",
+                x.len()
+            )));
+        }
         return Err(SignalError::TooShort {
             what: format!("time-synchronous average ({min_revs} revolutions of {per_rev:.1} samples)"),
-            needed: (min_revs as f64 * per_rev).ceil() as usize + 2,
+            needed,
             got: x.len(),
         });
     }

@@ -48,7 +48,7 @@ use crate::signal::indicators as ind;
 use crate::signal::order_map::OrderMap;
 use crate::signal::spectrum::Fft;
 use crate::signal::tsa::{self, AngleMap, Decomposition};
-use crate::signal::{angle, speed};
+use crate::signal::{angle, mesh_comb, speed};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

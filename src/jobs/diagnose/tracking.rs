@@ -64,7 +64,12 @@ pub(super) fn nominal_speed(
             }
             speed::refine_near(fft, &views, p, 0.03)
         }
-        None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
+        None => {
+            if let Some(found) = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs)) {
+                return Ok(found.nominal(n, warnings));
+            }
+            speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2))
+        }
     }
     .map_err(|e| bad(path, e))?;
     // a mesh-dominated signal (its shortest strong repetition is a tooth mesh): the shaft is sought on the
@@ -280,6 +285,150 @@ fn shaft_near(
     ((found.period_samples / period - 1.0).abs() <= MAX_SPEED_DIFFERENCE).then_some(found)
 }
 
+/// The record resampled on the angle of the line repeating every `mesh_lag` samples, followed on the first
+/// of `channels` where it stands [`MIN_TRACKING_SNR_DB`] over its band: the mean tracked cycle (samples)
+/// and [`MESH_CYCLE_POINTS`] points per cycle.
+///
+/// # Errors
+/// The line cannot be followed on any channel.
+fn follow_line(channels: &[&[f32]], mesh_lag: f64) -> Result<(f64, Vec<f64>), crate::signal::SignalError> {
+    let p = MESH_CYCLE_POINTS;
+    let mut last = None;
+    let found =
+        channels.iter().find_map(|x| match angle::track_mesh(x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES) {
+            Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
+            Ok(_) => None,
+            Err(e) => {
+                last = Some(e);
+                None
+            }
+        });
+    let Some((x, tracked)) = found else {
+        return Err(
+            last.unwrap_or_else(|| crate::signal::SignalError::Invalid("the mesh line is too weak to follow".into()))
+        );
+    };
+    let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
+    let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
+    let mut y = vec![0.0; points];
+    tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
+    Ok((cycle, y))
+}
+
+/// Largest relative difference between the mean cycle of the followed comb line and the comb's spacing
+/// for the line to be that harmonic (the tracked mean is good to 1e-4, the comb's spacing to its grid and
+/// the refinement on the averaged spectrum of a wandering speed: 2 %).
+const COMB_AGREEMENT: f64 = 0.02;
+/// How far (nats of power: 0.69 = 3 dB) every one of the first multiples of m of the best comb must stand
+/// over the comb's lines beside it for the m-th multiple to be the mesh: on a meshing gear the mesh
+/// harmonics stand 5-20 dB over the shaft lines and sidebands around them, while a true mesh comb's
+/// harmonics fall or rise by a few dB from one to the next, seldom alternating over four multiples.
+const MESH_OVER_SHAFT_LINES: f64 = 0.69;
+/// Evidence (nats per segment and channel) from which a mesh comb counts as plainly there: on generated
+/// machines of another physics (noise at 0.35-0.7 of the signal) the right comb scored 8-33 when nothing
+/// masked it, and every comb under 2 that won was a wrong one; the speed's confidence scales down below.
+const STRONG_COMB: f64 = 8.0;
+/// Share of the best candidate's evidence from which the second is said to stand close.
+const CLOSE_COMB: f64 = 0.6;
+/// Highest mesh frequency sought without a speed, cycles per sample: the TSA needs a few samples per
+/// mesh cycle (a quarter of the sample rate leaves four).
+const MESH_HIGHEST: f64 = 0.25;
+
+/// Without a speed but with the teeth `zp`, `zw`: the mesh is the harmonic series of lines that stands
+/// highest in short segments of the record ([`mesh_comb::comb_candidates`], a pinion of at least
+/// `min_revs` revolutions and [`MIN_SAMPLES_PER_REV`] samples per revolution); the pinion revolution is
+/// `zp` of its cycles, the mean cycle from following its strongest low harmonic. The three best combs and
+/// their evidence go into the note (with `fs`, in Hz), and a second comb close to the first is said to be.
+/// (Sidebands on the followed angle were tried as a tie-break and decided wrongly on generated machines
+/// whose sidebands sit in the noise: the comb's own evidence is the stronger.)
+fn shaft_from_comb(
+    fft: &mut Fft,
+    views: &[&[f32]],
+    full: &[&[f32]],
+    (zp, zw): (usize, usize),
+    min_revs: usize,
+    fs: Option<f64>,
+) -> Option<MeshShaft> {
+    let n = full.iter().map(|c| c.len()).min()?;
+    // a pinion of min_revs revolutions with two to spare, its mesh below a quarter of the sample rate
+    let (z_p, z_w) = (zp as f64, zw as f64);
+    let slowest = (min_revs.max(2) + 2) as f64 / n as f64;
+    // (and a revolution long enough for the TSA to resolve both mesh orders with their sidebands:
+    // analysis::check_mesh_order's 2 z + 8 orders within half its points)
+    let fastest = (MESH_HIGHEST / z_p).min(1.0 / MIN_SAMPLES_PER_REV).min(1.0 / (4 * zp.max(zw) + 16) as f64);
+    let evidence = mesh_comb::comb_candidates(
+        fft,
+        views,
+        slowest * z_p.min(z_w) / z_w,
+        MESH_HIGHEST,
+        (zp * min_revs.max(2)) as f64 / n as f64,
+    )
+    .ok()?;
+    // each comb read as the mesh. (Adding the evidence of the two shafts' own combs was tried: a comb at
+    // the mesh rate is also a shaft comb of a shaft turning that fast, and the wander each segment is
+    // allowed blurs a pinion comb into a wheel comb of nearby speed, so it decided worse on the generated
+    // machines than the mesh comb alone.)
+    let score = |fp: f64| evidence.at(z_p * fp);
+    let mut candidates: Vec<(f64, f64)> = evidence
+        .peaks
+        .iter()
+        .map(|c| c.frequency / z_p)
+        .filter(|&fp| (slowest..=fastest).contains(&fp))
+        .map(|fp| (fp, score(fp)))
+        .collect();
+    candidates.sort_by(|a, b| b.1.total_cmp(&a.1));
+    candidates.dedup_by(|a, b| (a.0 / b.0 - 1.0).abs() < 0.03);
+    let &(top, best) = candidates.first()?;
+    // a rich spectrum (every harmonic of both shafts a line) makes a comb of every divisor of the mesh as
+    // strong as the mesh comb: the smallest multiple m of the best whose multiples stand over the lines
+    // beside them is the mesh
+    let fp = (2..=2 * zp)
+        .take_while(|&m| top * m as f64 <= fastest)
+        .find(|&m| evidence.multiples_stand_out(z_p * top, m).is_some_and(|w| w >= MESH_OVER_SHAFT_LINES))
+        .map_or(top, |m| top * m as f64);
+    let first = evidence.peaks.iter().find(|c| (c.frequency / (z_p * fp) - 1.0).abs() < 0.03);
+    // the mesh comb's strongest low harmonic is followed for the mean cycle (a line that cannot be
+    // followed leaves the speed the comb gives)
+    let k = first.map_or(1, |c| c.strongest);
+    let mesh = first.map_or(z_p * fp, |c| c.frequency);
+    let lag = 1.0 / (k as f64 * mesh);
+    let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
+    let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| (zp * k) as f64 * cycle);
+    let hz =
+        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let listed: Vec<String> =
+        candidates.iter().take(3).map(|&(f, e)| format!("{} (evidence {e:.1})", hz(1.0 / f))).collect();
+    let mut note = format!(
+        "pinion speed estimated from the teeth: {} (the mesh comb of {zp} teeth, {}); candidates by their evidence: {}; give the speed or a tachometer channel when known",
+        hz(period),
+        if followed.is_some() {
+            format!("the mesh followed on its harmonic {k}")
+        } else {
+            "the mesh too weak to follow".into()
+        },
+        listed.join(", ")
+    );
+    if fp > top * 1.5 {
+        note.push_str(&format!(
+            "; the combs of the mesh's divisors (pinion {} and below) are as strong in this spectrum of many shaft lines, and the mesh was told from them by its lines standing over the lines beside them",
+            hz(1.0 / top)
+        ));
+    }
+    // a rival is a comb that is neither a divisor of the mesh nor a multiple of a shaft below it: those
+    // are one family of lines with the chosen speed
+    let whole = |x: f64| x >= 0.98 && x <= z_p.max(z_w) && (x - x.round()).abs() < (0.015 * x).min(0.1);
+    let family = |f: f64| whole(fp / f) || whole(f / fp * z_p) || whole(f / fp * z_w);
+    let second = candidates.iter().find(|c| !family(c.0)).map_or(0.0, |s| s.1);
+    if second > CLOSE_COMB * best {
+        note.push_str(&format!(
+            "; the second candidate stands close ({:.0} % of the evidence): a tachometer or the nameplate speed would decide",
+            100.0 * second / best
+        ));
+    }
+    let confidence = (1.0 - second / best).clamp(0.0, 1.0) * (best / STRONG_COMB).min(1.0);
+    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note })
+}
+
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
 /// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
 /// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
@@ -301,28 +450,8 @@ fn shaft_through_mesh(
     wheel_teeth: Option<usize>,
 ) -> Result<Option<MeshShaft>, crate::signal::SignalError> {
     let p = MESH_CYCLE_POINTS;
-    let mut last = None;
-    let (x, tracked) = match channels.iter().find_map(|x| {
-        let t = angle::track_mesh(x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES);
-        match t {
-            Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
-            Ok(_) => None,
-            Err(e) => {
-                last = Some(e);
-                None
-            }
-        }
-    }) {
-        Some(found) => found,
-        None => {
-            return Err(last
-                .unwrap_or_else(|| crate::signal::SignalError::Invalid("the mesh line is too weak to follow".into())));
-        }
-    };
-    let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
-    let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
-    let mut y = vec![0.0; points];
-    tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
+    let (cycle, y) = follow_line(channels, mesh_lag)?;
+    let points = y.len();
     if let (Some(zp), Some(zw)) = (pinion_teeth, wheel_teeth) {
         if let Some(found) = shaft_from_teeth(fft, &y, cycle, zp, zw) {
             return Ok(Some(found));

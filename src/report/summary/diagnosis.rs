@@ -547,7 +547,8 @@ pub struct Diagnosis {
     pub shaft_period_samples: f64,
     /// Where the speed came from.
     pub speed_source: SpeedSource,
-    /// Confidence of an estimated speed (autocorrelation at the period, 0..1); 1 when given.
+    /// Confidence of an estimated speed, 0..1 (autocorrelation at the period; from the teeth, the mesh comb's
+    /// margin over the best comb of another line family times its strength); 1 when given or measured.
     pub speed_confidence: f64,
     /// The pinion speed the user gave (a nominal speed, Hz), when given: the speed used is the one measured
     /// on the mesh line within the given tolerance (`shaft_hz`).
