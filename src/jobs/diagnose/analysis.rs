@@ -14,7 +14,7 @@ pub(super) fn analyse(
     let Checked { tacho, channels, moments, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
     let mut fft = Fft::new();
     let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
-    let (source, confidence) = (nominal.source, nominal.confidence);
+    let (source, confidence, speed_doubt) = (nominal.source, nominal.confidence, nominal.doubt.clone());
     let nominal_mesh_from_lag = nominal.mesh_order.is_some();
     let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
     let (map, tracking, line_snr_db, tracked_z) = track(path, &rec, &channels, o, known_z, nominal.map, &mut warnings)?;
@@ -250,6 +250,7 @@ pub(super) fn analyse(
         shaft_period_samples: period,
         speed_source: source,
         speed_confidence: confidence,
+        speed_doubt,
         speed_given_hz: speed_given.map(|g| g.0),
         speed_deviation_percent: speed_given.map(|g| g.1),
         speed_profile,

@@ -15,6 +15,8 @@ pub(super) struct Nominal {
     pub(super) confidence: f64,
     /// Mesh order from the ratio of the repetition period to the mesh lag (estimated speed only).
     pub(super) mesh_order: Option<usize>,
+    /// Why an estimated speed is too doubtful for a verdict of health to rest on it.
+    pub(super) doubt: Option<String>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -33,7 +35,13 @@ pub(super) fn nominal_speed(
         let pulses = speed::tacho_pulses(&rec.channels[t - 1])
             .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
             .map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
-        return Ok(Nominal { map: pulses, source: SpeedSource::Tachometer, confidence: 1.0, mesh_order: None });
+        return Ok(Nominal {
+            map: pulses,
+            source: SpeedSource::Tachometer,
+            confidence: 1.0,
+            mesh_order: None,
+            doubt: None,
+        });
     }
     if let Some(hz) = o.shaft_hz {
         let fs = fs
@@ -48,6 +56,7 @@ pub(super) fn nominal_speed(
             source: SpeedSource::Given,
             confidence: 1.0,
             mesh_order: None,
+            doubt: None,
         });
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
@@ -126,6 +135,7 @@ pub(super) fn nominal_speed(
                 source: SpeedSource::Estimated,
                 confidence: est.confidence,
                 mesh_order: None,
+                doubt: None,
             });
         }
     }
@@ -138,6 +148,12 @@ pub(super) fn nominal_speed(
             .map(|m| (est.period_samples / m).round() as usize)
             .map(|z| fundamental_mesh(&views, est.period_samples, z))
             .filter(|&z| z >= 8),
+        doubt: (est.confidence < UNSURE_REPETITION).then(|| {
+            format!(
+                "the shaft speed was estimated from a repetition of autocorrelation {:.2} (under {UNSURE_REPETITION}): the signal hardly repeats there, so averages on that period cannot clear the machine; give the speed (--rpm) or a tachometer channel",
+                est.confidence
+            )
+        }),
     })
 }
 
@@ -216,6 +232,7 @@ fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, zw: usize) 
         mesh_order: None,
         confidence: top.standing as f64 / top.predicted as f64,
         note,
+        from_comb: false,
     })
 }
 
@@ -246,7 +263,19 @@ struct MeshShaft {
     confidence: f64,
     /// What was done, for the warnings.
     note: String,
+    /// Whether the speed came from the mesh comb (its confidence is then on [`UNSURE_SPEED`]'s scale).
+    from_comb: bool,
 }
+
+/// Confidence of a speed estimated from the teeth (the mesh comb's) under which no verdict of health rests
+/// on it: on generated machines of another physics every wrong comb speed scored under it or called no
+/// gear healthy, while the right ones on clear spectra score 0.5-1. (The autocorrelation's confidence of
+/// the other routes is on another scale: a real rig's right period repeats at 0.16-0.3.)
+const UNSURE_SPEED: f64 = 0.2;
+/// Normalised autocorrelation at an estimated repetition period under which no verdict of health rests on
+/// it: a real rig's right periods repeat at 0.16-0.47 (the bundled SpectraQuest recordings), the wrong
+/// periods taken on generated machines with a broken tooth at 0.03.
+const UNSURE_REPETITION: f64 = 0.1;
 
 impl MeshShaft {
     /// The constant nominal speed over `n` samples, its note added to `warnings`.
@@ -257,6 +286,12 @@ impl MeshShaft {
             source: SpeedSource::Estimated,
             confidence: self.confidence,
             mesh_order: self.mesh_order,
+            doubt: (self.confidence < UNSURE_SPEED && self.from_comb).then(|| {
+                format!(
+                    "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the speed (--rpm) or a tachometer channel",
+                    self.confidence
+                )
+            }),
         }
     }
 }
@@ -426,7 +461,7 @@ fn shaft_from_comb(
         ));
     }
     let confidence = (1.0 - second / best).clamp(0.0, 1.0) * (best / STRONG_COMB).min(1.0);
-    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note })
+    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true })
 }
 
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
@@ -476,6 +511,7 @@ fn shaft_through_mesh(
             note: format!(
                 "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
             ),
+            from_comb: false,
         }));
     };
     let confidence = c[q];
@@ -508,6 +544,7 @@ fn shaft_through_mesh(
         note: format!(
             "shaft speed estimated on the mesh line's angle (line tracked, {cycle:.3} samples per cycle on average; {what}; autocorrelation {confidence:.2}); give the speed or a tachometer channel when known"
         ),
+        from_comb: false,
     }))
 }
 

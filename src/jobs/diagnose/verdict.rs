@@ -4,8 +4,7 @@
 
 use super::baseline::{self, Reference};
 use crate::report::summary::{
-    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Score, Shaft, SpeedSource, ToothOrigin, Verdict, VerdictGear,
-    VerdictState,
+    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Score, Shaft, ToothOrigin, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
@@ -231,11 +230,6 @@ fn unscored(d: &Diagnosis, g: &GearIndicators, reference: Option<&Reference>) ->
     }
 }
 
-/// Confidence of an estimated speed under which no verdict of health rests on it: the estimates' own
-/// scales (comb evidence against its rival, autocorrelation at the period) put wrong speeds of the generated
-/// test machines under it, and right ones on clear spectra far above.
-pub const UNSURE_SPEED: f64 = 0.2;
-
 /// Verdict against the statistical baseline of the same machine, or on absolute limits without one. A gear
 /// that cannot be scored (no comparable block, a number that is not one, a gear the baseline lacks) is never taken for healthy: when no judged gear shows a fault,
 /// the recording is [`VerdictState::NotJudged`] with the reasons.
@@ -262,11 +256,8 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
         }
         per_gear.push((g.gear, g.channel, trig));
     }
-    if d.speed_source == SpeedSource::Estimated && d.speed_confidence < UNSURE_SPEED {
-        not_judged.push(format!(
-            "the shaft speed was estimated with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the speed (--rpm) or a tachometer channel",
-            d.speed_confidence
-        ));
+    if let Some(doubt) = &d.speed_doubt {
+        not_judged.push(doubt.clone());
     }
     // the gear: the worst state; among equal states the one whose own average holds an impulse (FM4, M6A:
     // a local fault is whole in its own gear's average, smeared in the other's), then the one whose

@@ -550,6 +550,10 @@ pub struct Diagnosis {
     /// Confidence of an estimated speed, 0..1 (autocorrelation at the period; from the teeth, the mesh comb's
     /// margin over the best comb of another line family times its strength); 1 when given or measured.
     pub speed_confidence: f64,
+    /// Why the estimated speed is too doubtful for a verdict of health to rest on it (the verdict is then
+    /// at best not judged); absent when the speed is trusted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_doubt: Option<String>,
     /// The pinion speed the user gave (a nominal speed, Hz), when given: the speed used is the one measured
     /// on the mesh line within the given tolerance (`shaft_hz`).
     #[serde(skip_serializing_if = "Option::is_none")]
