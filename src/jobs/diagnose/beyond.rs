@@ -9,11 +9,19 @@ use crate::signal::spectrum::AmplitudeOptions;
 /// Speed range (slowest to fastest revolution, over the mean) above which the rpm-order map is drawn.
 pub(super) const ORDER_MAP_SPEED_CHANGE: f64 = 0.02;
 
+/// Mesh harmonics (with the sidebands of the last) drawn in the rpm-order map when the sample rate keeps
+/// them: a gear's mesh harmonics beyond the fifth seldom carry what the first five do not.
+const ORDER_MAP_MESH_HARMONICS: f64 = 5.5;
+
 /// The rpm-order map of a recording whose speed changes: segments of 8 revolutions advancing by 4 (order
-/// resolution 1/8), orders up to 3.5 mesh orders (three mesh harmonics and their sidebands). `None` when
-/// the recording holds too few revolutions.
+/// resolution 1/8), orders up to [`ORDER_MAP_MESH_HARMONICS`] mesh orders, or as far as the sample rate
+/// reaches at the fastest revolution (0.45 of its samples per revolution, under the anti-alias filter's
+/// edge), and at least 1.5 mesh orders. `None` when the recording holds too few revolutions.
 pub(super) fn order_map(fft: &mut Fft, x: &[f32], map: &AngleMap, mesh_order: usize) -> Option<OrderMap> {
-    let max_order = 3.5 * mesh_order.max(1) as f64;
+    let mesh = mesh_order.max(1) as f64;
+    let fastest = angle::SpeedProfile::of(map).max;
+    let nyquist_order = if fastest > 0.0 { 0.45 / fastest } else { f64::INFINITY };
+    let max_order = (ORDER_MAP_MESH_HARMONICS * mesh).min(nyquist_order).max(1.5 * mesh);
     let points = ((3.0 * max_order) as usize).next_power_of_two().max(64);
     crate::signal::order_map::order_map(fft, x, map, points, 8, 4, max_order).ok()
 }
