@@ -428,6 +428,32 @@ fn teeth_only_speed_is_found_from_the_mesh_comb() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
+/// Without a baseline, a spall and a broken tooth whose TSA indicators stay under the absolute limits are
+/// raised by their envelope order line (over 30 dB above its neighbourhood) on their own gear, and no
+/// healthy recording of those machines has an envelope line over that limit (they reach 22 dB).
+#[test]
+fn without_a_baseline_the_envelope_raises_impacts_on_their_gear() {
+    let mut wrong = vec![];
+    for (name, label) in [("z31z47-12Hz-fs51k2", "pinion-spall-t25"), ("z17z29-25Hz-fs20k", "wheel-broken-t23")] {
+        let (healthy, faults) = test_set(&machine(name));
+        let fault = faults.into_iter().find(|c| c.label() == label).unwrap();
+        ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+        let over = |o: &Outcome| o.json["verdict"]["reasons"].to_string().contains("over the 30 dB absolute limit");
+        let o = diagnose(&fault, Mode::Speed, &[]);
+        let truth = fault.fault.unwrap().gear.name();
+        if !(o.state == "suspect" || o.state == "faulty") || o.gear != truth || !over(&o) {
+            wrong.push(format!("{name} {label}: {} on {}: {}", o.state, o.gear, o.json["verdict"]));
+        }
+        for h in &healthy {
+            let o = diagnose(h, Mode::Speed, &[]);
+            if over(&o) {
+                wrong.push(format!("{name} {}: envelope over the limit: {}", h.label(), o.json["verdict"]));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
 /// The scorecard: every recording diagnosed with the speed, with the tachometer, each with and without the
 /// sibling baseline; a table on stdout and counts at the end. Never fails (it reports).
 #[test]

@@ -368,8 +368,13 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     }
     history.apply(&mut d);
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
-    if let Some(e) = p.facts.as_ref().and_then(|b| b.envelope.as_ref()) {
-        verdict::envelope_evidence(&mut d, e);
+    match &p.facts {
+        Some(b) => {
+            if let Some(e) = &b.envelope {
+                verdict::envelope_evidence(&mut d, e);
+            }
+        }
+        None => verdict::envelope_absolute(&mut d),
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);
