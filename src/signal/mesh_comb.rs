@@ -101,7 +101,7 @@ const FLOOR_QUANTILE: f64 = 0.25;
 
 /// The local floor of a power spectrum: the median of each block of 128 bins (a line or a smeared hump
 /// occupies a few of them), one value per bin.
-fn local_floor(power: &[f64]) -> Vec<f64> {
+pub(crate) fn local_floor(power: &[f64]) -> Vec<f64> {
     let block = 128;
     let medians: Vec<f64> = power
         .chunks(block)

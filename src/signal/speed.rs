@@ -361,17 +361,9 @@ pub fn teeth_candidates<T: Sample>(
     let segment = (x.len() / 16).next_power_of_two().clamp(1024, 1 << 15);
     let (power, n) = super::spectrum::averaged_power(fft, x, segment.min(x.len()), 0.5, "teeth comb spectrum")?;
     let amp: Vec<f64> = power.iter().map(|p| p.max(0.0).sqrt()).collect();
-    // the local floor: the median of blocks of 128 bins
-    let block = 128;
-    let floors: Vec<f64> = amp
-        .chunks(block)
-        .map(|c| {
-            let mut v = c.to_vec();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2].max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let floor = |bin: usize| floors[(bin / block).min(floors.len() - 1)];
+    // the local floor: the median of blocks of 128 bins (the median commutes with the square root)
+    let floors: Vec<f64> = super::mesh_comb::local_floor(&power).iter().map(|p| p.sqrt()).collect();
+    let floor = |bin: usize| floors[bin.min(floors.len() - 1)];
     // a line stands when a local maximum of the spectrum within a bin of it is that far over the floor (the
     // slope of a hump smeared by the speed's wander is not a line of its own)
     let stands = |f: f64| -> bool {
