@@ -67,6 +67,12 @@ pub(super) fn nominal_speed(
             // the baseline's period: a mesh-dominated recording is followed on its mesh line as the
             // baseline was (a 1 % speed fluctuation smears the raw repetition of a whole revolution), and
             // the shaft found there is kept when it is the baseline's within the accepted speed change
+            // with the teeth, the mesh comb as the baseline's own speed was found (one pipeline), kept when it
+            // is the baseline's within the accepted speed change
+            let comb = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs));
+            if let Some(found) = comb.filter(|f| (f.period_samples / p - 1.0).abs() <= MAX_SPEED_DIFFERENCE) {
+                return Ok(found.nominal(n, warnings));
+            }
             let mesh_order = geometry.and_then(|g| g.mesh_order).or(pinion_teeth);
             if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
                 return Ok(found.nominal(n, warnings));
