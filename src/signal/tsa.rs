@@ -340,6 +340,13 @@ pub struct Decomposition {
 
 /// Splits a TSA by bin masking. `mesh_order` is the mesh order z of the averaged shaft (its teeth).
 pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: usize) -> Decomposition {
+    decompose_many(fft, tsa, &[mesh_order], shaft_orders)
+}
+
+/// [`decompose`] of the average of a shaft that carries several gears (an intermediate shaft: one gear per
+/// stage): the harmonics of every mesh order in `mesh_orders` are regular, and the first-order sidebands of
+/// every one are left out of the difference signal.
+pub fn decompose_many(fft: &mut Fft, tsa: &[f64], mesh_orders: &[usize], shaft_orders: usize) -> Decomposition {
     let l = tsa.len();
     let mut spec = Vec::new();
     fft.forward(&mut tsa.to_vec(), &mut spec);
@@ -349,9 +356,8 @@ pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: us
         .map(|(k, c)| if k == 0 || k == l / 2 { 1.0 } else { 2.0 } * super::spectrum::magnitude(*c) / l as f64)
         .collect();
     let nb = spec.len();
-    let is_mesh = |k: usize| mesh_order > 0 && k.is_multiple_of(mesh_order);
-    let is_side =
-        |k: usize| mesh_order > 0 && (k % mesh_order == 1 || k % mesh_order == mesh_order - 1) && k + 1 >= mesh_order;
+    let is_mesh = |k: usize| mesh_orders.iter().any(|&z| z > 0 && k.is_multiple_of(z));
+    let is_side = |k: usize| mesh_orders.iter().any(|&z| z > 0 && (k % z == 1 || k % z == z - 1) && k + 1 >= z);
     let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k));
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()

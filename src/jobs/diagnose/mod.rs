@@ -13,6 +13,7 @@ pub mod baseline;
 mod beyond;
 mod compare;
 mod compat;
+mod machine;
 pub mod profile;
 mod recording;
 mod teeth;
@@ -371,6 +372,9 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     if let Some(e) = p.facts.as_ref().and_then(|b| b.envelope.as_ref()) {
         verdict::envelope_evidence(&mut d, e);
     }
+    if let Some(m) = &p.opts.machine {
+        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref());
+    }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);
     }
@@ -488,6 +492,12 @@ pub struct Options {
     pub block_revs: Option<usize>,
     /// Shaft orders 1..=n counted as regular.
     pub shaft_orders: usize,
+    /// A machine file (`--machine`): every shaft's speed from its ratio chain on the tracked angle, every
+    /// stage's lines, a TSA per shaft, the planets of a planetary stage. `shaft_hz` is then the speed of the
+    /// machine's `speed.shaft` (else its reference shaft) and `teeth` must not be given; the tachometer, the
+    /// nominal speed and the sensors' unit come from the file unless given. A profile stores it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine: Option<crate::scene::machine::MachineFile>,
     /// Amplitude spectra of every analysed channel, not only of the deciding one (the first): the text,
     /// the JSON and the images use the deciding channel's alone; a library caller may want them all.
     #[serde(skip)]
@@ -522,6 +532,7 @@ impl Default for Options {
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
+            machine: None,
             all_spectra: false,
         }
     }

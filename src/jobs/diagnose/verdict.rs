@@ -331,6 +331,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     }
     d.verdict = Verdict::new(state, gear, reasons);
     d.verdict.cross_talk = cross_talk;
+    d.verdict.deciding = worst.filter(|_| state > VerdictState::Healthy).map(|w| w.0);
     place_tooth(d);
 }
 
