@@ -416,9 +416,9 @@ fn planetary(
         }
     }
     let frequencies_hz = f_t.map(|f| orders.iter().map(|(k, v)| (k.clone(), v * f)).collect()).unwrap_or_default();
-    let (planet_averages, no_averages) = match separate(fft, m, t, st, map, deciding, o) {
-        Ok(a) => (a, None),
-        Err(why) => (Vec::new(), Some(why)),
+    let (planet_averages, planet_fault_energy, no_averages) = match separate(fft, m, t, st, map, deciding, o) {
+        Ok((a, e)) => (a, e, None),
+        Err(why) => (Vec::new(), Vec::new(), Some(why)),
     };
     PlanetaryDiagnosis {
         planets: st.planets as usize,
@@ -426,6 +426,7 @@ fn planetary(
         orders,
         frequencies_hz,
         planet_averages,
+        planet_fault_energy,
         no_averages,
     }
 }
@@ -442,7 +443,7 @@ fn separate(
     map: &AngleMap,
     deciding: &[f32],
     o: &Options,
-) -> Result<Vec<PlanetIndicators>, String> {
+) -> Result<(Vec<PlanetIndicators>, Vec<f64>), String> {
     let Member::Shaft(c) = st.carrier else {
         return Err("the carrier is fixed: the planets do not pass the sensor".into());
     };
@@ -477,6 +478,7 @@ fn separate(
         window_teeth: PLANET_WINDOW_TEETH.max(2 * gcd),
         window: SeparationWindow::Hann,
     };
+    let energy = gated_fault_energy(&y, lc, zr as f64 / zp as f64, &st.planet_angles_deg);
     let averages = planet_averages(&y, &opts).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     for (i, a) in averages.into_iter().enumerate() {
@@ -489,22 +491,66 @@ fn separate(
         let (indicators, dec) = tsa_indicators(fft, &samples, zp, &[], o.shaft_orders);
         out.push(PlanetIndicators { planet: i + 1, passes: a.passes, indicators, samples, difference: dec.difference });
     }
-    Ok(out)
+    Ok((out, energy))
 }
 
-/// FM4 of a planet's average over the median of the other planets' at which it is named (and the
-/// verdict made suspect), and the ratio at which faulty. The healthy planets of the same stage, seen
-/// through the same path in the same recording, are its reference; the numbers are engineering choices
-/// checked on the independent generator's planetary stage (tests/machine_diagnose.rs: healthy planets
-/// within 1.2 of each other, a 50 % crack 2-4 times).
-pub const PLANET_SUSPECT_RATIO: f64 = 1.5;
-/// See [`PLANET_SUSPECT_RATIO`].
-pub const PLANET_FAULTY_RATIO: f64 = 2.0;
+/// Half-width of the gate around a planet's passage, degrees of carrier angle: the sensor's view of a
+/// planet falls off within a few tens of degrees, and the planets stand at least 100 degrees apart.
+const PLANET_GATE_DEG: f64 = 20.0;
+
+/// [`PlanetaryDiagnosis::planet_fault_energy`](crate::report::summary::PlanetaryDiagnosis) of each planet:
+/// `y` the signal on the carrier angle (`lc` samples per revolution, sample 0 at angle 0), `q` the
+/// planet-fault order of the carrier (z_r / z_p with the ring fixed).
+fn gated_fault_energy(y: &[f64], lc: usize, q: f64, angles_deg: &[f64]) -> Vec<f64> {
+    let n = y.len().max(1) as f64;
+    let mean = y.iter().map(|v| v * v).sum::<f64>() / n;
+    let half = (PLANET_GATE_DEG / 360.0 * lc as f64).max(1.0);
+    angles_deg
+        .iter()
+        .map(|psi| {
+            let centre = psi / 360.0 * lc as f64;
+            let mut sums = [(0.0f64, 0.0f64); 3];
+            for (i, v) in y.iter().enumerate() {
+                // distance from the passage, samples, within one revolution
+                let d = ((i % lc) as f64 - centre + lc as f64 / 2.0).rem_euclid(lc as f64) - lc as f64 / 2.0;
+                if d.abs() >= half {
+                    continue;
+                }
+                let g = 0.5 + 0.5 * (std::f64::consts::PI * d / half).cos();
+                let s = (v * v - mean) * g;
+                let theta = 2.0 * std::f64::consts::PI * i as f64 / lc as f64;
+                for (m, acc) in sums.iter_mut().enumerate() {
+                    let a = (m + 1) as f64 * q * theta;
+                    acc.0 += s * a.cos();
+                    acc.1 -= s * a.sin();
+                }
+            }
+            sums.iter().map(|(re, im)| (re * re + im * im) / (n * n)).sum()
+        })
+        .collect()
+}
+
+/// Growth of a planet's gated planet-fault energy over the healthy baseline's at which the planet is named
+/// (and the verdict made suspect), when it is also [`PLANET_LEAD`] times every other planet's growth; at
+/// [`PLANET_FAULTY_GROWTH`] faulty. Engineering choices checked on the independent generator's planetary
+/// stage (tests/machine_diagnose.rs): healthy recordings against a healthy baseline grow by at most 3.1 on
+/// any planet, 50 % cracks on a planet by 4-25 on that planet.
+pub const PLANET_SUSPECT_GROWTH: f64 = 4.0;
+/// See [`PLANET_SUSPECT_GROWTH`].
+pub const PLANET_FAULTY_GROWTH: f64 = 8.0;
+/// See [`PLANET_SUSPECT_GROWTH`].
+pub const PLANET_LEAD: f64 = 1.5;
 
 /// Names the machine's stage, gear and tooth in a suspect or faulty verdict (see the module doc), or a
 /// planet whose average stands out.
-pub(super) fn name_verdict(d: &mut Diagnosis, m: &Machine, o: &Options, baseline: Option<&BaselinePlots>) {
-    if name_planet(d) {
+pub(super) fn name_verdict(
+    d: &mut Diagnosis,
+    m: &Machine,
+    o: &Options,
+    baseline: Option<&BaselinePlots>,
+    baseline_machine: Option<&MachineDiagnosis>,
+) {
+    if name_planet(d, baseline_machine) {
         return;
     }
     if d.verdict.state < VerdictState::Suspect {
@@ -618,45 +664,42 @@ fn choose_by_band(tsa: &[f64], healthy: Option<&[f64]>, gears: &[ShaftGear]) -> 
     )
 }
 
-/// Names a planet whose separated average stands out from the other planets' (FM4 over their median at
-/// least [`PLANET_SUSPECT_RATIO`], and over the absolute suspect limit of FM4); returns whether it did.
-fn name_planet(d: &mut Diagnosis) -> bool {
-    let Some(md) = &d.machine else { return false };
-    let mut best: Option<(usize, usize, f64, f64)> = None; // stage, planet, ratio, fm4
-    for s in &md.stages {
-        let Some(p) = &s.planetary else { continue };
-        let fm4: Vec<f64> =
-            p.planet_averages.iter().map(|a| a.indicators.get("fm4").copied().unwrap_or(f64::NAN)).collect();
-        if fm4.len() < 2 || fm4.iter().any(|v| !v.is_finite()) {
+/// Names a planet whose gated planet-fault energy grew over the healthy baseline's (see
+/// [`PLANET_SUSPECT_GROWTH`]); returns whether it did. Without a baseline's planets nothing is named here
+/// (the planets' own averages and energies are reported).
+fn name_planet(d: &mut Diagnosis, baseline: Option<&MachineDiagnosis>) -> bool {
+    let (Some(md), Some(b)) = (&d.machine, baseline) else { return false };
+    let mut best: Option<(usize, usize, f64, f64)> = None; // stage, planet, growth, lead over the others
+    for (s, bs) in md.stages.iter().zip(&b.stages) {
+        let (Some(p), Some(bp)) = (&s.planetary, &bs.planetary) else { continue };
+        if p.planet_fault_energy.len() != bp.planet_fault_energy.len() || p.planet_fault_energy.len() < 2 {
             continue;
         }
-        for (i, &v) in fm4.iter().enumerate() {
-            let mut others: Vec<f64> = fm4.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, v)| *v).collect();
-            others.sort_by(f64::total_cmp);
-            let median = others[others.len() / 2];
-            let ratio = v / median;
-            if best.is_none_or(|b| ratio > b.2) {
-                best = Some((s.stage, i + 1, ratio, v));
+        let growth: Vec<f64> =
+            p.planet_fault_energy.iter().zip(&bp.planet_fault_energy).map(|(a, b)| a / b.max(f64::MIN_POSITIVE)).collect();
+        for (i, &g) in growth.iter().enumerate() {
+            let others = growth.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, v)| *v).fold(0.0, f64::max);
+            let lead = g / others.max(f64::MIN_POSITIVE);
+            if g.is_finite() && best.is_none_or(|b| g > b.2) {
+                best = Some((s.stage, i + 1, g, lead));
             }
         }
     }
-    let limit = Thresholds::default().fm4_absolute.suspect;
-    let Some((stage, planet, ratio, fm4)) = best.filter(|b| b.2 >= PLANET_SUSPECT_RATIO && b.3 >= limit) else {
+    let Some((stage, planet, growth, lead)) = best.filter(|b| b.2 >= PLANET_SUSPECT_GROWTH && b.3 >= PLANET_LEAD) else {
         return false;
     };
-    let state = if ratio >= PLANET_FAULTY_RATIO { VerdictState::Faulty } else { VerdictState::Suspect };
+    let state = if growth >= PLANET_FAULTY_GROWTH { VerdictState::Faulty } else { VerdictState::Suspect };
     let reason = format!(
-        "stage {stage} planet {planet}: FM4 of its separated average {} is {ratio:.2} times the other planets' median (suspect from {PLANET_SUSPECT_RATIO}, faulty from {PLANET_FAULTY_RATIO}): the planets share the path and the load, so one that differs carries the fault",
-        crate::report::format::num(fm4)
+        "stage {stage} planet {planet}: the planet-fault order family of the squared signal while it passes the sensor grew {} times over the healthy baseline's ({} times any other planet's growth; suspect from {PLANET_SUSPECT_GROWTH}, faulty from {PLANET_FAULTY_GROWTH}): a local fault on that planet",
+        crate::report::format::num(growth),
+        crate::report::format::num(lead)
     );
     let v = &mut d.verdict;
     if v.state > VerdictState::Healthy {
         // what the shafts' averages showed is the planet's fault seen through them
         let was = std::mem::take(&mut v.reasons);
         v.cross_talk.extend(
-            was.into_iter()
-                .take(2)
-                .map(|r| format!("the shafts' averages moved too ({r}): the planet's fault seen through them")),
+            was.into_iter().take(2).map(|r| format!("the shafts' averages moved too ({r}): the planet's fault seen through them")),
         );
     }
     v.state = v.state.max(state);

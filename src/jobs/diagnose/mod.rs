@@ -215,6 +215,8 @@ pub struct Prepared {
     geometry: Option<Geometry>,
     reference: Option<baseline::Reference>,
     scene: Option<compare::ModelScene>,
+    /// With a machine: the first healthy recording's stages (its planets' energies; none from a profile).
+    machine: Option<crate::report::summary::MachineDiagnosis>,
 }
 
 /// The first healthy recording's amplitude spectra per channel and its averages per channel and gear.
@@ -238,6 +240,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
             geometry: Some(p.geometry),
             reference: Some(p.reference),
             scene,
+            machine: None,
         });
     }
     let mut learned = learn_baseline(&job.baselines, &job.options)?;
@@ -286,7 +289,8 @@ fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Erro
     let plots = baselines
         .first()
         .map(|b| (b.spectra.clone(), b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect::<Vec<_>>()));
-    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None })
+    let machine = baselines.first().and_then(|b| b.machine.clone());
+    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, machine })
 }
 
 /// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
@@ -373,7 +377,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         verdict::envelope_evidence(&mut d, e);
     }
     if let Some(m) = &p.opts.machine {
-        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref());
+        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.machine.as_ref());
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);

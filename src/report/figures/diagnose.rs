@@ -405,7 +405,13 @@ fn order_spectrum_chart(d: &Diagnosis, m: &crate::signal::order_map::OrderMap) -
         y_log: true,
         x_range: Some((0.0, top)),
         y_range: Some((peak * 1e-5, peak * 3.0)),
-        series: vec![Series { name: "mean over the speed range".into(), points: pts, style: Style::Line, color: 4 }],
+        series: {
+            let staged = d.machine.as_ref().map(|md| super::machine::stage_order_series(md, &pts, top));
+            let mut series =
+                vec![Series { name: "mean over the speed range".into(), points: pts, style: Style::Line, color: 4 }];
+            series.extend(staged.unwrap_or_default());
+            series
+        },
         markers,
         ..Default::default()
     }

@@ -204,3 +204,29 @@ pub fn stage_order_markers(md: &MachineDiagnosis, top: f64) -> Vec<Marker> {
         })
         .collect()
 }
+
+/// Legend entries of every stage's mesh orders on an order spectrum `pts` (order, amplitude): a point on
+/// the spectrum at each harmonic up to `top`, in the stage's colour, named with its shafts.
+pub fn stage_order_series(md: &MachineDiagnosis, pts: &[(f64, f64)], top: f64) -> Vec<Series> {
+    let at = |o: f64| -> f64 {
+        // the largest value within half an order (the order axis of a run-up's mean spectrum is fine)
+        pts.iter().filter(|p| (p.0 - o).abs() <= 0.5).map(|p| p.1).fold(0.0, f64::max)
+    };
+    md.stages
+        .iter()
+        .filter_map(|s| {
+            let points: Vec<(f64, f64)> = (1..=3u32)
+                .map(|h| h as f64 * s.mesh_order)
+                .filter(|o| *o <= top)
+                .map(|o| (o, at(o)))
+                .filter(|p| p.1 > 0.0)
+                .collect();
+            (!points.is_empty()).then(|| Series {
+                name: stage_words(s),
+                points,
+                style: Style::Points,
+                color: stage_color(s.stage - 1),
+            })
+        })
+        .collect()
+}
