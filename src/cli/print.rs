@@ -225,7 +225,7 @@ fn machine_lines(w: &mut dyn Write, d: &Diagnosis, md: &crate::report::summary::
             let mut sb: Vec<_> = h
                 .sidebands
                 .iter()
-                .filter(|x| spectrum.map_or(false, |sp| crate::report::figures::machine_sideband_stands_out(sp, x)))
+                .filter(|x| spectrum.is_some_and(|sp| crate::report::figures::machine_sideband_stands_out(sp, x)))
                 .collect();
             sb.sort_by(|a, b| b.amplitude.unwrap_or(0.0).total_cmp(&a.amplitude.unwrap_or(0.0)));
             let top: Vec<String> =

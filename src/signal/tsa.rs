@@ -340,13 +340,21 @@ pub struct Decomposition {
 
 /// Splits a TSA by bin masking. `mesh_order` is the mesh order z of the averaged shaft (its teeth).
 pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: usize) -> Decomposition {
-    decompose_many(fft, tsa, &[mesh_order], shaft_orders)
+    decompose_many(fft, tsa, &[mesh_order], &[], shaft_orders)
 }
 
 /// [`decompose`] of the average of a shaft that carries several gears (an intermediate shaft: one gear per
 /// stage): the harmonics of every mesh order in `mesh_orders` are regular, and the first-order sidebands of
-/// every one are left out of the difference signal.
-pub fn decompose_many(fft: &mut Fft, tsa: &[f64], mesh_orders: &[usize], shaft_orders: usize) -> Decomposition {
+/// every one are left out of the difference signal. `foreign_orders` are lines of other shafts (the mesh
+/// harmonics of stages the shaft does not carry) at orders that are not whole: what an average of a few
+/// revolutions leaves of them sits in the bins within one order, which are counted as regular too.
+pub fn decompose_many(
+    fft: &mut Fft,
+    tsa: &[f64],
+    mesh_orders: &[usize],
+    foreign_orders: &[f64],
+    shaft_orders: usize,
+) -> Decomposition {
     let l = tsa.len();
     let mut spec = Vec::new();
     fft.forward(&mut tsa.to_vec(), &mut spec);
@@ -358,7 +366,8 @@ pub fn decompose_many(fft: &mut Fft, tsa: &[f64], mesh_orders: &[usize], shaft_o
     let nb = spec.len();
     let is_mesh = |k: usize| mesh_orders.iter().any(|&z| z > 0 && k.is_multiple_of(z));
     let is_side = |k: usize| mesh_orders.iter().any(|&z| z > 0 && (k % z == 1 || k % z == z - 1) && k + 1 >= z);
-    let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k));
+    let is_foreign = |k: usize| foreign_orders.iter().any(|&f| (k as f64 - f).abs() < 1.0);
+    let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k) || is_foreign(k));
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()
     };

@@ -87,7 +87,8 @@ pub(super) fn analyse_parts<'a>(
         }
         (None, None) => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
-    let others = |gi: usize| machine_shafts.as_ref().map_or(&[][..], |ms| &ms[gi].mesh_orders[1..]);
+    let none = OtherLines::default();
+    let others = |gi: usize| machine_shafts.as_ref().map_or(&none, |ms| &ms[gi].others);
     // a mesh order known now must fit the averages' resolution before their blocks are scored
     for &(name, _, z) in &gears {
         if let Some(z) = z {
@@ -395,7 +396,7 @@ pub(super) fn gear_indicators(
     gear: Shaft,
     channel: usize,
     z: usize,
-    others: &[usize],
+    others: &OtherLines,
     t: &tsa::Tsa,
     shaft_orders: usize,
 ) -> GearIndicators {
@@ -414,19 +415,27 @@ pub(super) fn gear_indicators(
     }
 }
 
-/// The condition indicators of one TSA of a gear with mesh order `z` (its shaft's other gears' mesh orders
-/// `others`), and its decomposition.
+/// With a machine, the lines of an averaged shaft besides its gear's mesh: its other gears' mesh orders, and
+/// the other stages' mesh harmonics in its orders (not whole), both counted as regular.
+#[derive(Clone, Debug, Default)]
+pub(super) struct OtherLines {
+    pub mesh: Vec<usize>,
+    pub foreign: Vec<f64>,
+}
+
+/// The condition indicators of one TSA of a gear with mesh order `z` (its shaft's other lines `others`),
+/// and its decomposition.
 pub(super) fn tsa_indicators(
     fft: &mut Fft,
     x: &[f64],
     z: usize,
-    others: &[usize],
+    others: &OtherLines,
     shaft_orders: usize,
 ) -> (BTreeMap<String, f64>, Decomposition) {
-    let d = if others.is_empty() {
+    let d = if others.mesh.is_empty() && others.foreign.is_empty() {
         tsa::decompose(fft, x, z, shaft_orders)
     } else {
-        tsa::decompose_many(fft, x, &[&[z][..], others].concat(), shaft_orders)
+        tsa::decompose_many(fft, x, &[&[z][..], &others.mesh].concat(), &others.foreign, shaft_orders)
     };
     let Decomposition { amplitudes, regular, residual, difference } = &d;
     let mesh_amps: Vec<f64> =
@@ -470,7 +479,7 @@ pub(super) fn block_indicators(
     fft: &mut Fft,
     block: &[f64],
     z: usize,
-    others: &[usize],
+    others: &OtherLines,
     shaft_orders: usize,
 ) -> crate::report::summary::Block {
     let (mut indicators, d) = tsa_indicators(fft, block, z, others, shaft_orders);

@@ -32,7 +32,13 @@ pub(super) struct AveragedShaft {
     pub shaft: Shaft,
     pub ratio: f64,
     pub mesh_orders: Vec<usize>,
+    /// Its gears' mesh orders after the first, and the other stages' mesh harmonics in its orders.
+    pub others: super::analysis::OtherLines,
 }
+
+/// Highest order of a shaft at which the other stages' mesh harmonics are masked (beyond the averages'
+/// usual 3.5 mesh harmonics of the fastest gear there is nothing the indicators read).
+const FOREIGN_MAX_ORDER: f64 = 4096.0;
 
 /// A gear on a shaft: its stage (0-based), what it is, its teeth, and its mesh order over that shaft's
 /// rotation when it is whole (a sun's mesh over its own shaft generally is not).
@@ -103,10 +109,21 @@ pub(super) fn averaged_shafts(m: &Machine, o: &Options) -> Vec<AveragedShaft> {
     std::iter::once(t)
         .chain((0..m.shafts.len()).filter(|&i| i != t))
         .filter_map(|i| {
-            let mesh_orders: Vec<usize> = shaft_gears(m, i).iter().filter_map(|g| g.mesh_order).collect();
+            let gears = shaft_gears(m, i);
+            let mesh_orders: Vec<usize> = gears.iter().filter_map(|g| g.mesh_order).collect();
+            let own: Vec<usize> = gears.iter().map(|g| g.stage).collect();
+            let speed = m.order(i).abs().to_f64();
+            // the stages this shaft does not carry: their mesh harmonics, not whole orders of it
+            let foreign: Vec<f64> = (0..m.stages.len())
+                .filter(|k| !own.contains(k))
+                .filter_map(|k| m.mesh_order(k).map(|r| r.to_f64() / speed))
+                .flat_map(|f| (1..).map(move |h| h as f64 * f).take_while(|o| *o <= FOREIGN_MAX_ORDER))
+                .filter(|o| (o - o.round()).abs() > 1e-9)
+                .collect();
             (!mesh_orders.is_empty()).then(|| AveragedShaft {
                 shaft: Shaft::named(&m.shafts[i]),
                 ratio: m.ratio(i, t).abs().to_f64(),
+                others: super::analysis::OtherLines { mesh: mesh_orders[1..].to_vec(), foreign },
                 mesh_orders,
             })
         })
@@ -488,7 +505,7 @@ fn separate(
                 i + 1
             ));
         };
-        let (indicators, dec) = tsa_indicators(fft, &samples, zp, &[], o.shaft_orders);
+        let (indicators, dec) = tsa_indicators(fft, &samples, zp, &Default::default(), o.shaft_orders);
         out.push(PlanetIndicators { planet: i + 1, passes: a.passes, indicators, samples, difference: dec.difference });
     }
     Ok((out, energy))
@@ -675,8 +692,12 @@ fn name_planet(d: &mut Diagnosis, baseline: Option<&MachineDiagnosis>) -> bool {
         if p.planet_fault_energy.len() != bp.planet_fault_energy.len() || p.planet_fault_energy.len() < 2 {
             continue;
         }
-        let growth: Vec<f64> =
-            p.planet_fault_energy.iter().zip(&bp.planet_fault_energy).map(|(a, b)| a / b.max(f64::MIN_POSITIVE)).collect();
+        let growth: Vec<f64> = p
+            .planet_fault_energy
+            .iter()
+            .zip(&bp.planet_fault_energy)
+            .map(|(a, b)| a / b.max(f64::MIN_POSITIVE))
+            .collect();
         for (i, &g) in growth.iter().enumerate() {
             let others = growth.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, v)| *v).fold(0.0, f64::max);
             let lead = g / others.max(f64::MIN_POSITIVE);
@@ -685,7 +706,8 @@ fn name_planet(d: &mut Diagnosis, baseline: Option<&MachineDiagnosis>) -> bool {
             }
         }
     }
-    let Some((stage, planet, growth, lead)) = best.filter(|b| b.2 >= PLANET_SUSPECT_GROWTH && b.3 >= PLANET_LEAD) else {
+    let Some((stage, planet, growth, lead)) = best.filter(|b| b.2 >= PLANET_SUSPECT_GROWTH && b.3 >= PLANET_LEAD)
+    else {
         return false;
     };
     let state = if growth >= PLANET_FAULTY_GROWTH { VerdictState::Faulty } else { VerdictState::Suspect };
@@ -699,7 +721,9 @@ fn name_planet(d: &mut Diagnosis, baseline: Option<&MachineDiagnosis>) -> bool {
         // what the shafts' averages showed is the planet's fault seen through them
         let was = std::mem::take(&mut v.reasons);
         v.cross_talk.extend(
-            was.into_iter().take(2).map(|r| format!("the shafts' averages moved too ({r}): the planet's fault seen through them")),
+            was.into_iter()
+                .take(2)
+                .map(|r| format!("the shafts' averages moved too ({r}): the planet's fault seen through them")),
         );
     }
     v.state = v.state.max(state);
