@@ -380,3 +380,25 @@ fn learned_profile_carries_the_machine() {
         assert!(x.0 == y.0 && x.1 == y.1 && (x.2 - y.2).abs() < 1e-6 * (1.0 + y.2.abs()), "{x:?} {y:?}");
     }
 }
+
+/// Writes `target/tmp/machine-speed/two-stage-60s-4ch.wav` (four vibration channels, the input tachometer in
+/// channel 5) and its machine file, for the timing in the README (`cargo test --release --test
+/// machine_diagnose speed_recording -- --ignored`; timings are never a test).
+#[test]
+#[ignore]
+fn speed_recording() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("machine-speed");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rec = two_stage(&TwoStage::example(), None, 21, Some(&plant()), 60.0);
+    let mut rng = common::gearbox_gen::Rng::new(77);
+    // three more sensors: the same vibration through other gains, with their own noise
+    let others: Vec<Vec<f64>> =
+        [0.8, 1.3, 0.6].iter().map(|g| rec.accel.iter().map(|v| g * v + 0.2 * rng.normal()).collect()).collect();
+    write_channels(
+        &dir.join("two-stage-60s-4ch.wav"),
+        rec.fs,
+        &[&rec.accel, &others[0], &others[1], &others[2], &rec.tacho],
+    );
+    let machine = TWO_STAGE_MACHINE.replace(r#""channel": 2, "shaft": "input""#, r#""channel": 5, "shaft": "input""#);
+    std::fs::write(dir.join("two-stage-4ch.json"), machine).unwrap();
+}

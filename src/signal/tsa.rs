@@ -366,7 +366,15 @@ pub fn decompose_many(
     let nb = spec.len();
     let is_mesh = |k: usize| mesh_orders.iter().any(|&z| z > 0 && k.is_multiple_of(z));
     let is_side = |k: usize| mesh_orders.iter().any(|&z| z > 0 && (k % z == 1 || k % z == z - 1) && k + 1 >= z);
-    let is_foreign = |k: usize| foreign_orders.iter().any(|&f| (k as f64 - f).abs() < 1.0);
+    let mut foreign = vec![false; spec.len()];
+    for &f in foreign_orders.iter().filter(|f| f.is_finite() && **f >= 0.0) {
+        for k in [f.floor() as usize, f.ceil() as usize] {
+            if let Some(b) = foreign.get_mut(k) {
+                *b |= (k as f64 - f).abs() < 1.0;
+            }
+        }
+    }
+    let is_foreign = |k: usize| foreign[k];
     let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k) || is_foreign(k));
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()

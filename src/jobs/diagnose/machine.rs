@@ -36,9 +36,9 @@ pub(super) struct AveragedShaft {
     pub others: super::analysis::OtherLines,
 }
 
-/// Highest order of a shaft at which the other stages' mesh harmonics are masked (beyond the averages'
-/// usual 3.5 mesh harmonics of the fastest gear there is nothing the indicators read).
-const FOREIGN_MAX_ORDER: f64 = 4096.0;
+/// Mesh harmonics of the other stages masked in a shaft's residual: a mesh's energy sits in its first few
+/// harmonics, and each masked line takes two bins of the shaft's spectrum from the residual.
+const FOREIGN_HARMONICS: usize = 6;
 
 /// A gear on a shaft: its stage (0-based), what it is, its teeth, and its mesh order over that shaft's
 /// rotation when it is whole (a sun's mesh over its own shaft generally is not).
@@ -117,7 +117,7 @@ pub(super) fn averaged_shafts(m: &Machine, o: &Options) -> Vec<AveragedShaft> {
             let foreign: Vec<f64> = (0..m.stages.len())
                 .filter(|k| !own.contains(k))
                 .filter_map(|k| m.mesh_order(k).map(|r| r.to_f64() / speed))
-                .flat_map(|f| (1..).map(move |h| h as f64 * f).take_while(|o| *o <= FOREIGN_MAX_ORDER))
+                .flat_map(|f| (1..=FOREIGN_HARMONICS).map(move |h| h as f64 * f))
                 .filter(|o| (o - o.round()).abs() > 1e-9)
                 .collect();
             (!mesh_orders.is_empty()).then(|| AveragedShaft {
