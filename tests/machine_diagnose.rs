@@ -237,8 +237,8 @@ fn report_marks_every_stage_in_its_own_colour() {
         |k: usize| spectrum.series.iter().find(|s| s.name.starts_with(&format!("stage {k} mesh"))).expect("stage");
     let (s1, s2) = (stage(1), stage(2));
     assert_ne!(s1.color, s2.color);
-    assert!(s1.name.contains("on input") && s1.name.contains("on intermediate"), "{}", s1.name);
-    assert!(s2.name.contains("on intermediate") && s2.name.contains("on output"), "{}", s2.name);
+    assert!(s1.name.contains("on `input`") && s1.name.contains("on `intermediate`"), "{}", s1.name);
+    assert!(s2.name.contains("on `intermediate`") && s2.name.contains("on `output`"), "{}", s2.name);
     let colours: Vec<usize> = spectrum.markers.iter().map(|m| m.color).collect();
     assert!(colours.contains(&s1.color) && colours.contains(&s2.color), "markers {colours:?}");
     // the legend and labels stay off the data (the layout rule of every report image)

@@ -38,17 +38,21 @@ fn family_color(md: &MachineDiagnosis, name: &str) -> usize {
     FAMILY_COLORS[i % FAMILY_COLORS.len()]
 }
 
-/// "stage 1 mesh (input 23 / intermediate 61 teeth)".
+/// "stage 1 mesh: pinion 23 teeth on `input`, wheel 61 on `intermediate`".
 pub fn stage_words(s: &StageDiagnosis) -> String {
     let gears: Vec<String> = s
         .gears
         .iter()
-        .map(|g| match &g.shaft {
-            Some(shaft) => format!("{} {} on {shaft}", g.gear, g.teeth),
-            None => format!("{} {}", g.gear, g.teeth),
+        .enumerate()
+        .map(|(i, g)| {
+            let teeth = if i == 0 { format!("{} teeth", g.teeth) } else { g.teeth.to_string() };
+            match &g.shaft {
+                Some(shaft) => format!("{} {teeth} on `{shaft}`", g.gear),
+                None => format!("{} {teeth}", g.gear),
+            }
         })
         .collect();
-    format!("stage {} mesh ({} teeth)", s.stage, gears.join(", "))
+    format!("stage {} mesh: {}", s.stage, gears.join(", "))
 }
 
 /// Legend words of a family's sidebands that stand out.
@@ -176,6 +180,22 @@ pub fn machine_zooms(d: &Diagnosis, md: &MachineDiagnosis, ch: usize) -> Vec<Cha
             series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
             let (marks, markers) = machine_marks(md, amp, lo, hi, Some((s.stage, h.k)));
             series.extend(marks);
+            // lines of two families (or stages) within three bins: their amplitude belongs to neither
+            let unresolved: Vec<(f64, f64)> = h
+                .sidebands
+                .iter()
+                .filter(|sb| !sb.resolved)
+                .filter_map(|sb| sb.frequency_hz.map(|f| (f, drawn_peak(amp, f))))
+                .filter(|p| p.1 > 0.0)
+                .collect();
+            if !unresolved.is_empty() {
+                series.push(Series {
+                    name: "unresolved: lines of two families within 3 bins".into(),
+                    points: unresolved,
+                    style: Style::Hatched,
+                    color: 8,
+                });
+            }
             out.push(Chart {
                 title: format!("zoom around stage {} {}x mesh = {} Hz, channel {ch}", s.stage, h.k, num(fk)),
                 x_label: "frequency [Hz]".into(),
