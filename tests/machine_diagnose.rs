@@ -402,3 +402,29 @@ fn speed_recording() {
     let machine = TWO_STAGE_MACHINE.replace(r#""channel": 2, "shaft": "input""#, r#""channel": 5, "shaft": "input""#);
     std::fs::write(dir.join("two-stage-4ch.json"), machine).unwrap();
 }
+
+/// A profile learned with a planetary machine stores the planets' healthy energies and names the faulty
+/// planet as `--baseline` does.
+#[test]
+fn planetary_profile_names_the_planet() {
+    let dir = temp_dir("machine-planetary-profile");
+    let m = machine_file(&dir, "stage.json", &planetary_machine());
+    let baseline = planetary_file("planetary-healthy-1", None, 1);
+    let profile = dir.join("stage-profile.json");
+    let r = gearvib(&[
+        "learn",
+        baseline.to_str().unwrap(),
+        "--machine",
+        m.to_str().unwrap(),
+        "-o",
+        profile.to_str().unwrap(),
+    ]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let stored: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&profile).unwrap()).unwrap();
+    assert_eq!(stored["planets"][0]["planet_fault_energy"].as_array().map(Vec::len), Some(3), "{}", stored["planets"]);
+    let fault = PlanetaryFault { member: Member::Planet(1), kind: FaultKind::Crack(0.5), tooth: 3 };
+    let rec = planetary_file("planetary-p1t3-s6", Some(fault), 6);
+    let j = json_of(&gearvib(&["diagnose", rec.to_str().unwrap(), "--profile", profile.to_str().unwrap(), "--json"]));
+    assert_eq!(j["verdict"]["gear"], "planet", "{}", j["verdict"]);
+    assert_eq!(j["verdict"]["planet"], 1, "{}", j["verdict"]);
+}

@@ -565,9 +565,9 @@ pub(super) fn name_verdict(
     m: &Machine,
     o: &Options,
     baseline: Option<&BaselinePlots>,
-    baseline_machine: Option<&MachineDiagnosis>,
+    planets: Option<&[crate::report::summary::PlanetBaseline]>,
 ) {
-    if name_planet(d, baseline_machine) {
+    if name_planet(d, planets) {
         return;
     }
     if d.verdict.state < VerdictState::Suspect {
@@ -684,11 +684,11 @@ fn choose_by_band(tsa: &[f64], healthy: Option<&[f64]>, gears: &[ShaftGear]) -> 
 /// Names a planet whose gated planet-fault energy grew over the healthy baseline's (see
 /// [`PLANET_SUSPECT_GROWTH`]); returns whether it did. Without a baseline's planets nothing is named here
 /// (the planets' own averages and energies are reported).
-fn name_planet(d: &mut Diagnosis, baseline: Option<&MachineDiagnosis>) -> bool {
+fn name_planet(d: &mut Diagnosis, baseline: Option<&[crate::report::summary::PlanetBaseline]>) -> bool {
     let (Some(md), Some(b)) = (&d.machine, baseline) else { return false };
     let mut best: Option<(usize, usize, f64, f64)> = None; // stage, planet, growth, lead over the others
-    for (s, bs) in md.stages.iter().zip(&b.stages) {
-        let (Some(p), Some(bp)) = (&s.planetary, &bs.planetary) else { continue };
+    for s in &md.stages {
+        let (Some(p), Some(bp)) = (&s.planetary, b.iter().find(|x| x.stage == s.stage)) else { continue };
         if p.planet_fault_energy.len() != bp.planet_fault_energy.len() || p.planet_fault_energy.len() < 2 {
             continue;
         }

@@ -215,8 +215,8 @@ pub struct Prepared {
     geometry: Option<Geometry>,
     reference: Option<baseline::Reference>,
     scene: Option<compare::ModelScene>,
-    /// With a machine: the first healthy recording's stages (its planets' energies; none from a profile).
-    machine: Option<crate::report::summary::MachineDiagnosis>,
+    /// With a machine: the healthy recordings' planet-fault energies of each planetary stage.
+    planets: Option<Vec<crate::report::summary::PlanetBaseline>>,
 }
 
 /// The first healthy recording's amplitude spectra per channel and its averages per channel and gear.
@@ -240,7 +240,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
             geometry: Some(p.geometry),
             reference: Some(p.reference),
             scene,
-            machine: None,
+            planets: p.planets,
         });
     }
     let mut learned = learn_baseline(&job.baselines, &job.options)?;
@@ -289,8 +289,12 @@ fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Erro
     let plots = baselines
         .first()
         .map(|b| (b.spectra.clone(), b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect::<Vec<_>>()));
-    let machine = baselines.first().and_then(|b| b.machine.clone());
-    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, machine })
+    let planets = opts
+        .machine
+        .is_some()
+        .then(|| crate::report::summary::PlanetBaseline::of(baselines.iter().filter_map(|b| b.machine.as_ref())))
+        .filter(|p| !p.is_empty());
+    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, planets })
 }
 
 /// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
@@ -377,7 +381,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         verdict::envelope_evidence(&mut d, e);
     }
     if let Some(m) = &p.opts.machine {
-        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.machine.as_ref());
+        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref());
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);

@@ -3,7 +3,7 @@
 //! per-planet averages.
 
 use super::VerdictGear;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// What a machine diagnosis adds to the pair's keys.
@@ -134,4 +134,46 @@ pub struct PlanetIndicators {
     /// Its difference signal (planet mesh harmonics and their first sidebands removed).
     #[serde(skip)]
     pub difference: Vec<f64>,
+}
+
+/// The healthy planet-fault energies of one planetary stage (each planet's
+/// [`PlanetaryDiagnosis::planet_fault_energy`], the mean over the healthy recordings): what a planet's is
+/// compared with. A profile stores them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanetBaseline {
+    /// Stage, 1-based.
+    pub stage: usize,
+    /// Per planet, the mean over the healthy recordings.
+    pub planet_fault_energy: Vec<f64>,
+}
+
+impl PlanetBaseline {
+    /// The mean planet-fault energies of every planetary stage over `healthy` (machine diagnoses of the
+    /// same machine); stages with a recording that gave none are left out.
+    pub fn of<'a>(healthy: impl IntoIterator<Item = &'a MachineDiagnosis>) -> Vec<PlanetBaseline> {
+        let mut sums: Vec<(usize, Vec<f64>, usize)> = Vec::new();
+        let mut incomplete: Vec<usize> = Vec::new();
+        for md in healthy {
+            for s in &md.stages {
+                let Some(p) = &s.planetary else { continue };
+                match sums.iter_mut().find(|x| x.0 == s.stage) {
+                    Some(x) if x.1.len() == p.planet_fault_energy.len() && !p.planet_fault_energy.is_empty() => {
+                        x.1.iter_mut().zip(&p.planet_fault_energy).for_each(|(a, b)| *a += b);
+                        x.2 += 1;
+                    }
+                    Some(_) => incomplete.push(s.stage),
+                    None if p.planet_fault_energy.is_empty() => incomplete.push(s.stage),
+                    None => sums.push((s.stage, p.planet_fault_energy.clone(), 1)),
+                }
+            }
+        }
+        sums.into_iter()
+            .filter(|x| !incomplete.contains(&x.0))
+            .map(|(stage, sum, n)| PlanetBaseline {
+                stage,
+                planet_fault_energy: sum.iter().map(|v| v / n as f64).collect(),
+            })
+            .collect()
+    }
 }
