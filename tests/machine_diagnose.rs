@@ -131,7 +131,7 @@ fn intermediate_pinion_crack_is_flagged_on_its_gear_and_tooth() {
         assert_eq!(v["shaft"], "intermediate", "{v}");
         assert_eq!(v["stage"], 2, "{v}");
         assert_eq!(v["gear"], "pinion", "{v}");
-        assert_eq!(v["tooth_origin"], "arbitrary (no tachometer)", "{v}");
+        assert_eq!(v["tooth_origin"], "relative (no tachometer on this shaft)", "{v}");
         let z = b.teeth[2] as f64;
         // the pulse is at a whole input revolution; the intermediate has turned 23/61 of it there
         let origin = b.ratios()[1] * first_pulse.round();
@@ -240,6 +240,11 @@ fn report_marks_every_stage_in_its_own_colour() {
     assert!(s2.name.contains("on `intermediate`") && s2.name.contains("on `output`"), "{}", s2.name);
     let colours: Vec<usize> = spectrum.markers.iter().map(|m| m.color).collect();
     assert!(colours.contains(&s1.color) && colours.contains(&s2.color), "markers {colours:?}");
+    // the highest stage's third mesh harmonic is on the chart: order 3 x 23 of the input, or 3 x 23 x the
+    // input's frequency in Hz (the generator's 1480 rpm within its 2 % fluctuation)
+    let top = spectrum.x_range.expect("a range").1;
+    let third = if spectrum.x_label.contains("order") { 69.0 } else { 69.0 * 1480.0 / 60.0 * 1.02 };
+    assert!(top > third, "the chart stops at {top}, before the third mesh harmonic {third}");
     // the legend and labels stay off the data (the layout rule of every report image)
     for f in &figures {
         gearvib::report::plot::layout(f.width, f.height, 1, &f.charts).unwrap_or_else(|e| panic!("{}: {e}", f.file));

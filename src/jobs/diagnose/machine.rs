@@ -600,10 +600,10 @@ pub(super) fn name_verdict(
     if let Some(tooth) = signal.and_then(|x| impulse_tooth(x, z)) {
         let t = tracked(m, o);
         d.verdict.tooth = Some(tooth);
-        d.verdict.tooth_origin = Some(if i == t && d.speed_profile.tracking.tachometer_origin() {
-            ToothOrigin::Tachometer
-        } else {
-            ToothOrigin::Arbitrary
+        d.verdict.tooth_origin = Some(match (i == t, d.speed_profile.tracking.tachometer_origin()) {
+            (true, true) => ToothOrigin::Tachometer,
+            (false, true) => ToothOrigin::Relative,
+            (_, false) => ToothOrigin::Arbitrary,
         });
         if i != t {
             d.verdict.reasons.push(format!(

@@ -30,6 +30,17 @@ pub struct Figure {
     pub charts: Vec<Chart>,
 }
 
+/// With a machine whose verdict names a gear on `shaft`: that gear's name and teeth.
+fn named_gear_teeth(d: &Diagnosis, shaft: &Shaft) -> Option<(String, u32)> {
+    let (Shaft::Named(name), Some(md), Some(k)) = (shaft, &d.machine, d.verdict.stage) else { return None };
+    if d.verdict.shaft.as_deref() != Some(&**name) {
+        return None;
+    }
+    let stage = md.stages.get(k.checked_sub(1)?)?;
+    let g = stage.gears.iter().find(|g| g.gear == d.verdict.gear && g.shaft.as_deref() == Some(&**name))?;
+    Some((format!("(stage {k} {})", g.gear.name()), g.teeth))
+}
+
 /// The images of one diagnosis, as [`diagnosis`] writes them (file names start with the recording's stem).
 pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
     let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
@@ -47,14 +58,29 @@ pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
         .tsas()
         .filter(|(g, _, _)| g.channel == ch)
         .flat_map(|(g, t, _)| {
-            let z = g.mesh_order as f64;
+            // with a machine, a shaft carrying the named gear is drawn in that gear's teeth (an intermediate
+            // shaft's average otherwise counts its first gear's)
+            let named = named_gear_teeth(d, &g.gear);
+            let z = named.as_ref().map_or(g.mesh_order as f64, |(_, t)| f64::from(*t));
             let along = |v: &[f64]| -> Vec<(f64, f64)> {
                 v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
+            };
+            // with a machine only the tracked shaft (the first average) has the tachometer's origin
+            let origin = match d.gears.first() {
+                Some(t) if d.machine.is_some() && t.gear != g.gear && origin.starts_with("origin at") => {
+                    "origin relative: its angle at the tracked shaft's pulse"
+                }
+                _ => origin,
             };
             let x_label = if g.gear == Shaft::Estimated {
                 format!("mesh cycle [cycle k spans k-1 to k of {}; {origin}]", g.mesh_order)
             } else {
-                format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order)
+                match named {
+                    Some((gear, teeth)) => {
+                        format!("{} {gear} tooth in mesh [tooth k spans k-1 to k of {teeth}; {origin}]", g.gear)
+                    }
+                    None => format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order),
+                }
             };
             let mut tsa_series = Vec::new();
             // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
@@ -310,7 +336,7 @@ fn shafts(d: &Diagnosis) -> Vec<Shaft> {
 fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Chart {
     // with a machine, up to 1.2 times the highest stage's third mesh harmonic
     let fm = match &d.machine {
-        Some(md) => md.stages.iter().filter_map(|s| s.mesh_hz).fold(0.0, f64::max) / 3.0 * 1.2,
+        Some(md) => md.stages.iter().filter_map(|s| s.mesh_hz).fold(0.0, f64::max),
         None => d.mesh_hz.unwrap_or(0.0),
     };
     let max_f = if fm > 0.0 { 3.6 * fm } else { f64::INFINITY }.min(*amp.freqs_hz.last().unwrap_or(&1.0));

@@ -562,6 +562,9 @@ impl Verdict {
             (Some(t), Some(ToothOrigin::Tachometer)) => {
                 format!("{gear}, tooth {t} (counted from the tachometer pulse)")
             }
+            (Some(t), Some(ToothOrigin::Relative)) => format!(
+                "{gear}, tooth {t} (counted from a relative origin: no tachometer on this shaft, so only the distance between teeth is meaningful)"
+            ),
             (Some(t), _) => format!(
                 "{gear}, tooth {t} (counted from an arbitrary origin: no tachometer, so only the distance between teeth is meaningful)"
             ),
@@ -596,6 +599,11 @@ pub enum ToothOrigin {
     /// is meaningful (another recording of the same machine may number them from elsewhere).
     #[serde(rename = "arbitrary (no tachometer)")]
     Arbitrary,
+    /// With a machine: a shaft that the tachometer does not watch; tooth 1 is where its angle stood at the
+    /// tracked shaft's first pulse (the tracked angle times the exact ratio), which depends on how many
+    /// revolutions the machine had turned: only the distance between teeth is meaningful.
+    #[serde(rename = "relative (no tachometer on this shaft)")]
+    Relative,
 }
 
 /// One line of the model comparison.
