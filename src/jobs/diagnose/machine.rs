@@ -595,8 +595,12 @@ pub(super) fn name_verdict(
     if let Some(why) = why {
         d.verdict.reasons.insert(0, why);
     }
+    // a tooth only when the shaft's own indicators moved (a verdict from the envelope alone names the gear;
+    // without a baseline there are no scores and the indicators decided)
+    let moved = d.scores.is_empty()
+        || d.scores.iter().any(|s| s.gear == Shaft::Named(name) && s.decides && s.spreads >= s.suspect_at);
     let z = chosen.mesh_order.unwrap_or(chosen.teeth as usize);
-    let signal = [&g.difference, &g.residual].into_iter().find(|x| concentration(x, z) >= 3.0);
+    let signal = [&g.difference, &g.residual].into_iter().find(|x| moved && concentration(x, z) >= 3.0);
     if let Some(tooth) = signal.and_then(|x| impulse_tooth(x, z)) {
         let t = tracked(m, o);
         d.verdict.tooth = Some(tooth);

@@ -468,6 +468,10 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
             d.verdict.state = VerdictState::Suspect;
             d.verdict.gear = gear;
             d.verdict.reasons.insert(0, reason);
+            // a machine's shaft: its gear is named from there (`machine::name_verdict`)
+            if matches!(line.shaft, Shaft::Named(_)) {
+                d.verdict.deciding = Some(line.shaft);
+            }
         }
         _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
         _ => d.verdict.reasons.push(reason),
