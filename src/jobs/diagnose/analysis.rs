@@ -416,7 +416,7 @@ pub(super) fn gear_indicators(
 }
 
 /// With a machine, the lines of an averaged shaft besides its gear's mesh: its other gears' mesh orders, and
-/// the other stages' mesh harmonics in its orders (not whole), both counted as regular.
+/// the other stages' mesh harmonics in its orders, both counted as regular.
 #[derive(Clone, Debug, Default)]
 pub(super) struct OtherLines {
     pub mesh: Vec<usize>,

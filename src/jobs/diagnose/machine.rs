@@ -113,12 +113,12 @@ pub(super) fn averaged_shafts(m: &Machine, o: &Options) -> Vec<AveragedShaft> {
             let mesh_orders: Vec<usize> = gears.iter().filter_map(|g| g.mesh_order).collect();
             let own: Vec<usize> = gears.iter().map(|g| g.stage).collect();
             let speed = m.order(i).abs().to_f64();
-            // the stages this shaft does not carry: their mesh harmonics, not whole orders of it
+            // the stages this shaft does not carry: their mesh harmonics in its orders (whole ones too, when
+            // the stages share a short common period: another gear's mesh line, not this gear's residual)
             let foreign: Vec<f64> = (0..m.stages.len())
                 .filter(|k| !own.contains(k))
                 .filter_map(|k| m.mesh_order(k).map(|r| r.to_f64() / speed))
                 .flat_map(|f| (1..=FOREIGN_HARMONICS).map(move |h| h as f64 * f))
-                .filter(|o| (o - o.round()).abs() > 1e-9)
                 .collect();
             (!mesh_orders.is_empty()).then(|| AveragedShaft {
                 shaft: Shaft::named(&m.shafts[i]),
