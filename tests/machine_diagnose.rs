@@ -367,6 +367,8 @@ fn learned_profile_carries_the_machine() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     let stored: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&profile).unwrap()).unwrap();
     assert_eq!(stored["processing"]["machine"]["machine"], "two-stage test box");
+    // the summary names the machine, not "estimated" teeth
+    assert!(r.stdout.contains("the machine `two-stage test box`: 2 stage(s)"), "{}", r.stdout);
     let fault = StageFault { stage: 1, fault: Fault { kind: FaultKind::Crack(0.5), gear: Gear::Pinion, tooth: 12 } };
     let (rec, _) = two_stage_file("crack-pinion2-t12", Some(fault), 4);
     let by_profile =

@@ -494,7 +494,14 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
 pub fn profile(w: &mut dyn Write, p: &crate::jobs::diagnose::profile::Profile, file: &str) -> std::io::Result<()> {
     let o = &p.processing;
     writeln!(w, "profile          {file} ({} healthy recording(s))", p.learned_from.len())?;
-    let teeth = o.teeth.map_or("estimated".to_string(), |(a, b)| format!("{a},{b}"));
+    let teeth = match (&o.machine, o.teeth) {
+        (Some(m), _) => {
+            let m = m.machine();
+            format!("the machine `{}`: {} stage(s), shafts {}", m.name, m.stages.len(), m.shafts.join(", "))
+        }
+        (None, Some((a, b))) => format!("{a},{b}"),
+        (None, None) => "estimated".to_string(),
+    };
     writeln!(w, "teeth            {teeth}")?;
     let speed = match (p.baseline.speed_hz, o.shaft_hz) {
         (Some(m), Some(g)) => format!("{m:.4} Hz measured (given {g:.4} Hz, +-{:.1} %)", 100.0 * o.speed_tolerance),
