@@ -279,7 +279,22 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
         ));
     }
     let mut teeth = a.teeth.as_deref().map(parse_teeth).transpose()?;
-    if teeth.is_none() {
+    let machine = match &a.machine {
+        Some(m) => {
+            if a.teeth.is_some() {
+                return Err(CliError::flag(
+                    "--teeth",
+                    "cannot be given with --machine: the machine file states every stage's teeth (--teeth ZP,ZW is the one-stage shorthand)",
+                ));
+            }
+            if a.lifter.is_some() {
+                return Err(CliError::flag("--lifter", "takes pinion or wheel of a pair: not with --machine"));
+            }
+            Some(crate::scene::machine::load_machine_file(m)?)
+        }
+        None => None,
+    };
+    if teeth.is_none() && machine.is_none() {
         if let Some(sc) = &a.scene {
             teeth = scene_teeth(sc)?;
         }
@@ -305,6 +320,7 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
             None => None,
         },
         block_revs: a.block_revs.map(|r| r as usize),
+        machine,
         ..Default::default()
     };
     Ok(jobs::diagnose::DiagnoseJob {
@@ -323,6 +339,7 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
 fn profile_conflicts(a: &DiagnoseArgs) -> Option<&'static str> {
     [
         (a.teeth.is_some(), "--teeth"),
+        (a.machine.is_some(), "--machine"),
         (a.rpm.is_some(), "--rpm"),
         (a.shaft_hz.is_some(), "--shaft-hz"),
         (a.tacho_channel.is_some(), "--tacho-channel"),

@@ -8,6 +8,19 @@ use super::*;
 /// # Errors
 /// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
 pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+    if let Some(m) = &o.machine {
+        return super::machine::diagnose(path, o, m.machine(), geometry);
+    }
+    let (rec, o) = read(path, o)?;
+    analyse(path, rec, &o, geometry)
+}
+
+/// Reads the channels of `path` that the diagnosis uses (units applied), and the options with the
+/// tachometer in use (given, or the sidecar's).
+///
+/// # Errors
+/// Unreadable file.
+pub(super) fn read(path: &Path, o: &Options) -> Result<(Recording<'static>, Options), Error> {
     // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
     // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
     // tachometer in use are not decoded either (they are never analysed as vibration)
@@ -28,7 +41,7 @@ pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result
     };
     let mut rec = io::read_recording_channels(path, keep.as_deref())?;
     apply_units(&mut rec, o, tacho);
-    analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+    Ok((rec, Options { tacho_channel: tacho, ..o.clone() }))
 }
 
 /// Diagnoses a recording held in memory under `name` (no sidecar: a tachometer channel must be named by
@@ -42,6 +55,9 @@ pub fn diagnose_in_memory(
     o: &Options,
     geometry: Option<&Geometry>,
 ) -> Result<Diagnosis, Error> {
+    if let Some(m) = &o.machine {
+        return super::machine::diagnose_in_memory(name, rec, o, m.machine(), geometry);
+    }
     apply_units(&mut rec, o, o.tacho_channel);
     analyse(name, rec, o, geometry)
 }

@@ -28,7 +28,8 @@ pub(super) fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, 
 /// pulses per revolution to be taken as too many: a resonance near twice the mesh makes the first mesh
 /// line 7-10 % of the second on the bundled scenes (`MESH_FUNDAMENTAL_SHARE` of the tracking), while a
 /// revolution that really spans k revolutions has no line at all at order z (0.1 % on the bundled healthy
-/// recording with 2 pulses per revolution given for 1): 1 % lies between the two.
+/// recording with 2 pulses per revolution given for 1): 1 % lies between the two. The same holds for every
+/// mesh harmonic that is not a multiple of k z.
 const PULSES_TOO_MANY_SHARE: f64 = 0.01;
 
 /// Ratio by which a line at order z / k must exceed the mesh line for the tachometer to have k times more
@@ -50,8 +51,15 @@ pub(super) fn pulses_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize)
     }
     let at = |k: usize| power.get(k).copied().unwrap_or(0.0).sqrt();
     let mesh = at(z);
-    let spans =
-        (2..=4usize).map(|k| k * z).filter(|&o| o < power.len()).find(|&o| mesh < PULSES_TOO_MANY_SHARE * at(o));
+    // an average spanning k revolutions holds the mesh family at the multiples of k z only: every harmonic
+    // m z (m = 1..4) that is not one of them must be missing, not only the first (a housing resonance can
+    // lift the fourth harmonic a hundred times over the first while the second and third still stand)
+    let spans = (2..=4usize).filter(|&k| k * z < power.len()).map(|k| k * z).find(|&o| {
+        (1..=4usize)
+            .map(|m| m * z)
+            .filter(|&h| h < power.len() && h % o != 0)
+            .all(|h| at(h) < PULSES_TOO_MANY_SHARE * at(o))
+    });
     let part = (2..=4usize)
         .filter(|k| z.is_multiple_of(*k))
         .map(|k| z / k)

@@ -334,6 +334,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     }
     d.verdict = Verdict::new(state, gear, reasons);
     d.verdict.cross_talk = cross_talk;
+    d.verdict.deciding = worst.filter(|_| state > VerdictState::Healthy).map(|w| w.0);
     place_tooth(d);
 }
 
@@ -470,6 +471,10 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
             d.verdict.state = VerdictState::Suspect;
             d.verdict.gear = gear;
             d.verdict.reasons.insert(0, reason);
+            // a machine's shaft: its gear is named from there (`machine::name_verdict`)
+            if matches!(line.shaft, Shaft::Named(_)) {
+                d.verdict.deciding = Some(line.shaft);
+            }
         }
         _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
         _ => d.verdict.reasons.push(reason),
