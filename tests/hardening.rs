@@ -603,3 +603,51 @@ fn a_full_disk_is_one_plain_line() {
         assert!(e.contains(&tmp.split(".png.").next().unwrap().split(".json.").next().unwrap().to_string()), "{e}");
     }
 }
+
+/// Issue 29 (bad-inputs README): 1e4 or 1e5 pinion error terms of equal size ran for minutes after the
+/// solve: the extreme search of the printed response refined 4096 intervals per extreme at 1e4-1e5
+/// harmonics each (a spacing of 20 orders makes 20 near-equal peaks per revolution: every interval
+/// reaches the best sample). The search now stops at a work budget and reports what it left as slack: at
+/// the default tolerance a refusal saying so, with a looser one an answer whose estimate carries it.
+#[test]
+fn thousands_of_error_terms_end_within_a_work_budget() {
+    let dir = temp_dir("error-terms");
+    let healthy = read_json(&repo("data/scenes/gear-z14z39-healthy.json"));
+    let scene = |name: &str, orders: Vec<usize>, tolerance: f64| {
+        let mut v = healthy.clone();
+        let errors: Vec<serde_json::Value> = orders
+            .into_iter()
+            .map(|k| serde_json::json!({"order": k, "amplitude_m": 1e-9, "phase_rad": 0.0}))
+            .collect();
+        v["gear_pair"]["pinion"]["errors"] = errors.into();
+        v["solver"]["tolerance"] = tolerance.into();
+        write(&dir, name, &v.to_string())
+    };
+    // `timeout` turns a return of the old behaviour (minutes) into a failure, not a stuck test run
+    let bounded = |scene: &str| {
+        let out = Command::new("timeout")
+            .args(["120", env!("CARGO_BIN_EXE_gearvib"), "simulate", scene, "--json"])
+            .output()
+            .expect("timeout runs");
+        Run {
+            code: out.status.code().unwrap_or(-1),
+            stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        }
+    };
+    for (name, orders) in [
+        ("errors-1e5.json", (1..=100_000).collect::<Vec<usize>>()),
+        ("errors-spaced-20.json", (0..5000).map(|i| 20 * i + 1).collect()),
+    ] {
+        let p = scene(name, orders, 1e-7);
+        assert_one_line_error(&bounded(&p), &[name, "solver.tolerance", "extreme search", "work budget"]);
+    }
+    // 1e4 terms at a tolerance of 1e-2: answered, the unrefined intervals inside the printed estimate
+    // (it cannot be the 1e-12 of a complete search: the default tolerance of 1e-7 was refused)
+    let p = scene("errors-1e4.json", (1..=10_000).collect(), 1e-2);
+    let run = bounded(&p);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let e = v["error_estimate"].as_f64().unwrap();
+    assert!(e > 1e-7 && e <= 1e-2, "{e}");
+}
