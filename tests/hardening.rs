@@ -651,3 +651,35 @@ fn thousands_of_error_terms_end_within_a_work_budget() {
     let e = v["error_estimate"].as_f64().unwrap();
     assert!(e > 1e-7 && e <= 1e-2, "{e}");
 }
+
+/// Found by a scene campaign after issue 29: a press whose torsional damping is 1e6 N m s/rad (5400 times
+/// critical; the paper's is 0.1) made the system so stiff that the solve took 20 s, and a
+/// `solver.tolerance` of 1e-308 was accepted and refused only after 20 s of ever finer grids. Each press
+/// damping is now checked against its critical value 2 sqrt(k m), as the gear mesh's damping ratio is, and
+/// a tolerance below 1e-15 (about 5 machine epsilons) is refused up front.
+#[test]
+fn absurd_press_damping_and_tolerance_are_refused() {
+    let dir = temp_dir("press-damping");
+    let base = read_json(&repo("data/scenes/paper-press-case1.json"));
+    for (field, value) in [("torsional_damping_n_m_s_per_rad", 1e6), ("follower_damping_n_s_per_m", 1e9)] {
+        let mut v = base.clone();
+        v["press"][field] = value.into();
+        let p = write(&dir, &format!("{field}.json"), &v.to_string());
+        // k = 7692 N m/rad, J = 1.11 kg m^2: critical 2 sqrt(k J) = 184.8 N m s/rad, so 1e6 is 5.4e3 times
+        // it; k = 1e6 N/m, m = 136 kg: critical 2.33e4 N s/m, 1e9 is 4.287e4 times it
+        let needle = if field.starts_with("torsional") { "5.411e3 times" } else { "4.287e4 times" };
+        assert_one_line_error(&limited(&["simulate", &p]), &[&format!("press.{field}"), needle, "critical"]);
+    }
+    // 9.9 times critical is still accepted (the bound is 10)
+    let mut v = base.clone();
+    v["press"]["follower_damping_n_s_per_m"] = (9.9 * 2.0 * (1e6f64 * 136.0).sqrt()).into();
+    let p = write(&dir, "under.json", &v.to_string());
+    let run = limited(&["simulate", &p, "--json"]);
+    assert!(!run.stderr.contains("critical"), "{}", run.stderr);
+    for t in [1e-308, 9e-16] {
+        let mut v = read_json(&repo("data/scenes/paper-press-case2.json"));
+        v["solver"]["tolerance"] = t.into();
+        let p = write(&dir, "tolerance.json", &v.to_string());
+        assert_one_line_error(&limited(&["simulate", &p]), &["tolerance.json", "solver.tolerance", "[1e-15, 1)"]);
+    }
+}

@@ -14,6 +14,8 @@ const MAX_CAM_COEFFICIENTS: usize = 1000;
 /// Sine-cosine pairs allowed for turning a sampled mesh-stiffness table into its Fourier series (N^2 / 2
 /// for N samples: about 1.5 s on one core of the development machine; 100000 samples took 77 s).
 const TABLE_BUDGET: f64 = 1e8;
+/// Smallest accepted `solver.tolerance`.
+const MIN_TOLERANCE: f64 = 1e-15;
 /// Largest accepted mesh damping ratio (critical damping is 1).
 const MAX_DAMPING_RATIO: f64 = 10.0;
 /// Largest accepted ratio between the mesh natural frequency and the mesh frequency (either way).
@@ -50,8 +52,13 @@ impl Validator<'_> {
             o.method = m;
         }
         if let Some(t) = s.tolerance {
-            if !(t.is_finite() && t > 0.0 && t < 1.0) {
-                return Err(self.err("solver.tolerance", format!("must be in (0, 1), got {t}")));
+            // below about 5 machine epsilons no estimate can certify a 64-bit solution: 1e-308 was accepted
+            // and spent 20 s of ever finer rk4 grids before its refusal
+            if !(t.is_finite() && (MIN_TOLERANCE..1.0).contains(&t)) {
+                return Err(self.err(
+                    "solver.tolerance",
+                    format!("must be in [{MIN_TOLERANCE:e}, 1) (64-bit rounding is about 2e-16), got {t}"),
+                ));
             }
             o.tolerance = t;
         }
@@ -380,7 +387,7 @@ impl Validator<'_> {
         if cos.is_empty() && p.cam_sin_m_per_rad.is_empty() {
             return Err(self.err(&format!("{f}.cam_cos_m_per_rad"), "at least one cam coefficient is needed".into()));
         }
-        Ok(PressParams {
+        let params = PressParams {
             speed_rpm: self.positive(&format!("{f}.speed_rpm"), p.speed_rpm)?,
             k1_n_m_per_rad: self
                 .positive(&format!("{f}.torsional_stiffness_n_m_per_rad"), p.torsional_stiffness_n_m_per_rad)?,
@@ -394,7 +401,31 @@ impl Validator<'_> {
             load_n: self.finite(&format!("{f}.load_n"), p.load_n)?,
             cam_cos_m_per_rad: cos,
             cam_sin_m_per_rad: p.cam_sin_m_per_rad.clone(),
-        })
+        };
+        self.press_damping(&params)?;
+        Ok(params)
+    }
+
+    /// Each press damping relative to its critical value 2 sqrt(k m) (the paper's is 0.1): beyond
+    /// `MAX_DAMPING_RATIO` it is no press (and a torsional damping of 1e6 N m s/rad, ratio 5400, made the
+    /// system so stiff that the solve took 20 s).
+    fn press_damping(&self, p: &PressParams) -> Result<(), SceneError> {
+        for (field, c, k, m) in [
+            ("press.torsional_damping_n_m_s_per_rad", p.c1_n_m_s_per_rad, p.k1_n_m_per_rad, p.inertia_kg_m2),
+            ("press.follower_damping_n_s_per_m", p.c2_n_s_per_m, p.k2_n_per_m, p.mass_kg),
+        ] {
+            let ratio = c / (2.0 * (k * m).sqrt());
+            if ratio.is_nan() || ratio > MAX_DAMPING_RATIO {
+                return Err(self.err(
+                    field,
+                    format!(
+                        "{c} is {ratio:.3e} times the critical damping 2 sqrt(k m) = {:.4e}: beyond any press (at most {MAX_DAMPING_RATIO})",
+                        2.0 * (k * m).sqrt()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     pub(super) fn entry(&self, field: &str, e: &RawEntry, period: f64) -> Result<Coefficient, SceneError> {
