@@ -683,3 +683,30 @@ fn absurd_press_damping_and_tolerance_are_refused() {
         assert_one_line_error(&limited(&["simulate", &p]), &["tolerance.json", "solver.tolerance", "[1e-15, 1)"]);
     }
 }
+
+/// Found by a scene campaign after issue 29: a pit of 1e-9 tooth pitches aborted the process (a
+/// 6e11-byte request for its Gaussian series). The narrowest fault's harmonics, sqrt(2 ln(1 / keep)) /
+/// sigma with sigma = 2 pi w / (6 z), are now checked against the error orders' limit (100000), and
+/// faults times harmonics against a budget.
+#[test]
+fn a_needle_thin_pit_and_a_flood_of_faults_are_refused() {
+    let dir = temp_dir("thin-pit");
+    let base = read_json(&repo("data/scenes/gear-z14z39-pitted-pinion-tooth3.json"));
+    let mut v = base.clone();
+    v["gear_pair"]["pinion"]["tooth_faults"][0]["width_teeth"] = 1e-9.into();
+    let p = write(&dir, "thin.json", &v.to_string());
+    // keep = 1e-7 (the scene's tolerance): sqrt(2 ln 1e7) = 5.678, times 6 * 14 / (2 pi 1e-9) = 7.59e10
+    assert_one_line_error(
+        &limited(&["simulate", &p]),
+        &["thin.json", "gear_pair.pinion.tooth_faults[0].width_teeth", "7.59e10 harmonics", "at most 100000"],
+    );
+    // 20000 faults of 0.01 pitches: 5.678 * 84 / (2 pi 0.01) = 7590.6, so 7591 harmonics each, 1.5e8 terms over
+    // the budget of 1e8
+    let fault = serde_json::json!({"tooth": 3, "depth_m": 1e-7, "width_teeth": 0.01});
+    v["gear_pair"]["pinion"]["tooth_faults"] = vec![fault; 20_000].into();
+    let p = write(&dir, "flood.json", &v.to_string());
+    assert_one_line_error(
+        &limited(&["simulate", &p]),
+        &["flood.json", "gear_pair.pinion.tooth_faults", "20000 faults of 7591 harmonics", "budget"],
+    );
+}

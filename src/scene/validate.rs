@@ -14,6 +14,10 @@ const MAX_CAM_COEFFICIENTS: usize = 1000;
 /// Sine-cosine pairs allowed for turning a sampled mesh-stiffness table into its Fourier series (N^2 / 2
 /// for N samples: about 1.5 s on one core of the development machine; 100000 samples took 77 s).
 const TABLE_BUDGET: f64 = 1e8;
+/// Highest order of a tooth error, and most harmonics of a tooth-fault series.
+const MAX_ERROR_ORDER: usize = 100_000;
+/// Terms (faults times harmonics) of the tooth-fault series (about a second).
+const FAULT_BUDGET: f64 = 1e8;
 /// Smallest accepted `solver.tolerance`.
 const MIN_TOLERANCE: f64 = 1e-15;
 /// Largest accepted mesh damping ratio (critical damping is 1).
@@ -81,8 +85,10 @@ impl Validator<'_> {
         let mut terms = Vec::new();
         for (i, h) in list.iter().enumerate() {
             let f = format!("{field}[{i}]");
-            if h.order == 0 || h.order > 100_000 {
-                return Err(self.err(&format!("{f}.order"), format!("must be in 1..=100000, got {}", h.order)));
+            if h.order == 0 || h.order as usize > MAX_ERROR_ORDER {
+                return Err(
+                    self.err(&format!("{f}.order"), format!("must be in 1..={MAX_ERROR_ORDER}, got {}", h.order))
+                );
             }
             self.non_negative(&format!("{f}.amplitude_m"), h.amplitude_m)?;
             self.finite(&format!("{f}.phase_rad"), h.phase_rad)?;
@@ -120,6 +126,34 @@ impl Validator<'_> {
                 );
             }
             list.push(ToothFault { tooth: f.tooth as usize, depth_m: f.depth_m, width_teeth: f.width_teeth });
+        }
+        // the narrowest fault sets the series' harmonics (a width of 1e-9 pitches asked for 6e11 bytes and
+        // aborted), each fault costs them all
+        let (narrowest, width) = list
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (i, f.width_teeth))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let h = gear::gaussian_harmonics(teeth as usize, width, keep);
+        if h.is_nan() || h > MAX_ERROR_ORDER as f64 {
+            return Err(self.err(
+                &format!("{field}[{narrowest}].width_teeth"),
+                format!(
+                    "{width} pitches on {teeth} teeth needs {h:.2e} harmonics of the gear angle (at most {MAX_ERROR_ORDER}, as for errors): widen it to at least {:.3e} pitches",
+                    width * h / MAX_ERROR_ORDER as f64
+                ),
+            ));
+        }
+        let work = h * list.len() as f64;
+        if work > FAULT_BUDGET {
+            return Err(self.err(
+                field,
+                format!(
+                    "{} faults of {} harmonics each: about {work:.1e} terms, beyond the budget of {FAULT_BUDGET:.0e}",
+                    list.len(),
+                    h.ceil()
+                ),
+            ));
         }
         let mut series = gear::gaussian_tooth_faults(teeth as usize, &list, keep);
         let dropped = series.truncate_below(keep * series.max_amplitude());
