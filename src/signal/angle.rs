@@ -257,13 +257,27 @@ pub fn follow_ridge<T: Sample>(x: &[T], r: MeshRidge) -> Result<Tracked, SignalE
 /// offset(m) = m per_rev / M for m < M/2 and (m - M) per_rev / M above (M = the result's length): a
 /// line of amplitude A at order + d reads A at the bin nearest d (within 0.5 % for the zero padding).
 pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: f64, per_rev: usize) -> Vec<f64> {
+    baseband_lines_over(fft, x, map, order, per_rev, 0..map.revolutions())
+}
+
+/// [`baseband_lines`] over the revolutions `revs` of `map` only (a part of a long record: the result's
+/// resolution is 1 / `revs.len()` orders and its memory that of the part).
+pub fn baseband_lines_over<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    map: &AngleMap,
+    order: f64,
+    per_rev: usize,
+    revs: std::ops::Range<usize>,
+) -> Vec<f64> {
     use std::f64::consts::TAU;
-    let nb = map.revolutions() * per_rev;
-    if nb < 8 {
+    let nb = revs.len() * per_rev;
+    if nb < 8 || revs.end > map.revolutions() {
         return Vec::new();
     }
+    let first = revs.start * per_rev;
     let mut edges = vec![0.0; nb + 1];
-    map.fill_positions(0.0, 1.0 / per_rev as f64, &mut edges);
+    map.fill_positions(revs.start as f64, 1.0 / per_rev as f64, &mut edges);
     let m = (8 * nb).next_power_of_two();
     let mut y = vec![(0.0, 0.0); m];
     // the blocks are independent: summed in parallel; each gives its entry and its window weight
@@ -279,7 +293,7 @@ pub fn baseband_lines<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, order: 
             }
             // angle (revolutions) at sample i: b / per_rev + (i - e0) / (e1 - e0) / per_rev
             let slope = 1.0 / ((e[1] - e[0]) * per_rev as f64);
-            let th0 = b as f64 / per_rev as f64 + (i0 as f64 - e[0]) * slope;
+            let th0 = (first + b) as f64 / per_rev as f64 + (i0 as f64 - e[0]) * slope;
             let (sr, si) = phasor_sum(&x[i0..i1], th0, slope, order);
             let w = 0.5 - 0.5 * (TAU * (b as f64 + 0.5) / nb as f64).cos();
             let k = (i1 - i0) as f64;
@@ -541,6 +555,15 @@ mod tests {
         assert!((a[bin(0.0)] - 1.0).abs() < 0.01, "{}", a[bin(0.0)]);
         assert!((a[bin(14.0 / 39.0)] - 0.3).abs() < 0.003, "{}", a[bin(14.0 / 39.0)]);
         assert!(a[bin(-14.0 / 39.0)] < 1e-3, "{}", a[bin(-14.0 / 39.0)]);
+        // over a part of the record (revolutions 150..450): the same lines at the part's resolution, and
+        // the whole range is the whole record's result
+        let p = baseband_lines_over(&mut Fft::new(), &x, &map, 14.0, 16, 150..450);
+        let pbin = |d: f64| ((d * p.len() as f64 / 16.0).round() as isize).rem_euclid(p.len() as isize) as usize;
+        assert!((p[pbin(0.0)] - 1.0).abs() < 0.01, "{}", p[pbin(0.0)]);
+        assert!((p[pbin(14.0 / 39.0)] - 0.3).abs() < 0.003, "{}", p[pbin(14.0 / 39.0)]);
+        assert!(p[pbin(-14.0 / 39.0)] < 1e-3, "{}", p[pbin(-14.0 / 39.0)]);
+        assert_eq!(baseband_lines_over(&mut Fft::new(), &x, &map, 14.0, 16, 0..map.revolutions()), a);
+        assert!(baseband_lines_over(&mut Fft::new(), &x, &map, 14.0, 16, 0..map.revolutions() + 1).is_empty());
     }
 
     /// Largest error of the revolution starts against the true angle, in revolutions.

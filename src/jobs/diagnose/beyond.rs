@@ -70,9 +70,14 @@ pub(super) fn envelope_band<T: crate::signal::Sample>(
     Ok(EnvelopeBand { kurtogram, level, band_hz: (lo, hi), given: band.is_some() })
 }
 
+/// Most revolutions the envelope's order spectrum transforms at once: a longer record's is the power
+/// average of parts of at most this many (resolution 1/4096 of an order; a one-hour record's whole would
+/// take 300 MB at once and print 7 million lines).
+const ENVELOPE_REVS: usize = 4096;
+
 /// Envelope analysis of one channel from its band and the band's squared envelope `e` at the rate `r`
 /// relative to the record's (from [`BandOverlapAdd`](crate::signal::envelope::BandOverlapAdd)): the
-/// envelope's order spectrum on the tracked angle and its lines at orders 1..=3 of each shaft.
+/// envelope's order spectrum on the tracked angle (a long record's averaged over parts of [`ENVELOPE_REVS`]) and its lines at orders 1..=3 of each shaft.
 pub(super) fn envelope(
     fft: &mut Fft,
     band: EnvelopeBand,
@@ -91,8 +96,8 @@ pub(super) fn envelope(
     let points = (needed.ceil() as usize)
         .next_power_of_two()
         .clamp(32, ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096));
-    let (orders, amplitudes) = env::order_spectrum(fft, e, &scaled, points);
-    let revs = map.revolutions().max(1) as f64;
+    let (orders, amplitudes, revs) = env::order_spectrum_parts(fft, e, &scaled, points, ENVELOPE_REVS);
+    let revs = revs.max(1) as f64;
     let at = |o: f64| -> (f64, f64) {
         let i = (o * revs).round() as usize;
         let a = (i.saturating_sub(2)..=i + 2).filter_map(|j| amplitudes.get(j)).copied().fold(0.0, f64::max);

@@ -282,3 +282,30 @@ pub(super) fn check_recording(
     }
     Ok(Checked { tacho, channels, moments, samples: n, fs })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch's catch ([`caught`](super::caught)): a panic while one recording is diagnosed, in its
+    /// thread or a worker's, becomes that recording's error naming the file (the batch goes on and the
+    /// exit code says it failed); a result passes through.
+    #[test]
+    fn a_panic_in_one_recording_is_its_error() {
+        let file = Path::new("hour-long.wav");
+        let e =
+            caught(file, || -> Result<(), Error> { panic!("index out of bounds: the len is 33 but the index is 38") })
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("hour-long.wav") && e.contains("internal error") && e.contains("the index is 38"), "{e}");
+        let e = caught(file, || {
+            let v: Vec<usize> =
+                (0..64usize).into_par_iter().map(|i| if i == 9 { panic!("worker {i}") } else { i }).collect();
+            Ok(v.len())
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("hour-long.wav") && e.contains("worker 9"), "{e}");
+        assert_eq!(caught(file, || Ok(5)).unwrap(), 5);
+    }
+}
