@@ -990,7 +990,11 @@ pub fn write_channels(path: &Path, fs: f64, channels: &[&[f64]]) {
         bits_per_sample: 32,
         sample_format: hound::SampleFormat::Float,
     };
-    let tmp = path.with_extension("wav.part");
+    // a name of this writer's own: two tests may write the same recording at once (the later rename wins,
+    // with the same content)
+    static WRITERS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = WRITERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_extension(format!("wav.{}-{n}.part", std::process::id()));
     {
         let mut w = hound::WavWriter::create(&tmp, spec).expect("create wav");
         for k in 0..channels[0].len() {
