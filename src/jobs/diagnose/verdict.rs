@@ -33,7 +33,11 @@ pub struct Thresholds {
     pub m6a_absolute: Limits,
     /// NA4 without a baseline (3 nominal).
     pub na4_absolute: Limits,
-    /// Number of indicators at their first limit that together make a recording faulty.
+    /// Number of indicators at their first limit that together make a recording faulty against a baseline.
+    /// Without one the count does not apply: FM4, M6A and NA4 are moments of nearly the same signal, so
+    /// several at their first limit are one piece of evidence, not corroboration (healthy generated
+    /// machines whose gears carry manufacturing errors put all three at it together), and only one
+    /// beyond its second limit makes the recording faulty.
     pub faulty_count: usize,
     /// Reasons listed in the verdict, strongest first.
     pub max_reasons: usize,
@@ -240,6 +244,8 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
 /// [`judge`], with `levels` false when absolute levels do not compare with the baseline's (one side's
 /// unit unknown): the level-dependent indicators are scored but do not decide.
 pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds, levels: bool) {
+    let absolute_only = Thresholds { faulty_count: usize::MAX, ..t.clone() };
+    let t = if reference.is_none() { &absolute_only } else { t };
     // (gear, channel, triggers)
     let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>)> = Vec::new();
     let mut not_judged = Vec::new();
