@@ -112,7 +112,7 @@ pub fn response(
     tolerance: f64,
 ) -> Response {
     match traj {
-        Trajectory::Fourier(sol) => fourier_response(sol, probe, kmax, period_s, d),
+        Trajectory::Fourier(sol) => fourier_response(sol, probe, kmax, period_s, d, None).0,
         Trajectory::Grid { grid, states, scheme } if *scheme == rk4::Scheme::Magnus4 && sys.piecewise_constant() => {
             piecewise_response(sys, grid, states, probe, kmax, period_s, d, tolerance)
         }
@@ -136,7 +136,18 @@ fn row_gain(c: &DVector<f64>, d: &[f64]) -> f64 {
     d.iter().enumerate().map(|(i, s)| (c[i] * s).abs()).sum()
 }
 
-fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f64, d: &[f64]) -> Response {
+/// The response of a harmonic-balance solution and the times of its extremes (s). With `near` (the times of
+/// another solution's extremes and a window half-width, s), the extremes are searched only within those
+/// windows: the comparison solution of an error estimate, whose extremes are the printed one's moved by
+/// its error.
+fn fourier_response(
+    sol: &HillSolution,
+    probe: &Probe,
+    kmax: usize,
+    period_s: f64,
+    d: &[f64],
+    near: Option<([f64; 2], f64)>,
+) -> (Response, [f64; 2]) {
     let h = sol.harmonics;
     let z: Vec<C64> = (0..=h)
         .map(|k| {
@@ -147,36 +158,58 @@ fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f6
     let rms = (z[0].re * z[0].re + 2.0 * z.iter().skip(1).map(|c| c.norm_sqr()).sum::<f64>()).sqrt();
     // a rigorous bound on |z''| from the coefficients: sum 2 |Z_k| (k w)^2
     let curvature: f64 = z.iter().enumerate().map(|(k, c)| 2.0 * c.norm() * (k as f64 * sol.omega).powi(2)).sum();
-    let m = (8 * h).max(1024).next_power_of_two().min(1 << 22);
-    let spec: Vec<(f64, f64)> =
-        (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
-    let samples = crate::signal::spectrum::Fft::new().inverse(&spec, m);
+    let m = sample_count(h);
     let dt = period_s / m as f64;
     // the refinement evaluates only the harmonics present (a long period's solution is mostly zeros: the
-    // unforced residue classes), each by its own sin_cos
-    let present: Vec<(f64, C64)> = z
-        .iter()
-        .enumerate()
-        .skip(1)
-        .filter(|(_, c)| c.norm_sqr() > 0.0)
-        .map(|(k, c)| (k as f64 * sol.omega, *c))
-        .collect();
+    // unforced residue classes): e^{i k w t} chained from the previous present harmonic by the phasor of the
+    // gap, one sin_cos per distinct gap (a gear's lines sit on a few regular gaps: mesh harmonics and their
+    // sidebands)
+    let present: Vec<(usize, C64)> =
+        z.iter().enumerate().skip(1).filter(|(_, c)| c.norm_sqr() > 0.0).map(|(k, c)| (k, *c)).collect();
     let sparse = 4 * present.len() < h;
+    let mut gaps: Vec<usize> = present.iter().scan(0, |last, &(k, _)| Some(k - std::mem::replace(last, k))).collect();
+    let mut distinct = gaps.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let chained = distinct.len() <= 64;
+    for g in &mut gaps {
+        *g = distinct.partition_point(|d| d < g);
+    }
     let value = |t: f64| {
         if !sparse {
             return fourier_value(&z, sol.omega, t);
         }
-        present.iter().fold(z[0].re, |acc, (kw, c)| {
-            let (s, co) = (kw * t).sin_cos();
-            acc + 2.0 * (c.re * co - c.im * s)
+        if !chained {
+            return present.iter().fold(z[0].re, |acc, (k, c)| {
+                let (s, co) = (*k as f64 * sol.omega * t).sin_cos();
+                acc + 2.0 * (c.re * co - c.im * s)
+            });
+        }
+        let steps: Vec<C64> = distinct.iter().map(|g| C64::from_polar(1.0, *g as f64 * sol.omega * t)).collect();
+        let mut e = C64::new(1.0, 0.0);
+        present.iter().zip(&gaps).fold(z[0].re, |acc, ((_, c), g)| {
+            e *= steps[*g];
+            acc + 2.0 * (c * e).re
         })
     };
-    let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
-    ts[m] = period_s;
-    let mut zs = samples.clone();
-    zs.push(samples[0]);
-    let bound = vec![curvature; m];
-    let (max, min, slack) = extremes(&[Segment { ts, zs, curvature: Some(bound) }], &|_, t| value(t));
+    let (max, min, slack, at) = match near {
+        Some((at, w)) => {
+            let local = |sign: f64, t: f64| {
+                let (v, _) = golden(&|x| sign * value(x), t - w, t + w);
+                sign * v.max(sign * value(t))
+            };
+            (local(1.0, at[0]), local(-1.0, at[1]), 0.0, at)
+        }
+        None => {
+            let spec: Vec<(f64, f64)> =
+                (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
+            let mut zs = crate::signal::spectrum::Fft::new().inverse(&spec, m);
+            zs.push(zs[0]);
+            let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
+            ts[m] = period_s;
+            extremes(&[Segment { ts, zs, curvature: Some(curvature) }], &|_, t| value(t))
+        }
+    };
     // |dz| <= sum_c |w_c| e size_c for a relative coefficient error e per component (the measure of
     // harmonic balance's estimates: sum_n |dY_n| over sum_n |Y_n|, times n w for velocities)
     let gain: f64 = probe
@@ -197,7 +230,13 @@ fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f6
     let _ = d;
     let mut lines = z;
     lines.resize(kmax + 1, C64::new(0.0, 0.0));
-    Response { lines, rms, max, min, gain, extreme_slack: slack }
+    (Response { lines, rms, max, min, gain, extreme_slack: slack }, at)
+}
+
+/// Samples per period of the extreme search on a harmonic-balance solution of H harmonics: a power of two,
+/// at least 8 H.
+fn sample_count(h: usize) -> usize {
+    (2 * h).max(1024).next_power_of_two().min(1 << 22)
 }
 
 /// z(t) = Re Z_0 + 2 Re sum_k Z_k e^{i k w t}: one complex multiplication per harmonic.
@@ -212,12 +251,11 @@ pub fn fourier_value(z: &[C64], omega: f64, t: f64) -> f64 {
     acc
 }
 
-/// Samples of z on one step (times increasing, ends included) and, when known, a bound on |z''| per
-/// interval.
+/// Samples of z on one step (times increasing, ends included) and, when known, a bound on |z''| over it.
 struct Segment {
     ts: Vec<f64>,
     zs: Vec<f64>,
-    curvature: Option<Vec<f64>>,
+    curvature: Option<f64>,
 }
 
 /// Most intervals refined per extreme: beyond it the search reports how much the others could still add.
@@ -227,15 +265,21 @@ const MAX_CANDIDATES: usize = 4096;
 /// max(z_i, z_i+1) + h^2 |z''| / 8 reaches the best sample is refined by golden section on `value(segment,
 /// t)`. |z''| is the segment's bound when given, else twice the largest second divided difference of the
 /// neighbouring samples.
-fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64) -> (f64, f64, f64) {
+fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64) -> (f64, f64, f64, [f64; 2]) {
     let mut out = [0.0; 2];
+    let mut at = [0.0; 2];
     let mut slack: f64 = 0.0;
     for (slot, sign) in [1.0, -1.0].into_iter().enumerate() {
-        let best = segments.iter().flat_map(|s| s.zs.iter()).map(|v| sign * v).fold(f64::NEG_INFINITY, f64::max);
+        let (mut best, mut best_t) = (f64::NEG_INFINITY, 0.0);
+        for (v, t) in segments.iter().flat_map(|s| s.zs.iter().zip(&s.ts)) {
+            if sign * v > best {
+                (best, best_t) = (sign * v, *t);
+            }
+        }
         let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
         for (j, s) in segments.iter().enumerate() {
             let m = s.ts.len();
-            let dd: Vec<f64> = (1..m.saturating_sub(1))
+            let dd: Vec<f64> = (1..if s.curvature.is_some() { 0 } else { m.saturating_sub(1) })
                 .map(|i| {
                     let (h0, h1) = (s.ts[i] - s.ts[i - 1], s.ts[i + 1] - s.ts[i]);
                     if h0 <= 0.0 || h1 <= 0.0 {
@@ -247,7 +291,7 @@ fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64) -> (f64, f6
             for i in 0..m.saturating_sub(1) {
                 let h = s.ts[i + 1] - s.ts[i];
                 let c2 = match &s.curvature {
-                    Some(c) => c[i],
+                    Some(c) => *c,
                     None => {
                         let near = |k: usize| dd.get(k).copied().unwrap_or(0.0);
                         2.0 * near(i.wrapping_sub(1)).max(near(i)).max(near(i + 1))
@@ -274,17 +318,21 @@ fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64) -> (f64, f6
             }
             let s = &segments[j];
             let f = |t: f64| sign * value(j, t);
-            found = found.max(golden(&f, s.ts[i], s.ts[i + 1]));
+            let (v, t) = golden(&f, s.ts[i], s.ts[i + 1]);
+            if v > found {
+                (found, best_t) = (v, t);
+            }
         }
         slack = slack.max(left - found);
         out[slot] = sign * found;
+        at[slot] = best_t;
     }
-    (out[0], out[1], slack)
+    (out[0], out[1], slack, at)
 }
 
 /// Largest value of `f` on [a, b] by golden section (40 steps: the bracket shrinks by 4e-9, so the value,
 /// quadratic near the maximum, is within 2e-17 (b - a)^2 |f''| of it).
-fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
     let (mut a, mut b) = (a, b);
     let r = 0.5 * (5f64.sqrt() - 1.0);
     let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
@@ -302,7 +350,7 @@ fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
             fd = f(d);
         }
     }
-    fc.max(fd)
+    if fc > fd { (fc, c) } else { (fd, d) }
 }
 
 /// States of a grid trajectory at `times` (each in [0, T]): a partial step of `scheme` from the node at or
@@ -650,7 +698,7 @@ fn gauss_response(
         }
         probe.value(&x, &p, &f)
     };
-    let (max, min, slack) = extremes(&segments, &value);
+    let (max, min, slack, _) = extremes(&segments, &value);
     let gain = gain_row * balanced_scale(states, d);
     Response { lines, rms, max, min, gain, extreme_slack: slack }
 }
@@ -769,7 +817,7 @@ fn piecewise_response(
         let x0 = DVector::from_fn(n + 1, |r, _| if r < n { states[j * n + r] / d[r] } else { 1.0 });
         c.dot(&((a * (t - grid.nodes[j])).exp() * x0))
     };
-    let (max, min, slack) = extremes(&segments, &value);
+    let (max, min, slack, _) = extremes(&segments, &value);
     let gain = gain_row * balanced_scale(states, d);
     Response { lines, rms: (square / period_s).max(0.0).sqrt(), max, min, gain, extreme_slack: slack }
 }
@@ -816,7 +864,14 @@ pub fn estimated_response(
     tolerance: f64,
 ) -> (Response, Estimates) {
     let d = super::steady::state_scales(sys);
-    let main = response(sys, &steady.trajectory, steady.period_s, probe, kmax, &d, tolerance);
+    // a harmonic-balance pair: the comparison's extremes are searched near the printed ones only
+    let (main, near) = match &steady.trajectory {
+        Trajectory::Fourier(sol) => {
+            let (r, at) = fourier_response(sol, probe, kmax, steady.period_s, &d, None);
+            (r, Some((at, steady.period_s / sample_count(sol.harmonics) as f64)))
+        }
+        traj => (response(sys, traj, steady.period_s, probe, kmax, &d, tolerance), None),
+    };
     let top = main.amplitudes().iter().fold(0.0f64, |a, v| a.max(*v));
     // peak-to-peak relative to itself, or to the output's size when smaller (a constant output)
     let p2p = main.max - main.min;
@@ -829,7 +884,12 @@ pub fn estimated_response(
     );
     match &steady.comparison {
         Some(c) => {
-            let other = response(sys, &c.trajectory, steady.period_s, probe, kmax, &d, tolerance);
+            let other = match (&c.trajectory, near) {
+                (Trajectory::Fourier(sol), Some(near)) => {
+                    fourier_response(sol, probe, kmax, steady.period_s, &d, Some(near)).0
+                }
+                (traj, _) => response(sys, traj, steady.period_s, probe, kmax, &d, tolerance),
+            };
             // the printed amplitudes' change (a phase change of a resonant line is not printed)
             let lines =
                 main.amplitudes().iter().zip(other.amplitudes()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
