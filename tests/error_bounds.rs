@@ -86,6 +86,13 @@ fn gear(name: &str) -> Case {
     Case { name: name.into(), source: Source::Scene(Box::new(bundled(name))), lines: 154, reference_steps: 1 << 18 }
 }
 
+/// A bundled press scene (Nguyen et al. 2009 cam mechanism, one cam revolution of 1.2 s): 24 coefficient
+/// harmonics, the follower's lines up to order 20.
+fn press(name: &str) -> Case {
+    // |lambda| ~ 300 1/s and 20 w = 105 rad/s: 2^16 steps keep h (20 w + |lambda|) below 8e-3
+    Case { name: name.into(), source: Source::Scene(Box::new(bundled(name))), lines: 20, reference_steps: 1 << 16 }
+}
+
 /// The hunting period (39 pinion revolutions, 1.3 s): peak-to-peak and rms only (lines: 6006 of them).
 fn hunting() -> Case {
     let name = "gear-z14z39-wheel-eccentricity";
@@ -116,6 +123,8 @@ reference_case!(plus_one, near_plus_one());
 reference_case!(rectangular, gear("gear-z14z39-rectangular-stiffness"));
 reference_case!(cracked, gear("gear-z14z39-cracked-pinion-tooth3"));
 reference_case!(hunting_period, hunting());
+reference_case!(press1, press("paper-press-case1"));
+reference_case!(press2, press("paper-press-case2"));
 
 fn run(holder: fn() -> &'static (Case, Reference), method: Method, tolerance: f64) {
     let (case, r) = holder();
@@ -157,6 +166,10 @@ checks! {
     hunting_auto_1e7: hunting_period, Auto, 1e-7;
     hunting_auto_1e10: hunting_period, Auto, 1e-10;
     hunting_hill_1e10: hunting_period, Hill, 1e-10;
+    press1_hill_1e10: press1, Hill, 1e-10;
+    press2_hill_1e8: press2, Hill, 1e-8;
+    press2_hill_1e10: press2, Hill, 1e-10;
+    press2_rk4_1e8: press2, Rk4, 1e-8;
 }
 
 /// The hunting period's peak-to-peak and rms at 1e-10 are held against a reference that resolves them: the
