@@ -354,8 +354,8 @@ impl Classes {
                 }
                 for j in near(n) {
                     for i in 0..nd {
-                        for l in 0..nd {
-                            b[j * nd + i] += self.entry(members[j], n, i, l) * e[l];
+                        for (l, el) in e.iter().enumerate() {
+                            b[j * nd + i] += self.entry(members[j], n, i, l) * el;
                         }
                     }
                 }
