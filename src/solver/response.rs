@@ -158,8 +158,6 @@ fn fourier_response(
     let rms = (z[0].re * z[0].re + 2.0 * z.iter().skip(1).map(|c| c.norm_sqr()).sum::<f64>()).sqrt();
     // a rigorous bound on |z''| from the coefficients: sum 2 |Z_k| (k w)^2
     let curvature: f64 = z.iter().enumerate().map(|(k, c)| 2.0 * c.norm() * (k as f64 * sol.omega).powi(2)).sum();
-    let m = sample_count(h);
-    let dt = period_s / m as f64;
     // the refinement evaluates only the harmonics present (a long period's solution is mostly zeros: the
     // unforced residue classes): e^{i k w t} chained from the previous present harmonic by the phasor of the
     // gap, one sin_cos per distinct gap (a gear's lines sit on a few regular gaps: mesh harmonics and their
@@ -201,13 +199,23 @@ fn fourier_response(
             (local(1.0, at[0]), local(-1.0, at[1]), 0.0, at)
         }
         None => {
-            let spec: Vec<(f64, f64)> =
-                (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
-            let mut zs = crate::signal::spectrum::Fft::new().inverse(&spec, m);
-            zs.push(zs[0]);
-            let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
-            ts[m] = period_s;
-            extremes(&[Segment { ts, zs, curvature: Some(curvature) }], &|_, t| value(t))
+            // samples at 2 H per period; where the bounds leave more intervals than the search refines (a
+            // strong harmonic near H: a pinion error of order 1e5), four times denser, up to the cap
+            let mut m = sample_count(h);
+            loop {
+                let dt = period_s / m as f64;
+                let spec: Vec<(f64, f64)> =
+                    (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
+                let mut zs = crate::signal::spectrum::Fft::new().inverse(&spec, m);
+                zs.push(zs[0]);
+                let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
+                ts[m] = period_s;
+                let found = extremes(&[Segment { ts, zs, curvature: Some(curvature) }], &|_, t| value(t));
+                if found.2 <= 0.0 || m >= 1 << 22 {
+                    break found;
+                }
+                m = (4 * m).min(1 << 22);
+            }
         }
     };
     // |dz| <= sum_c |w_c| e size_c for a relative coefficient error e per component (the measure of
