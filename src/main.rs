@@ -20,29 +20,12 @@ fn main() -> ExitCode {
     }
     // a panic is a bug: its location is kept for the one error line (a batch reports it for the recording
     // that caused it and goes on), never a backtrace, and never a success code
-    std::panic::set_hook(Box::new(|info| {
-        if let Some(l) = info.location() {
-            gearvib::jobs::note_panic(l.to_string());
-        }
-    }));
-    match std::panic::catch_unwind(|| gearvib::cli::run(cli)) {
-        Ok(Ok(code)) => ExitCode::from(code),
-        Ok(Err(e)) if e.is_broken_pipe() => ExitCode::SUCCESS,
-        Ok(Err(e)) => {
-            eprintln!("gearvib: error: {e}");
-            ExitCode::from(2)
-        }
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "a panic".into());
-            let at = gearvib::jobs::last_panic_location().unwrap_or_default();
-            eprintln!("gearvib: error: internal error at {at}: {what} (a bug in gearvib: please report it)");
-            ExitCode::from(2)
-        }
+    gearvib::cli::quiet_panics();
+    let (code, line) = gearvib::cli::guarded(|| gearvib::cli::run(cli));
+    if let Some(line) = line {
+        eprintln!("{line}");
     }
+    ExitCode::from(code)
 }
 
 /// glibc's allocator by default hands every freed block of more than 128 KiB (adaptively up to 32 MiB)

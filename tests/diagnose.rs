@@ -78,13 +78,19 @@ fn real_recordings_against_parts_of_themselves_and_other_loads() {
     }
 }
 
+/// The rig turns at a nominal 30 Hz at both loads (SOURCE.md), so the shaft period must be the same at 0 %
+/// and 90 % load within an induction motor's slip change (a few percent; load slows it, so the loaded
+/// period is the longer). The unloaded signal repeats most strongly only every five revolutions (its
+/// hunting period, autocorrelation 0.44 at ~2151 samples against 0.14-0.21 at each revolution): that is
+/// not the shaft.
 #[test]
 fn real_period_estimate_is_the_repetition_period() {
-    // 0 % load: the signal repeats every ~2151 samples (autocorrelation peak); 90 % load: ~432 samples
     let d0 = diag_json(&[&real("h30hz0"), "--fs-unknown"]);
-    assert!((d0["shaft_period_samples"].as_f64().unwrap() - 2151.0).abs() < 1.0);
     let d90 = diag_json(&[&real("h30hz90"), "--fs-unknown"]);
-    assert!((d90["shaft_period_samples"].as_f64().unwrap() - 432.1).abs() < 0.5);
+    let (p0, p90) = (d0["shaft_period_samples"].as_f64().unwrap(), d90["shaft_period_samples"].as_f64().unwrap());
+    assert!((p90 / p0 - 1.0).abs() < 0.02 && p90 > p0, "0 % load {p0}, 90 % load {p90}");
+    // the hunting period of the unloaded rig is a whole number of the revolutions found
+    assert!((2151.0 / p0 - 5.0).abs() < 0.02, "{p0}");
     assert_eq!(d0["teeth_source"], "estimated");
 }
 

@@ -603,3 +603,111 @@ fn a_full_disk_is_one_plain_line() {
         assert!(e.contains(&tmp.split(".png.").next().unwrap().split(".json.").next().unwrap().to_string()), "{e}");
     }
 }
+
+/// Issue 29 (bad-inputs README): 1e4 or 1e5 pinion error terms of equal size ran for minutes after the
+/// solve: the extreme search of the printed response refined 4096 intervals per extreme at 1e4-1e5
+/// harmonics each (a spacing of 20 orders makes 20 near-equal peaks per revolution: every interval
+/// reaches the best sample). The search now stops at a work budget and reports what it left as slack: at
+/// the default tolerance a refusal saying so, with a looser one an answer whose estimate carries it.
+#[test]
+fn thousands_of_error_terms_end_within_a_work_budget() {
+    let dir = temp_dir("error-terms");
+    let healthy = read_json(&repo("data/scenes/gear-z14z39-healthy.json"));
+    let scene = |name: &str, orders: Vec<usize>, tolerance: f64| {
+        let mut v = healthy.clone();
+        let errors: Vec<serde_json::Value> = orders
+            .into_iter()
+            .map(|k| serde_json::json!({"order": k, "amplitude_m": 1e-9, "phase_rad": 0.0}))
+            .collect();
+        v["gear_pair"]["pinion"]["errors"] = errors.into();
+        v["solver"]["tolerance"] = tolerance.into();
+        write(&dir, name, &v.to_string())
+    };
+    // `timeout` turns a return of the old behaviour (minutes) into a failure, not a stuck test run
+    let bounded = |scene: &str| {
+        let out = Command::new("timeout")
+            .args(["120", env!("CARGO_BIN_EXE_gearvib"), "simulate", scene, "--json"])
+            .output()
+            .expect("timeout runs");
+        Run {
+            code: out.status.code().unwrap_or(-1),
+            stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+        }
+    };
+    for (name, orders) in [
+        ("errors-1e5.json", (1..=100_000).collect::<Vec<usize>>()),
+        ("errors-spaced-20.json", (0..5000).map(|i| 20 * i + 1).collect()),
+    ] {
+        let p = scene(name, orders, 1e-7);
+        assert_one_line_error(&bounded(&p), &[name, "solver.tolerance", "extreme search", "work budget"]);
+    }
+    // 1e4 terms at a tolerance of 0.1: answered, the unrefined intervals inside the printed estimate
+    // (it cannot be the 1e-12 of a complete search: the default tolerance of 1e-7 was refused; the slack
+    // left is 1e-3 to 2e-2 of the peak-to-peak depending on the search's sample spacing)
+    let p = scene("errors-1e4.json", (1..=10_000).collect(), 0.1);
+    let run = bounded(&p);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    let e = v["error_estimate"].as_f64().unwrap();
+    assert!(e > 1e-7 && e <= 0.1, "{e}");
+}
+
+/// Found by a scene campaign after issue 29: a press whose torsional damping is 1e6 N m s/rad (5400 times
+/// critical; the paper's is 0.1) made the system so stiff that the solve took 20 s, and a
+/// `solver.tolerance` of 1e-308 was accepted and refused only after 20 s of ever finer grids. Each press
+/// damping is now checked against its critical value 2 sqrt(k m), as the gear mesh's damping ratio is, and
+/// a tolerance below 1e-15 (about 5 machine epsilons) is refused up front.
+#[test]
+fn absurd_press_damping_and_tolerance_are_refused() {
+    let dir = temp_dir("press-damping");
+    let base = read_json(&repo("data/scenes/paper-press-case1.json"));
+    for (field, value) in [("torsional_damping_n_m_s_per_rad", 1e6), ("follower_damping_n_s_per_m", 1e9)] {
+        let mut v = base.clone();
+        v["press"][field] = value.into();
+        let p = write(&dir, &format!("{field}.json"), &v.to_string());
+        // k = 7692 N m/rad, J = 1.11 kg m^2: critical 2 sqrt(k J) = 184.8 N m s/rad, so 1e6 is 5.4e3 times
+        // it; k = 1e6 N/m, m = 136 kg: critical 2.33e4 N s/m, 1e9 is 4.287e4 times it
+        let needle = if field.starts_with("torsional") { "5.411e3 times" } else { "4.287e4 times" };
+        assert_one_line_error(&limited(&["simulate", &p]), &[&format!("press.{field}"), needle, "critical"]);
+    }
+    // 9.9 times critical is still accepted (the bound is 10)
+    let mut v = base.clone();
+    v["press"]["follower_damping_n_s_per_m"] = (9.9 * 2.0 * (1e6f64 * 136.0).sqrt()).into();
+    let p = write(&dir, "under.json", &v.to_string());
+    let run = limited(&["simulate", &p, "--json"]);
+    assert!(!run.stderr.contains("critical"), "{}", run.stderr);
+    for t in [1e-308, 9e-16] {
+        let mut v = read_json(&repo("data/scenes/paper-press-case2.json"));
+        v["solver"]["tolerance"] = t.into();
+        let p = write(&dir, "tolerance.json", &v.to_string());
+        assert_one_line_error(&limited(&["simulate", &p]), &["tolerance.json", "solver.tolerance", "[1e-15, 1)"]);
+    }
+}
+
+/// Found by a scene campaign after issue 29: a pit of 1e-9 tooth pitches aborted the process (a
+/// 6e11-byte request for its Gaussian series). The narrowest fault's harmonics, sqrt(2 ln(1 / keep)) /
+/// sigma with sigma = 2 pi w / (6 z), are now checked against the error orders' limit (100000), and
+/// faults times harmonics against a budget.
+#[test]
+fn a_needle_thin_pit_and_a_flood_of_faults_are_refused() {
+    let dir = temp_dir("thin-pit");
+    let base = read_json(&repo("data/scenes/gear-z14z39-pitted-pinion-tooth3.json"));
+    let mut v = base.clone();
+    v["gear_pair"]["pinion"]["tooth_faults"][0]["width_teeth"] = 1e-9.into();
+    let p = write(&dir, "thin.json", &v.to_string());
+    // keep = 1e-7 (the scene's tolerance): sqrt(2 ln 1e7) = 5.678, times 6 * 14 / (2 pi 1e-9) = 7.59e10
+    assert_one_line_error(
+        &limited(&["simulate", &p]),
+        &["thin.json", "gear_pair.pinion.tooth_faults[0].width_teeth", "7.59e10 harmonics", "at most 100000"],
+    );
+    // 20000 faults of 0.01 pitches: 5.678 * 84 / (2 pi 0.01) = 7590.6, so 7591 harmonics each, 1.5e8 terms over
+    // the budget of 1e8
+    let fault = serde_json::json!({"tooth": 3, "depth_m": 1e-7, "width_teeth": 0.01});
+    v["gear_pair"]["pinion"]["tooth_faults"] = vec![fault; 20_000].into();
+    let p = write(&dir, "flood.json", &v.to_string());
+    assert_one_line_error(
+        &limited(&["simulate", &p]),
+        &["flood.json", "gear_pair.pinion.tooth_faults", "20000 faults of 7591 harmonics", "budget"],
+    );
+}

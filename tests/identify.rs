@@ -318,6 +318,16 @@ fn bad_inputs_refused_with_one_line() {
     refused(&["identify", &healthy_rec, "--scene", &big, "--wheel-orders", "1"], "hunting period");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--pinion-orders", "0"], "nothing to fit");
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--pit-width=-1"], "--pit-width");
+    // found after issue 29: 1e-300 pitches overflowed a capacity (a caught panic), 1e-6 aborted on a 2.7 GB
+    // request, 0.005 failed in the solver with a message naming no flag
+    for w in ["1e-300", "1e-6", "0.005"] {
+        let args = ["identify", &healthy_rec, "--scene", &healthy, "--faults", "pit", "--pit-width", w];
+        refused(&args, "--pit-width");
+        refused(&args, "[0.01, 3]");
+    }
+    let pitted = repo("data/recordings/gear-z14z39-fs10kHz-pitted-pinion-tooth3.wav");
+    let run = gearvib(&["identify", &pitted, "--scene", &healthy, "--faults", "pit", "--pit-width", "0.01", "--json"]);
+    assert_eq!(run.code, 0, "the narrowest width accepted is answered: {}", run.stderr);
     refused(&["identify", &healthy_rec, "--scene", &healthy, "--channel", "9"], "--channel 9");
     // a 1 kHz recording: 33 samples per revolution cannot hold order 14 and its sidebands
     let mut low: Value = serde_json::from_str(&std::fs::read_to_string(&healthy).unwrap()).unwrap();

@@ -92,7 +92,7 @@ fn physically_meaningless_values() {
         &edited(|v| v["gear_pair"]["damping_ratio"] = (-0.01).into()),
         &["gear_pair.damping_ratio", ">= 0"],
     );
-    check("tol", &edited(|v| v["solver"]["tolerance"] = 2.0.into()), &["solver.tolerance", "(0, 1)"]);
+    check("tol", &edited(|v| v["solver"]["tolerance"] = 2.0.into()), &["solver.tolerance", "[1e-15, 1)"]);
     check("method", &edited(|v| v["solver"]["method"] = "euler".into()), &["solver.method", "euler"]);
 }
 

@@ -392,6 +392,68 @@ machine_tests! {
     z19z37_faults_with_speed, z19z37_faults_with_tacho, z19z37_healthy_siblings, "z19z37-25Hz-fs25k6";
 }
 
+/// With the teeth but no speed, tachometer or baseline, the speed is found from the mesh comb on every
+/// machine's first healthy recording and its 25 % pinion crack (machines of another physics, whose speed
+/// wanders by 0.5-2 %): within 2 % of the nominal speed (the nearest wrong reading of the same line family,
+/// the mesh taken one tooth off, is 1/47 = 2.1 % away on the largest gear; the mean of the generator's
+/// fluctuation stays within 0.3 % of nominal over a record). And a speed the estimate itself doubts never
+/// ends in a healthy verdict.
+#[test]
+fn teeth_only_speed_is_found_from_the_mesh_comb() {
+    let cases: Vec<Case> = machines()
+        .into_iter()
+        .flat_map(|m| {
+            let crack = Fault { kind: FaultKind::Crack(0.25), gear: Gear::Pinion, tooth: 2 };
+            [Case { machine: m.clone(), fault: None, seed: 1 }, Case { machine: m, fault: Some(crack), seed: 7 }]
+        })
+        .collect();
+    ensure(&cases);
+    let mut wrong = vec![];
+    for case in &cases {
+        let o = diagnose(case, Mode::Teeth, &[]);
+        let hz = o.json["shaft_hz"]["pinion"].as_f64().unwrap_or(f64::NAN);
+        let nominal = case.machine.rpm() / 60.0;
+        if hz.is_nan() || (hz / nominal - 1.0).abs() > 0.02 {
+            wrong.push(format!("{} {}: {hz} Hz for {nominal} Hz ({})", case.machine.name, case.label(), o.stderr));
+        }
+        let confidence = o.json["speed_confidence"].as_f64().unwrap_or(0.0);
+        if o.state == "healthy" && confidence < 0.2 {
+            wrong.push(format!(
+                "{} {}: healthy on a speed of confidence {confidence}",
+                case.machine.name,
+                case.label()
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// Without a baseline, a spall and a broken tooth whose TSA indicators stay under the absolute limits are
+/// raised by their envelope order line (over 30 dB above its neighbourhood) on their own gear, and no
+/// healthy recording of those machines has an envelope line over that limit (they reach 22 dB).
+#[test]
+fn without_a_baseline_the_envelope_raises_impacts_on_their_gear() {
+    let mut wrong = vec![];
+    for (name, label) in [("z31z47-12Hz-fs51k2", "pinion-spall-t25"), ("z17z29-25Hz-fs20k", "wheel-broken-t23")] {
+        let (healthy, faults) = test_set(&machine(name));
+        let fault = faults.into_iter().find(|c| c.label() == label).unwrap();
+        ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+        let over = |o: &Outcome| o.json["verdict"]["reasons"].to_string().contains("over the 30 dB absolute limit");
+        let o = diagnose(&fault, Mode::Speed, &[]);
+        let truth = fault.fault.unwrap().gear.name();
+        if !(o.state == "suspect" || o.state == "faulty") || o.gear != truth || !over(&o) {
+            wrong.push(format!("{name} {label}: {} on {}: {}", o.state, o.gear, o.json["verdict"]));
+        }
+        for h in &healthy {
+            let o = diagnose(h, Mode::Speed, &[]);
+            if over(&o) {
+                wrong.push(format!("{name} {}: envelope over the limit: {}", h.label(), o.json["verdict"]));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
 /// The scorecard: every recording diagnosed with the speed, with the tachometer, each with and without the
 /// sibling baseline; a table on stdout and counts at the end. Never fails (it reports).
 #[test]

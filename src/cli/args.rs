@@ -129,9 +129,14 @@ pub struct DiagnoseArgs {
     /// the measured speed used (a nameplate speed is off by the motor's slip).
     #[arg(long, default_value_t = 0.05)]
     pub speed_tolerance: f64,
-    /// Teeth of pinion and wheel, e.g. 14,39.
+    /// Teeth of pinion and wheel, e.g. 14,39 (the one-stage shorthand of --machine).
     #[arg(long, value_name = "ZP,ZW")]
     pub teeth: Option<String>,
+    /// Machine file (JSON: shafts, parallel and planetary stages, speed, tachometer, sensors): every
+    /// shaft's speed from the ratio chain, every stage's lines, a TSA per shaft, the planets' averages;
+    /// --rpm/--shaft-hz are then the speed of the machine's `speed.shaft`.
+    #[arg(long, value_name = "MACHINE.json")]
+    pub machine: Option<String>,
     /// Tachometer channel (1-based) on the pinion shaft.
     #[arg(long)]
     pub tacho_channel: Option<usize>,

@@ -44,6 +44,41 @@ impl Error {
     }
 }
 
+/// Makes every panic of this process record where it happened ([`jobs::note_panic`]) and print nothing: a
+/// panic is a bug, reported on one line by [`guarded`] (or, in a batch, for the recording that caused it),
+/// never with a backtrace.
+pub fn quiet_panics() {
+    std::panic::set_hook(Box::new(|info| {
+        if let Some(l) = info.location() {
+            jobs::note_panic(l.to_string());
+        }
+    }));
+}
+
+/// Runs a whole command `f` and returns the process exit code with the one line for standard error, if
+/// any: `f`'s own code and no line; 0 and no line for a closed standard output (`gearvib ... | head`); 2
+/// and `gearvib: error: ...` for an error; 2 and `gearvib: error: internal error at FILE:LINE:COL: WHAT (a
+/// bug ...)` for a panic anywhere in `f`, worker threads included (rayon hands their panics to the
+/// caller), with the location [`quiet_panics`] recorded. Never a success code after a panic.
+pub fn guarded(f: impl FnOnce() -> Result<u8, Error>) -> (u8, Option<String>) {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(code)) => (code, None),
+        Ok(Err(e)) if e.is_broken_pipe() => (0, None),
+        Ok(Err(e)) => (2, Some(format!("gearvib: error: {e}"))),
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".into());
+            let at = jobs::last_panic_location().map(|l| format!(" at {l}")).unwrap_or_default();
+            // one line, whatever the panic's message holds
+            let what = what.replace(['\n', '\r'], " ");
+            (2, Some(format!("gearvib: error: internal error{at}: {what} (a bug in gearvib: please report it)")))
+        }
+    }
+}
+
 /// Runs a parsed command; returns the process exit code (0 ok, 1 fault found with `--fail-on`).
 ///
 /// # Errors
@@ -279,7 +314,22 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
         ));
     }
     let mut teeth = a.teeth.as_deref().map(parse_teeth).transpose()?;
-    if teeth.is_none() {
+    let machine = match &a.machine {
+        Some(m) => {
+            if a.teeth.is_some() {
+                return Err(CliError::flag(
+                    "--teeth",
+                    "cannot be given with --machine: the machine file states every stage's teeth (--teeth ZP,ZW is the one-stage shorthand)",
+                ));
+            }
+            if a.lifter.is_some() {
+                return Err(CliError::flag("--lifter", "takes pinion or wheel of a pair: not with --machine"));
+            }
+            Some(crate::scene::machine::load_machine_file(m)?)
+        }
+        None => None,
+    };
+    if teeth.is_none() && machine.is_none() {
         if let Some(sc) = &a.scene {
             teeth = scene_teeth(sc)?;
         }
@@ -305,6 +355,7 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
             None => None,
         },
         block_revs: a.block_revs.map(|r| r as usize),
+        machine,
         ..Default::default()
     };
     Ok(jobs::diagnose::DiagnoseJob {
@@ -323,6 +374,7 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
 fn profile_conflicts(a: &DiagnoseArgs) -> Option<&'static str> {
     [
         (a.teeth.is_some(), "--teeth"),
+        (a.machine.is_some(), "--machine"),
         (a.rpm.is_some(), "--rpm"),
         (a.shaft_hz.is_some(), "--shaft-hz"),
         (a.tacho_channel.is_some(), "--tacho-channel"),

@@ -130,7 +130,10 @@ pub fn diagnosis(
             .collect();
         writeln!(w, "  {:<name_width$} {:>3}{vals}", g.gear.name(), g.channel)?;
     }
-    mesh_harmonics(w, d)?;
+    match &d.machine {
+        Some(md) if d.order_map.is_none() => machine_lines(w, d, md)?,
+        _ => mesh_harmonics(w, d)?,
+    }
     if let Some(e) = &d.envelope {
         let lines: Vec<String> = e
             .lines
@@ -195,6 +198,70 @@ fn mesh_harmonics(w: &mut dyn Write, d: &Diagnosis) -> io::Result<()> {
         let top: Vec<String> = sb.iter().map(|s| format!("{:+} {} {}", s.offset, s.shaft, num(s.amplitude))).collect();
         let top = if top.is_empty() { "none".to_string() } else { top.join("; ") };
         writeln!(w, "  {}x mesh  {f:>10}  {}   sidebands 12 dB over the local floor: {top}", h.k, num(h.amplitude))?;
+    }
+    Ok(())
+}
+
+/// Every stage of a machine: its mesh harmonics and the sidebands that stand out, labelled by the family's
+/// shaft; a planetary stage's characteristic orders and its planets' averages.
+fn machine_lines(w: &mut dyn Write, d: &Diagnosis, md: &crate::report::summary::MachineDiagnosis) -> io::Result<()> {
+    let unit = crate::report::figures::unit_or(&d.unit);
+    let spectrum = d.spectra().iter().find(|s| s.0 == d.channels[0]).map(|s| &s.1);
+    writeln!(
+        w,
+        "machine          {} (orders of the tracked shaft `{}`; channel {}, amplitudes in {unit})",
+        md.machine, md.tracked_shaft, d.channels[0]
+    )?;
+    for s in &md.stages {
+        let hz = s.mesh_hz.map_or(String::new(), |f| format!(" = {} Hz", num(f)));
+        writeln!(
+            w,
+            "  {}: order {} ({}){hz}",
+            crate::report::figures::stage_words(s),
+            num(s.mesh_order),
+            s.mesh_order_exact
+        )?;
+        for h in &s.mesh_harmonics {
+            let mut sb: Vec<_> = h
+                .sidebands
+                .iter()
+                .filter(|x| spectrum.is_some_and(|sp| crate::report::figures::machine_sideband_stands_out(sp, x)))
+                .collect();
+            sb.sort_by(|a, b| b.amplitude.unwrap_or(0.0).total_cmp(&a.amplitude.unwrap_or(0.0)));
+            let top: Vec<String> =
+                sb.iter().map(|x| format!("{:+} {} {}", x.offset, x.family, num(x.amplitude.unwrap_or(0.0)))).collect();
+            let top = if top.is_empty() { "none".to_string() } else { top.join("; ") };
+            let f = h.frequency_hz.map_or("-".into(), |f| format!("{} Hz", num(f)));
+            let a = h.amplitude.map_or("-".into(), num);
+            writeln!(w, "    {}x mesh  {f:>10}  {a}   sidebands 12 dB over the local floor: {top}", h.k)?;
+        }
+        if let Some(p) = &s.planetary {
+            let orders: Vec<String> = p
+                .orders
+                .iter()
+                .map(|(k, v)| match p.frequencies_hz.get(k) {
+                    Some(f) => format!("{} {} ({} Hz)", k.replace('_', " "), num(*v), num(*f)),
+                    None => format!("{} {}", k.replace('_', " "), num(*v)),
+                })
+                .collect();
+            writeln!(w, "    orders: {}", orders.join(", "))?;
+            for a in &p.planet_averages {
+                let get = |k: &str| a.indicators.get(k).copied().map_or("-".into(), table_number);
+                writeln!(
+                    w,
+                    "    planet {} average ({} passes): FM4 {}, M6A {}, kurtosis {}, RMS {}",
+                    a.planet,
+                    a.passes,
+                    get("fm4"),
+                    get("m6a"),
+                    get("kurtosis"),
+                    get("rms")
+                )?;
+            }
+            if let Some(why) = &p.no_averages {
+                writeln!(w, "    no planet averages: {why}")?;
+            }
+        }
     }
     Ok(())
 }
@@ -427,7 +494,14 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
 pub fn profile(w: &mut dyn Write, p: &crate::jobs::diagnose::profile::Profile, file: &str) -> std::io::Result<()> {
     let o = &p.processing;
     writeln!(w, "profile          {file} ({} healthy recording(s))", p.learned_from.len())?;
-    let teeth = o.teeth.map_or("estimated".to_string(), |(a, b)| format!("{a},{b}"));
+    let teeth = match (&o.machine, o.teeth) {
+        (Some(m), _) => {
+            let m = m.machine();
+            format!("the machine `{}`: {} stage(s), shafts {}", m.name, m.stages.len(), m.shafts.join(", "))
+        }
+        (None, Some((a, b))) => format!("{a},{b}"),
+        (None, None) => "estimated".to_string(),
+    };
     writeln!(w, "teeth            {teeth}")?;
     let speed = match (p.baseline.speed_hz, o.shaft_hz) {
         (Some(m), Some(g)) => format!("{m:.4} Hz measured (given {g:.4} Hz, +-{:.1} %)", 100.0 * o.speed_tolerance),

@@ -58,7 +58,7 @@ pub struct StabilityOutcome {
 
 /// The warning that explains a refusal best (stability limit, then conditioning).
 fn main_reason(warnings: &[String]) -> String {
-    ["stability limit", "ill-conditioned", "near +1"]
+    ["stability limit", "ill-conditioned", "near +1", "extreme search"]
         .iter()
         .find_map(|k| warnings.iter().find(|w| w.contains(k)))
         .map_or(String::new(), |w| format!("; {w}"))

@@ -450,6 +450,14 @@ pub struct ToothFault {
     pub width_teeth: f64,
 }
 
+/// Harmonics of the gear angle that [`gaussian_tooth_faults`] computes for its narrowest fault of
+/// `width_teeth` pitches on a gear of `teeth` teeth: the bump's spectrum exp(-(k sigma)^2 / 2), sigma =
+/// 2 pi width / (6 teeth) rad, falls below `keep` at k = sqrt(2 ln(1 / keep)) / sigma.
+pub fn gaussian_harmonics(teeth: usize, width_teeth: f64, keep: f64) -> f64 {
+    let sigma = 2.0 * PI * width_teeth / teeth as f64 / 6.0;
+    (2.0 * (1.0 / keep).ln()).sqrt() / sigma
+}
+
 /// Local profile deviations on single teeth as a Fourier series in the gear angle (w = 1 rad per rad):
 /// each a periodised Gaussian of height d centred on the tooth's mesh cycle, c = 2 pi (tooth - 1/2) / z,
 /// with 6 sigma = `width_teeth` pitches, in closed form:
@@ -469,8 +477,8 @@ pub fn gaussian_tooth_faults(teeth: usize, faults: &[ToothFault], keep: f64) -> 
             (f.depth_m * sigma / (2.0 * PI).sqrt(), sigma, centre)
         })
         .collect();
-    let sigma_min = terms.iter().map(|t| t.1).fold(f64::INFINITY, f64::min);
-    let h = ((2.0 * (1.0 / keep).ln()).sqrt() / sigma_min).ceil() as usize;
+    let width_min = faults.iter().map(|f| f.width_teeth).fold(f64::INFINITY, f64::min);
+    let h = gaussian_harmonics(teeth, width_min, keep).ceil() as usize;
     let mut series = FourierSeries::new(1.0, terms.iter().map(|t| t.0).sum(), vec![0.0; h], vec![0.0; h]);
     for (a, sigma, c) in &terms {
         for k in 1..=h {

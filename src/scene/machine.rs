@@ -169,6 +169,50 @@ pub fn machine_from_value(value: serde_json::Value, file: &str, prefix: &str) ->
     })
 }
 
+/// A validated machine together with the JSON it was read from: what a profile stores (the machine file's
+/// own text, so that people can read it) and validates again when it is read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MachineFile {
+    json: serde_json::Value,
+    machine: Machine,
+}
+
+impl MachineFile {
+    /// The validated machine.
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+}
+
+/// Reads and validates a machine file, keeping its JSON.
+///
+/// # Errors
+/// [`SceneError`] naming the file and the field path.
+pub fn load_machine_file(path: &str) -> Result<MachineFile, SceneError> {
+    crate::io::register_input(std::path::Path::new(path));
+    let text =
+        std::fs::read_to_string(path).map_err(|e| SceneError::Io { file: path.to_string(), message: e.to_string() })?;
+    let machine = machine_from_str(&text, path)?;
+    let json =
+        serde_json::from_str(&text).map_err(|e| SceneError::Json { file: path.into(), message: e.to_string() })?;
+    Ok(MachineFile { json, machine })
+}
+
+impl serde::Serialize for MachineFile {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.json.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for MachineFile {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let json = serde_json::Value::deserialize(d)?;
+        let machine = machine_from_value(json.clone(), "the machine", "")
+            .map_err(|e| serde::de::Error::custom(e.to_string().trim_start_matches("the machine: ").to_string()))?;
+        Ok(Self { json, machine })
+    }
+}
+
 /// `prefix` + `path` as one dotted field path ("stages[0].teeth" + "[1]", "stages[0].teeth" + "ring").
 fn join(prefix: &str, path: &str) -> String {
     if prefix.is_empty() || path == "." || path.is_empty() {

@@ -14,6 +14,12 @@ const MAX_CAM_COEFFICIENTS: usize = 1000;
 /// Sine-cosine pairs allowed for turning a sampled mesh-stiffness table into its Fourier series (N^2 / 2
 /// for N samples: about 1.5 s on one core of the development machine; 100000 samples took 77 s).
 const TABLE_BUDGET: f64 = 1e8;
+/// Highest order of a tooth error, and most harmonics of a tooth-fault series.
+const MAX_ERROR_ORDER: usize = 100_000;
+/// Terms (faults times harmonics) of the tooth-fault series (about a second).
+const FAULT_BUDGET: f64 = 1e8;
+/// Smallest accepted `solver.tolerance`.
+const MIN_TOLERANCE: f64 = 1e-15;
 /// Largest accepted mesh damping ratio (critical damping is 1).
 const MAX_DAMPING_RATIO: f64 = 10.0;
 /// Largest accepted ratio between the mesh natural frequency and the mesh frequency (either way).
@@ -50,8 +56,13 @@ impl Validator<'_> {
             o.method = m;
         }
         if let Some(t) = s.tolerance {
-            if !(t.is_finite() && t > 0.0 && t < 1.0) {
-                return Err(self.err("solver.tolerance", format!("must be in (0, 1), got {t}")));
+            // below about 5 machine epsilons no estimate can certify a 64-bit solution: 1e-308 was accepted
+            // and spent 20 s of ever finer rk4 grids before its refusal
+            if !(t.is_finite() && (MIN_TOLERANCE..1.0).contains(&t)) {
+                return Err(self.err(
+                    "solver.tolerance",
+                    format!("must be in [{MIN_TOLERANCE:e}, 1) (64-bit rounding is about 2e-16), got {t}"),
+                ));
             }
             o.tolerance = t;
         }
@@ -74,8 +85,10 @@ impl Validator<'_> {
         let mut terms = Vec::new();
         for (i, h) in list.iter().enumerate() {
             let f = format!("{field}[{i}]");
-            if h.order == 0 || h.order > 100_000 {
-                return Err(self.err(&format!("{f}.order"), format!("must be in 1..=100000, got {}", h.order)));
+            if h.order == 0 || h.order as usize > MAX_ERROR_ORDER {
+                return Err(
+                    self.err(&format!("{f}.order"), format!("must be in 1..={MAX_ERROR_ORDER}, got {}", h.order))
+                );
             }
             self.non_negative(&format!("{f}.amplitude_m"), h.amplitude_m)?;
             self.finite(&format!("{f}.phase_rad"), h.phase_rad)?;
@@ -113,6 +126,34 @@ impl Validator<'_> {
                 );
             }
             list.push(ToothFault { tooth: f.tooth as usize, depth_m: f.depth_m, width_teeth: f.width_teeth });
+        }
+        // the narrowest fault sets the series' harmonics (a width of 1e-9 pitches asked for 6e11 bytes and
+        // aborted), each fault costs them all
+        let (narrowest, width) = list
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (i, f.width_teeth))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        let h = gear::gaussian_harmonics(teeth as usize, width, keep);
+        if h.is_nan() || h > MAX_ERROR_ORDER as f64 {
+            return Err(self.err(
+                &format!("{field}[{narrowest}].width_teeth"),
+                format!(
+                    "{width} pitches on {teeth} teeth needs {h:.2e} harmonics of the gear angle (at most {MAX_ERROR_ORDER}, as for errors): widen it to at least {:.3e} pitches",
+                    width * h / MAX_ERROR_ORDER as f64
+                ),
+            ));
+        }
+        let work = h * list.len() as f64;
+        if work > FAULT_BUDGET {
+            return Err(self.err(
+                field,
+                format!(
+                    "{} faults of {} harmonics each: about {work:.1e} terms, beyond the budget of {FAULT_BUDGET:.0e}",
+                    list.len(),
+                    h.ceil()
+                ),
+            ));
         }
         let mut series = gear::gaussian_tooth_faults(teeth as usize, &list, keep);
         let dropped = series.truncate_below(keep * series.max_amplitude());
@@ -380,7 +421,7 @@ impl Validator<'_> {
         if cos.is_empty() && p.cam_sin_m_per_rad.is_empty() {
             return Err(self.err(&format!("{f}.cam_cos_m_per_rad"), "at least one cam coefficient is needed".into()));
         }
-        Ok(PressParams {
+        let params = PressParams {
             speed_rpm: self.positive(&format!("{f}.speed_rpm"), p.speed_rpm)?,
             k1_n_m_per_rad: self
                 .positive(&format!("{f}.torsional_stiffness_n_m_per_rad"), p.torsional_stiffness_n_m_per_rad)?,
@@ -394,7 +435,31 @@ impl Validator<'_> {
             load_n: self.finite(&format!("{f}.load_n"), p.load_n)?,
             cam_cos_m_per_rad: cos,
             cam_sin_m_per_rad: p.cam_sin_m_per_rad.clone(),
-        })
+        };
+        self.press_damping(&params)?;
+        Ok(params)
+    }
+
+    /// Each press damping relative to its critical value 2 sqrt(k m) (the paper's is 0.1): beyond
+    /// `MAX_DAMPING_RATIO` it is no press (and a torsional damping of 1e6 N m s/rad, ratio 5400, made the
+    /// system so stiff that the solve took 20 s).
+    fn press_damping(&self, p: &PressParams) -> Result<(), SceneError> {
+        for (field, c, k, m) in [
+            ("press.torsional_damping_n_m_s_per_rad", p.c1_n_m_s_per_rad, p.k1_n_m_per_rad, p.inertia_kg_m2),
+            ("press.follower_damping_n_s_per_m", p.c2_n_s_per_m, p.k2_n_per_m, p.mass_kg),
+        ] {
+            let ratio = c / (2.0 * (k * m).sqrt());
+            if ratio.is_nan() || ratio > MAX_DAMPING_RATIO {
+                return Err(self.err(
+                    field,
+                    format!(
+                        "{c} is {ratio:.3e} times the critical damping 2 sqrt(k m) = {:.4e}: beyond any press (at most {MAX_DAMPING_RATIO})",
+                        2.0 * (k * m).sqrt()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     pub(super) fn entry(&self, field: &str, e: &RawEntry, period: f64) -> Result<Coefficient, SceneError> {

@@ -191,13 +191,19 @@ pub fn squared_envelope_decimated<T: Sample>(
 /// moved to 0 Hz, inverse transformed at the smallest power of two M holding twice the band, and added at
 /// their place in a record-long decimated envelope. Hann windows at 50 % overlap sum to one, so the sum is
 /// the band's analytic signal (the band's edges blurred by the window's main lobe, 2 bins of the segment).
-/// This shares the transforms of the amplitude spectrum instead of transforming the whole record.
+/// This shares the transforms of the amplitude spectrum instead of transforming the whole record. The
+/// segments come in order, so a position is complete once the next segment starts after it: only the
+/// squared envelope is kept record-long, the complex sums of one segment's span at a time.
 pub struct BandOverlapAdd {
     lo: usize,
     width: usize,
     segment: usize,
     len: usize,
-    c: Vec<(f64, f64)>,
+    /// Squared envelope of the complete positions (record-long, at the decimated rate).
+    e: Vec<f64>,
+    /// Sums of the positions still open, `base ..`.
+    open: Vec<(f64, f64)>,
+    base: isize,
     buf: Vec<(f64, f64)>,
 }
 
@@ -214,11 +220,22 @@ impl BandOverlapAdd {
         let width = hi.min(segment / 2) + 1 - lo.min(hi + 1);
         let len = (2 * width).next_power_of_two().clamp(16, segment);
         let total = (n * len).div_ceil(segment);
-        Ok(Self { lo, width, segment, len, c: vec![(0.0, 0.0); total], buf: vec![(0.0, 0.0); len] })
+        Ok(Self {
+            lo,
+            width,
+            segment,
+            len,
+            e: vec![0.0; total],
+            open: Vec::with_capacity(2 * len),
+            base: 0,
+            buf: vec![(0.0, 0.0); len],
+        })
     }
 
     /// Adds the segment starting at sample `start` (a multiple of half a segment) with one-sided spectrum
-    /// `spec` of its windowed samples.
+    /// `spec` of its windowed samples. Segments come in increasing order of `start` (as
+    /// [`averaged_power_each`](super::spectrum::averaged_power_each) gives them): the positions before
+    /// this segment's are complete.
     pub fn add(&mut self, fft: &mut Fft, start: isize, spec: &[(f64, f64)]) {
         let half = (self.segment / 2) as isize;
         // the band moved to 0 Hz carries exp(-2 pi i lo start / N) = (-1)^(lo start / (N/2)) into the sum
@@ -230,19 +247,42 @@ impl BandOverlapAdd {
         }
         fft.inverse_complex(&mut self.buf);
         let at = start.div_euclid(half) * (self.len / 2) as isize;
+        self.close_before(at);
+        let end = at + self.len as isize;
+        while self.base + (self.open.len() as isize) < end {
+            self.open.push((0.0, 0.0));
+        }
         for (j, b) in self.buf.iter().enumerate() {
-            let i = at + j as isize;
-            if i >= 0 && (i as usize) < self.c.len() {
-                let c = &mut self.c[i as usize];
-                *c = (c.0 + b.0, c.1 + b.1);
+            // a position before the record, or one already complete (a segment out of order), takes nothing
+            let Ok(k) = usize::try_from(at + j as isize - self.base) else { continue };
+            let c = &mut self.open[k];
+            *c = (c.0 + b.0, c.1 + b.1);
+        }
+    }
+
+    /// Moves the open positions before `at` into the squared envelope.
+    fn close_before(&mut self, at: isize) {
+        if self.open.is_empty() {
+            self.base = self.base.max(at);
+            return;
+        }
+        let done = (at.saturating_sub(self.base)).clamp(0, self.open.len() as isize) as usize;
+        for (k, c) in self.open.drain(..done).enumerate() {
+            if let Some(e) = usize::try_from(self.base + k as isize).ok().and_then(|i| self.e.get_mut(i)) {
+                *e = c.0 * c.0 + c.1 * c.1;
             }
+        }
+        self.base += done as isize;
+        if self.open.is_empty() {
+            self.base = self.base.max(at);
         }
     }
 
     /// The squared envelope |c|^2 (scaled as [`squared_envelope`]'s) and its sample rate relative to the
     /// record's.
-    pub fn finish(self) -> (Vec<f64>, f64) {
-        (self.c.iter().map(|(r, i)| r * r + i * i).collect(), self.len as f64 / self.segment as f64)
+    pub fn finish(mut self) -> (Vec<f64>, f64) {
+        self.close_before(isize::MAX);
+        (self.e, self.len as f64 / self.segment as f64)
     }
 
     /// Segment length used.
@@ -274,12 +314,51 @@ pub fn squared_envelope_segments<T: Sample>(
 /// revolution over the whole revolutions of `map`, mean removed, Hann window, amplitude-corrected. Entry k
 /// is order k / revolutions.
 pub fn order_spectrum<T: Sample>(fft: &mut Fft, x: &[T], map: &AngleMap, points: usize) -> (Vec<f64>, Vec<f64>) {
-    let revs = map.revolutions();
+    order_spectrum_over(fft, x, map, points, 0, map.revolutions())
+}
+
+/// [`order_spectrum`] of a long record as the power average of equal parts of at most `max_revs`
+/// revolutions (Welch without overlap): entry k is order k / (revolutions of a part), a steady line reads
+/// its amplitude, and the memory is a part's. Returns the orders, the amplitudes and the revolutions of a
+/// part. A record of up to `max_revs` revolutions is read whole, exactly as [`order_spectrum`] reads it.
+pub fn order_spectrum_parts<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    map: &AngleMap,
+    points: usize,
+    max_revs: usize,
+) -> (Vec<f64>, Vec<f64>, usize) {
+    let parts = map.revolutions().div_ceil(max_revs.max(1)).max(1);
+    if parts == 1 {
+        let (orders, amplitudes) = order_spectrum(fft, x, map, points);
+        return (orders, amplitudes, map.revolutions());
+    }
+    let part = map.revolutions() / parts;
+    let mut power: Vec<f64> = Vec::new();
+    let mut orders = Vec::new();
+    for p in 0..parts {
+        let (o, a) = order_spectrum_over(fft, x, map, points, p * part, part);
+        power.resize(a.len(), 0.0);
+        power.iter_mut().zip(&a).for_each(|(s, v)| *s += v * v / parts as f64);
+        orders = o;
+    }
+    (orders, power.iter().map(|p| p.sqrt()).collect(), part)
+}
+
+/// [`order_spectrum`] of the `revs` revolutions of `map` from revolution `first`.
+fn order_spectrum_over<T: Sample>(
+    fft: &mut Fft,
+    x: &[T],
+    map: &AngleMap,
+    points: usize,
+    first: usize,
+    revs: usize,
+) -> (Vec<f64>, Vec<f64>) {
     let n = revs * points;
     // the Hann window (periodic, as `spectrum::hann`) applied as it is computed: a 60 s record's order
     // spectrum holds no array of its length besides the samples and their spectrum
     let mut y = vec![0.0; n];
-    map.resample(x, 0.0, 1.0 / points as f64, &mut y);
+    map.resample(x, first as f64, 1.0 / points as f64, &mut y);
     let mean = y.iter().sum::<f64>() / n.max(1) as f64;
     let step = 2.0 * std::f64::consts::PI / n as f64;
     let mut gain = 0.0;
@@ -579,5 +658,56 @@ mod tests {
         // (1e-3) and the starts' linear crossing times (about 1e-4 revolution)
         assert!((at(3.0) - 1.0).abs() < 0.01, "{}", at(3.0));
         assert!((at(14.0) - 0.5).abs() < 0.01, "{}", at(14.0));
+        // in parts of at most 256 revolutions (about 1050 here: 5 parts of about 210), averaged in power:
+        // the steady lines read the same amplitudes (each part's orders on its bins, as above)
+        let (o5, a5, part) = order_spectrum_parts(&mut Fft::new(), &x, &map, 64, 256);
+        assert_eq!(part, map.revolutions() / 5);
+        assert!((o5[1] - 1.0 / part as f64).abs() < 1e-15);
+        let at5 = |o: f64| a5[(o * part as f64).round() as usize];
+        assert!((at5(3.0) - 1.0).abs() < 0.01, "{}", at5(3.0));
+        assert!((at5(14.0) - 0.5).abs() < 0.01, "{}", at5(14.0));
+        // a record within the limit is read whole, exactly as order_spectrum reads it
+        let (o1, a1, whole) = order_spectrum_parts(&mut Fft::new(), &x, &map, 64, 4096);
+        assert_eq!((o1, a1, whole), (orders, amps, map.revolutions()));
+    }
+
+    /// The overlap-add keeps only one segment's span of open sums; what it returns is, to the bit, the
+    /// record-long accumulation it replaced (every position's sum of the segments over it, in order).
+    #[test]
+    fn streamed_overlap_add_is_the_record_long_sum() {
+        let (n, segment, fs) = (20_000usize, 1024usize, 8192.0);
+        let mut state = 7u64;
+        let x: Vec<f64> = (0..n)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let (streamed, r) = squared_envelope_segments(&mut Fft::new(), &x, fs, 700.0, 1500.0, segment).unwrap();
+        // the reference: each segment's band inverse-transformed and added at its place in a record-long sum
+        let probe = BandOverlapAdd::new(n, segment, fs, 700.0, 1500.0).unwrap();
+        let (lo, width, len) = (probe.lo, probe.width, probe.len);
+        let mut c = vec![(0.0f64, 0.0f64); (n * len).div_ceil(segment)];
+        let mut fft = Fft::new();
+        let half = (segment / 2) as isize;
+        super::super::spectrum::averaged_power_each(&mut Fft::new(), &x, segment, 0.5, "t", true, |_, start, spec| {
+            let sign = if ((start.div_euclid(half)) * lo as isize).rem_euclid(2) == 0 { 1.0 } else { -1.0 };
+            let scale = 2.0 * sign / segment as f64;
+            let mut buf = vec![(0.0, 0.0); len];
+            for (b, v) in buf.iter_mut().zip(&spec[lo..lo + width]) {
+                *b = (scale * v.0, scale * v.1);
+            }
+            fft.inverse_complex(&mut buf);
+            let at = start.div_euclid(half) * (len / 2) as isize;
+            for (j, b) in buf.iter().enumerate() {
+                if let Some(v) = usize::try_from(at + j as isize).ok().and_then(|i| c.get_mut(i)) {
+                    *v = (v.0 + b.0, v.1 + b.1);
+                }
+            }
+        })
+        .unwrap();
+        let reference: Vec<f64> = c.iter().map(|(re, im)| re * re + im * im).collect();
+        assert_eq!(r, len as f64 / segment as f64);
+        assert!(streamed == reference, "the streamed envelope differs from the record-long sum");
     }
 }

@@ -5,6 +5,7 @@ pub mod angle;
 pub mod envelope;
 pub mod indicators;
 pub mod interpolate;
+pub mod mesh_comb;
 pub mod order_map;
 pub mod planetary;
 pub mod spectrum;

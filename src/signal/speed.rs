@@ -106,10 +106,39 @@ pub fn estimate_period<T: Sample>(
         // a short lag cannot be a shaft period (fewer than 64 samples per revolution): look for the shaft
         // among its multiples
         _ if shortest < 64 => comb_outlier(&sum, shortest, lag_max).unwrap_or(shortest),
-        _ => shortest,
+        _ => whole_fraction(&sum, shortest, &dominant).unwrap_or(shortest),
     };
-    let mesh_lag = (p0 != shortest).then(|| refine(&sum, shortest as f64));
-    Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence: sum[p0], mesh_lag })
+    let mesh_lag = (p0 > shortest).then(|| refine(&sum, shortest as f64));
+    // a whole fraction of the shortest strong period rests on that period's repetition
+    let confidence = if p0 < shortest { sum[shortest] } else { sum[p0] };
+    Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence, mesh_lag })
+}
+
+/// Lowest share of the period's autocorrelation that each multiple of a whole fraction of it must keep
+/// for the fraction to be the shaft: a pair whose teeth share a factor repeats wholly only after a few
+/// revolutions (the hunting period, on a real rig 0.44 against 0.14-0.21 at each revolution), while a
+/// lag that is no revolution holds no dominant peak at all.
+const FRACTION_SHARE: f64 = 0.25;
+
+/// The shaft period inside a period `p` that is a few revolutions of it (the hunting period of a pair,
+/// or the slower shaft): the smallest whole fraction p / k (k = 6 down to 2, at least 64 samples) whose
+/// every multiple j p / k (j < k) is a peak dominating +-10 % of its lag (`dominant`) and keeps
+/// [`FRACTION_SHARE`] of the autocorrelation at p. `None` when no fraction repeats so.
+fn whole_fraction(sum: &[f64], p: usize, dominant: &dyn Fn(usize) -> bool) -> Option<usize> {
+    let peak_near = |centre: usize| -> usize {
+        let w = (centre / 50).max(2);
+        (centre.saturating_sub(w).max(1)..=(centre + w).min(sum.len() - 1))
+            .max_by(|a, b| sum[*a].total_cmp(&sum[*b]))
+            .unwrap_or(centre)
+    };
+    (2..=6usize).rev().find_map(|k| {
+        let q = peak_near((p as f64 / k as f64).round() as usize);
+        let repeats = (1..k).all(|j| {
+            let i = peak_near(j * q);
+            dominant(i) && sum[i] >= FRACTION_SHARE * sum[p]
+        });
+        (q >= 64 && repeats).then_some(q)
+    })
 }
 
 /// The shaft period among the multiples j m of the mesh lag m (j >= 8) when it stands out of the comb of
@@ -332,17 +361,9 @@ pub fn teeth_candidates<T: Sample>(
     let segment = (x.len() / 16).next_power_of_two().clamp(1024, 1 << 15);
     let (power, n) = super::spectrum::averaged_power(fft, x, segment.min(x.len()), 0.5, "teeth comb spectrum")?;
     let amp: Vec<f64> = power.iter().map(|p| p.max(0.0).sqrt()).collect();
-    // the local floor: the median of blocks of 128 bins
-    let block = 128;
-    let floors: Vec<f64> = amp
-        .chunks(block)
-        .map(|c| {
-            let mut v = c.to_vec();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2].max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let floor = |bin: usize| floors[(bin / block).min(floors.len() - 1)];
+    // the local floor: the median of blocks of 128 bins (the median commutes with the square root)
+    let floors: Vec<f64> = super::mesh_comb::local_floor(&power).iter().map(|p| p.sqrt()).collect();
+    let floor = |bin: usize| floors[bin.min(floors.len() - 1)];
     // a line stands when a local maximum of the spectrum within a bin of it is that far over the floor (the
     // slope of a hump smeared by the speed's wander is not a line of its own)
     let stands = |f: f64| -> bool {
@@ -452,6 +473,39 @@ mod tests {
             .map(|j| 0.8 + ripple(j) + [14, 39, 23].iter().map(|q| if j % q == 0 { 0.05 } else { 0.0 }).sum::<f64>())
             .collect();
         assert_eq!(whole_cycle_period(&three, 8), None);
+    }
+
+    /// A pair whose signal repeats wholly only every five revolutions (a pattern of period 5 p, the hunting
+    /// period) over a weaker pattern of each revolution p and noise: the shaft is p, not 5 p, though the
+    /// autocorrelation peaks highest at 5 p; a signal with no revolution pattern keeps 5 p.
+    #[test]
+    fn estimate_period_takes_the_revolution_inside_a_hunting_period() {
+        let (p, n) = (431.0, 100_000);
+        let mut seed = 7u64;
+        let mut noise = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        // orders k / 5 of the shaft (k = 1..30, phases spread by the golden angle) for the five-revolution
+        // pattern, orders 1..3 for the revolution's own
+        let pattern =
+            |th: f64, orders: &[(f64, f64)]| orders.iter().map(|(k, a)| a * (k * th + 2.4 * k * k).sin()).sum::<f64>();
+        let hunting: Vec<(f64, f64)> = (1..=30).map(|k| (k as f64, 0.35)).collect();
+        let shaft = [(1.0, 1.0), (2.0, 1.0), (3.0, 1.0)];
+        let make = |with_shaft: bool, noise: &mut dyn FnMut() -> f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| {
+                    let th = 2.0 * PI * i as f64 / p;
+                    pattern(th / 5.0, &hunting) + if with_shaft { pattern(th, &shaft) } else { 0.0 } + 2.0 * noise()
+                })
+                .collect()
+        };
+        let x = make(true, &mut noise);
+        let e = estimate_period(&mut Fft::new(), &[&x], 64, 4000).unwrap();
+        assert!((e.period_samples / p - 1.0).abs() < 0.005, "{}", e.period_samples);
+        let y = make(false, &mut noise);
+        let e = estimate_period(&mut Fft::new(), &[&y], 64, 4000).unwrap();
+        assert!((e.period_samples / (5.0 * p) - 1.0).abs() < 0.005, "{}", e.period_samples);
     }
 
     #[test]

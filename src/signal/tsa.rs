@@ -145,9 +145,19 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
     let revs = revolutions_of(map, ratio);
     if revs < min_revs {
         let per_rev = map.mean_period_samples() / ratio;
+        let needed = (min_revs as f64 * per_rev).ceil() as usize + 2;
+        if needed <= x.len() {
+            // the record is long enough but the angle does not cover it (a tracked angle ends where the
+            // line could be followed, a pulse train at its first and last pulse): say so, not "too short"
+            let (a, b) = (map.sample_at(0.0), map.sample_at(map.revolutions() as f64));
+            return Err(SignalError::Invalid(format!(
+                "time-synchronous average: {revs} whole revolutions of {per_rev:.1} samples lie within the followed angle (samples {a:.0} to {b:.0} of {}), {min_revs} are needed",
+                x.len()
+            )));
+        }
         return Err(SignalError::TooShort {
             what: format!("time-synchronous average ({min_revs} revolutions of {per_rev:.1} samples)"),
-            needed: (min_revs as f64 * per_rev).ceil() as usize + 2,
+            needed,
             got: x.len(),
         });
     }
@@ -340,6 +350,22 @@ pub struct Decomposition {
 
 /// Splits a TSA by bin masking. `mesh_order` is the mesh order z of the averaged shaft (its teeth).
 pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: usize) -> Decomposition {
+    decompose_many(fft, tsa, &[mesh_order], &[], shaft_orders)
+}
+
+/// [`decompose`] of the average of a shaft that carries several gears (an intermediate shaft: one gear per
+/// stage): the harmonics of every mesh order in `mesh_orders` are regular, and the first-order sidebands of
+/// every one are left out of the difference signal. `foreign_orders` are lines of other shafts (the mesh
+/// harmonics of stages the shaft does not carry): at an order that is not whole, what an average of a few
+/// revolutions leaves of them sits in the bins within one order, which are counted as regular too; a whole
+/// order (stages with a short common period) is its own bin.
+pub fn decompose_many(
+    fft: &mut Fft,
+    tsa: &[f64],
+    mesh_orders: &[usize],
+    foreign_orders: &[f64],
+    shaft_orders: usize,
+) -> Decomposition {
     let l = tsa.len();
     let mut spec = Vec::new();
     fft.forward(&mut tsa.to_vec(), &mut spec);
@@ -349,10 +375,20 @@ pub fn decompose(fft: &mut Fft, tsa: &[f64], mesh_order: usize, shaft_orders: us
         .map(|(k, c)| if k == 0 || k == l / 2 { 1.0 } else { 2.0 } * super::spectrum::magnitude(*c) / l as f64)
         .collect();
     let nb = spec.len();
-    let is_mesh = |k: usize| mesh_order > 0 && k.is_multiple_of(mesh_order);
-    let is_side =
-        |k: usize| mesh_order > 0 && (k % mesh_order == 1 || k % mesh_order == mesh_order - 1) && k + 1 >= mesh_order;
-    let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k));
+    let is_mesh = |k: usize| mesh_orders.iter().any(|&z| z > 0 && k.is_multiple_of(z));
+    let is_side = |k: usize| mesh_orders.iter().any(|&z| z > 0 && (k % z == 1 || k % z == z - 1) && k + 1 >= z);
+    let mut foreign = vec![false; spec.len()];
+    for &f in foreign_orders.iter().filter(|f| f.is_finite() && **f >= 0.0) {
+        // a whole order up to rounding in the ratio chain's floating point: its own bin only
+        let f = if (f - f.round()).abs() < 1e-9 { f.round() } else { f };
+        for k in [f.floor() as usize, f.ceil() as usize] {
+            if let Some(b) = foreign.get_mut(k) {
+                *b |= (k as f64 - f).abs() < 1.0;
+            }
+        }
+    }
+    let is_foreign = |k: usize| foreign[k];
+    let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k) || is_foreign(k));
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()
     };
@@ -456,6 +492,25 @@ mod tests {
             assert!((d.difference[i] - 0.05 * (5.0 * th).cos()).abs() < 1e-12);
         }
         assert!((d.amplitudes[0] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_whole_foreign_order_takes_its_own_bin_only() {
+        // mesh 8; another stage's mesh line at order 20 given as 20 + 1e-12 (the ratio chain's rounding),
+        // and a line at 21 that is nobody's: the first is regular, the second stays in the residual
+        let l = 64;
+        let x: Vec<f64> = (0..l)
+            .map(|i| {
+                let th = 2.0 * PI * i as f64 / l as f64;
+                (8.0 * th).cos() + 3.0 * (20.0 * th).cos() + 0.1 * (21.0 * th).cos()
+            })
+            .collect();
+        let d = decompose_many(&mut Fft::new(), &x, &[8], &[20.0 + 1e-12], 1);
+        for i in 0..l {
+            let th = 2.0 * PI * i as f64 / l as f64;
+            // exact bins of an exact FFT: round-off only
+            assert!((d.residual[i] - 0.1 * (21.0 * th).cos()).abs() < 1e-12, "{i}");
+        }
     }
 
     #[test]

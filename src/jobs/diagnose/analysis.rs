@@ -6,15 +6,33 @@ use super::*;
 /// Diagnosis of a recording already read (channels checked here): the whole pipeline for one file.
 pub(super) fn analyse(
     path: &Path,
-    mut rec: Recording,
+    rec: Recording,
     o: &Options,
     geometry: Option<&Geometry>,
 ) -> Result<Diagnosis, Error> {
+    analyse_parts(path, rec, o, geometry).map(|a| a.diagnosis)
+}
+
+/// What [`analyse_parts`] leaves besides the diagnosis, for a machine's further stages: the tracked angle
+/// and the deciding channel's samples.
+pub(super) struct Analysed<'a> {
+    pub diagnosis: Diagnosis,
+    pub map: AngleMap,
+    pub deciding: std::borrow::Cow<'a, [f32]>,
+}
+
+/// [`analyse`], keeping the tracked angle and the deciding channel.
+pub(super) fn analyse_parts<'a>(
+    path: &Path,
+    mut rec: Recording<'a>,
+    o: &Options,
+    geometry: Option<&Geometry>,
+) -> Result<Analysed<'a>, Error> {
     let mut warnings = std::mem::take(&mut rec.warnings);
     let Checked { tacho, channels, moments, samples: n, fs } = check_recording(path, &rec, o, &mut warnings)?;
     let mut fft = Fft::new();
     let nominal = nominal_speed(path, &rec, &channels, o, fs, geometry, &mut fft, &mut warnings)?;
-    let (source, confidence) = (nominal.source, nominal.confidence);
+    let (source, confidence, speed_doubt) = (nominal.source, nominal.confidence, nominal.doubt.clone());
     let nominal_mesh_from_lag = nominal.mesh_order.is_some();
     let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
     let (map, tracking, line_snr_db, tracked_z) = track(path, &rec, &channels, o, known_z, nominal.map, &mut warnings)?;
@@ -59,10 +77,18 @@ pub(super) fn analyse(
     // ---- TSA of the reference shaft first (needed to find the mesh when teeth are unknown); a given or
     // measured speed is the pinion's, an estimated period belongs to a shaft nobody named
     let reference = if source == SpeedSource::Estimated { Shaft::Estimated } else { Shaft::Pinion };
-    let gears: Vec<(Shaft, f64, Option<usize>)> = match o.teeth {
-        Some((zp, zw)) => vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))],
-        None => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
+    // with a machine: every shaft with a gear whose mesh is a whole order of it, the tracked shaft first,
+    // each with the mesh orders of its other gears (removed from its regular signal too)
+    let machine_shafts = o.machine.as_ref().map(|m| super::machine::averaged_shafts(m.machine(), o));
+    let gears: Vec<(Shaft, f64, Option<usize>)> = match (&machine_shafts, o.teeth) {
+        (Some(ms), _) => ms.iter().map(|s| (s.shaft, s.ratio, Some(s.mesh_orders[0]))).collect(),
+        (None, Some((zp, zw))) => {
+            vec![(Shaft::Pinion, 1.0, Some(zp)), (Shaft::Wheel, zp as f64 / zw as f64, Some(zw))]
+        }
+        (None, None) => vec![(reference, 1.0, geometry.and_then(|g| g.mesh_order).or(tracked_z))],
     };
+    let none = OtherLines::default();
+    let others = |gi: usize| machine_shafts.as_ref().map_or(&none, |ms| &ms[gi].others);
     // a mesh order known now must fit the averages' resolution before their blocks are scored
     for &(name, _, z) in &gears {
         if let Some(z) = z {
@@ -77,6 +103,8 @@ pub(super) fn analyse(
     // angle of the first channel: at the same time as the TSAs when the mesh order is known already
     let first = channels[0];
     let teeth_scan = |z: usize| match o.teeth {
+        // a machine's stages are given whole: no pair's wheel to check
+        Some(_) if o.machine.is_some() => (None, None),
         Some((_, zw)) => (wheel_teeth(&rec.channels[first - 1], &map, z, zw), None),
         None => {
             let other = other_gear_teeth(&rec.channels[first - 1], &map, z);
@@ -88,7 +116,7 @@ pub(super) fn analyse(
             let mut out = Vec::new();
             for (gi, &(_, ratio, z)) in gears.iter().enumerate() {
                 let on_block = |fft: &mut Fft, _: usize, b: &[f64]| match z {
-                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, o.shaft_orders)),
+                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, others(gi), o.shaft_orders)),
                     None => PendingBlock::Raw(b.to_vec()),
                 };
                 let per_channel =
@@ -145,7 +173,7 @@ pub(super) fn analyse(
                 ));
             }
         }
-        if o.teeth.is_some() {
+        if o.teeth.is_some() && o.machine.is_none() {
             if let Some(w) = teeth_misfit(tsas.iter().filter(|t| t.1 == gi).map(|t| t.2.samples.as_slice()), z, *name) {
                 warnings.push(w);
             }
@@ -159,7 +187,7 @@ pub(super) fn analyse(
         }
         mesh_orders.push(z);
         for (i, (c, _, t)) in tsas.iter().enumerate().filter(|(_, t)| t.1 == gi) {
-            pending.push((*name, *c, z, t, std::mem::take(&mut block_lists[i])));
+            pending.push((*name, *c, z, others(gi), t, std::mem::take(&mut block_lists[i])));
         }
     }
     // ---- the gears' indicators, and at the same time the teeth scan when it waited for the mesh order;
@@ -174,14 +202,14 @@ pub(super) fn analyse(
         || {
             pending
                 .into_par_iter()
-                .map(|(name, c, z, t, blocks)| {
+                .map(|(name, c, z, others, t, blocks)| {
                     let mut fft = Fft::new();
-                    let mut g = gear_indicators(&mut fft, name, c, z, t, o.shaft_orders);
+                    let mut g = gear_indicators(&mut fft, name, c, z, others, t, o.shaft_orders);
                     g.blocks = blocks
                         .into_iter()
                         .map(|b| match b {
                             PendingBlock::Done(b) => b,
-                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, o.shaft_orders),
+                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders),
                         })
                         .collect();
                     g
@@ -226,10 +254,13 @@ pub(super) fn analyse(
         .collect();
     // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map)
     free_other_channels(&mut rec, &channels, first);
-    let shafts = match o.teeth {
-        Some((zp, zw)) => ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) },
-        None if reference == Shaft::Pinion => ShaftHz::Pinion { pinion: shaft_hz },
-        None => ShaftHz::Estimated { estimated_shaft: shaft_hz },
+    let shafts = match (&machine_shafts, o.teeth) {
+        (Some(_), _) => super::machine::shaft_hz(o, shaft_hz),
+        (None, Some((zp, zw))) => {
+            ShaftHz::Pair { pinion: shaft_hz, wheel: shaft_hz.map(|f| f * zp as f64 / zw as f64) }
+        }
+        (None, None) if reference == Shaft::Pinion => ShaftHz::Pinion { pinion: shaft_hz },
+        (None, None) => ShaftHz::Estimated { estimated_shaft: shaft_hz },
     };
     let mut deciding = None;
     let spectra = spectra
@@ -250,6 +281,7 @@ pub(super) fn analyse(
         shaft_period_samples: period,
         speed_source: source,
         speed_confidence: confidence,
+        speed_doubt,
         speed_given_hz: speed_given.map(|g| g.0),
         speed_deviation_percent: speed_given.map(|g| g.1),
         speed_profile,
@@ -272,6 +304,7 @@ pub(super) fn analyse(
         baseline_spectra: Vec::new(),
         baseline_tsas: Vec::new(),
         order_map: None,
+        machine: None,
     };
     d.mesh_harmonics = mesh_harmonics(&d, channels[0], &ratios);
     if let Some(g) = d.gears.first() {
@@ -317,7 +350,8 @@ pub(super) fn analyse(
     if (profile.max - profile.min) > ORDER_MAP_SPEED_CHANGE * profile.mean {
         d.order_map = order_map(&mut fft, &rec.channels[channels[0] - 1], &map, d.mesh_order);
     }
-    Ok(d)
+    let deciding = std::mem::take(&mut rec.channels[first - 1]);
+    Ok(Analysed { diagnosis: d, map, deciding })
 }
 
 /// A mesh order `z` that the TSA of `points` samples per revolution of `gear` resolves with room for its
@@ -363,10 +397,11 @@ pub(super) fn gear_indicators(
     gear: Shaft,
     channel: usize,
     z: usize,
+    others: &OtherLines,
     t: &tsa::Tsa,
     shaft_orders: usize,
 ) -> GearIndicators {
-    let (indicators, d) = tsa_indicators(fft, &t.samples, z, shaft_orders);
+    let (indicators, d) = tsa_indicators(fft, &t.samples, z, others, shaft_orders);
     GearIndicators {
         gear,
         channel,
@@ -381,14 +416,28 @@ pub(super) fn gear_indicators(
     }
 }
 
-/// The condition indicators of one TSA of a gear with mesh order `z`, and its decomposition.
+/// With a machine, the lines of an averaged shaft besides its gear's mesh: its other gears' mesh orders, and
+/// the other stages' mesh harmonics in its orders, both counted as regular.
+#[derive(Clone, Debug, Default)]
+pub(super) struct OtherLines {
+    pub mesh: Vec<usize>,
+    pub foreign: Vec<f64>,
+}
+
+/// The condition indicators of one TSA of a gear with mesh order `z` (its shaft's other lines `others`),
+/// and its decomposition.
 pub(super) fn tsa_indicators(
     fft: &mut Fft,
     x: &[f64],
     z: usize,
+    others: &OtherLines,
     shaft_orders: usize,
 ) -> (BTreeMap<String, f64>, Decomposition) {
-    let d = tsa::decompose(fft, x, z, shaft_orders);
+    let d = if others.mesh.is_empty() && others.foreign.is_empty() {
+        tsa::decompose(fft, x, z, shaft_orders)
+    } else {
+        tsa::decompose_many(fft, x, &[&[z][..], &others.mesh].concat(), &others.foreign, shaft_orders)
+    };
     let Decomposition { amplitudes, regular, residual, difference } = &d;
     let mesh_amps: Vec<f64> =
         (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
@@ -431,9 +480,10 @@ pub(super) fn block_indicators(
     fft: &mut Fft,
     block: &[f64],
     z: usize,
+    others: &OtherLines,
     shaft_orders: usize,
 ) -> crate::report::summary::Block {
-    let (mut indicators, d) = tsa_indicators(fft, block, z, shaft_orders);
+    let (mut indicators, d) = tsa_indicators(fft, block, z, others, shaft_orders);
     let n = d.residual.len() as f64;
     let mean = d.residual.iter().sum::<f64>() / n;
     indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);

@@ -9,11 +9,19 @@ use crate::signal::spectrum::AmplitudeOptions;
 /// Speed range (slowest to fastest revolution, over the mean) above which the rpm-order map is drawn.
 pub(super) const ORDER_MAP_SPEED_CHANGE: f64 = 0.02;
 
+/// Mesh harmonics (with the sidebands of the last) drawn in the rpm-order map when the sample rate keeps
+/// them: a gear's mesh harmonics beyond the fifth seldom carry what the first five do not.
+const ORDER_MAP_MESH_HARMONICS: f64 = 5.5;
+
 /// The rpm-order map of a recording whose speed changes: segments of 8 revolutions advancing by 4 (order
-/// resolution 1/8), orders up to 3.5 mesh orders (three mesh harmonics and their sidebands). `None` when
-/// the recording holds too few revolutions.
+/// resolution 1/8), orders up to [`ORDER_MAP_MESH_HARMONICS`] mesh orders, or as far as the sample rate
+/// reaches at the fastest revolution (0.45 of its samples per revolution, under the anti-alias filter's
+/// edge), and at least 1.5 mesh orders. `None` when the recording holds too few revolutions.
 pub(super) fn order_map(fft: &mut Fft, x: &[f32], map: &AngleMap, mesh_order: usize) -> Option<OrderMap> {
-    let max_order = 3.5 * mesh_order.max(1) as f64;
+    let mesh = mesh_order.max(1) as f64;
+    let fastest = angle::SpeedProfile::of(map).max;
+    let nyquist_order = if fastest > 0.0 { 0.45 / fastest } else { f64::INFINITY };
+    let max_order = (ORDER_MAP_MESH_HARMONICS * mesh).min(nyquist_order).max(1.5 * mesh);
     let points = ((3.0 * max_order) as usize).next_power_of_two().max(64);
     crate::signal::order_map::order_map(fft, x, map, points, 8, 4, max_order).ok()
 }
@@ -62,9 +70,14 @@ pub(super) fn envelope_band<T: crate::signal::Sample>(
     Ok(EnvelopeBand { kurtogram, level, band_hz: (lo, hi), given: band.is_some() })
 }
 
+/// Most revolutions the envelope's order spectrum transforms at once: a longer record's is the power
+/// average of parts of at most this many (resolution 1/4096 of an order; a one-hour record's whole would
+/// take 300 MB at once and print 7 million lines).
+const ENVELOPE_REVS: usize = 4096;
+
 /// Envelope analysis of one channel from its band and the band's squared envelope `e` at the rate `r`
 /// relative to the record's (from [`BandOverlapAdd`](crate::signal::envelope::BandOverlapAdd)): the
-/// envelope's order spectrum on the tracked angle and its lines at orders 1..=3 of each shaft.
+/// envelope's order spectrum on the tracked angle (a long record's averaged over parts of [`ENVELOPE_REVS`]) and its lines at orders 1..=3 of each shaft.
 pub(super) fn envelope(
     fft: &mut Fft,
     band: EnvelopeBand,
@@ -83,8 +96,8 @@ pub(super) fn envelope(
     let points = (needed.ceil() as usize)
         .next_power_of_two()
         .clamp(32, ((period * r).ceil() as usize).next_power_of_two().clamp(32, 4096));
-    let (orders, amplitudes) = env::order_spectrum(fft, e, &scaled, points);
-    let revs = map.revolutions().max(1) as f64;
+    let (orders, amplitudes, revs) = env::order_spectrum_parts(fft, e, &scaled, points, ENVELOPE_REVS);
+    let revs = revs.max(1) as f64;
     let at = |o: f64| -> (f64, f64) {
         let i = (o * revs).round() as usize;
         let a = (i.saturating_sub(2)..=i + 2).filter_map(|j| amplitudes.get(j)).copied().fold(0.0, f64::max);

@@ -13,6 +13,7 @@ pub mod baseline;
 mod beyond;
 mod compare;
 mod compat;
+mod machine;
 pub mod profile;
 mod recording;
 mod teeth;
@@ -48,7 +49,7 @@ use crate::signal::indicators as ind;
 use crate::signal::order_map::OrderMap;
 use crate::signal::spectrum::Fft;
 use crate::signal::tsa::{self, AngleMap, Decomposition};
-use crate::signal::{angle, speed};
+use crate::signal::{angle, mesh_comb, speed};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -214,6 +215,8 @@ pub struct Prepared {
     geometry: Option<Geometry>,
     reference: Option<baseline::Reference>,
     scene: Option<compare::ModelScene>,
+    /// With a machine: the healthy recordings' planet-fault energies of each planetary stage.
+    planets: Option<Vec<crate::report::summary::PlanetBaseline>>,
 }
 
 /// The first healthy recording's amplitude spectra per channel and its averages per channel and gear.
@@ -237,6 +240,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
             geometry: Some(p.geometry),
             reference: Some(p.reference),
             scene,
+            planets: p.planets,
         });
     }
     let mut learned = learn_baseline(&job.baselines, &job.options)?;
@@ -285,7 +289,12 @@ fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Erro
     let plots = baselines
         .first()
         .map(|b| (b.spectra.clone(), b.gears.iter().map(|g| (g.channel, g.gear, g.tsa.clone())).collect::<Vec<_>>()));
-    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None })
+    let planets = opts
+        .machine
+        .is_some()
+        .then(|| crate::report::summary::PlanetBaseline::of(baselines.iter().filter_map(|b| b.machine.as_ref())))
+        .filter(|p| !p.is_empty());
+    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, planets })
 }
 
 /// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
@@ -368,8 +377,16 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     }
     history.apply(&mut d);
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
-    if let Some(e) = p.facts.as_ref().and_then(|b| b.envelope.as_ref()) {
-        verdict::envelope_evidence(&mut d, e);
+    match &p.facts {
+        Some(b) => {
+            if let Some(e) = &b.envelope {
+                verdict::envelope_evidence(&mut d, e);
+            }
+        }
+        None => verdict::envelope_absolute(&mut d),
+    }
+    if let Some(m) = &p.opts.machine {
+        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref());
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);
@@ -488,6 +505,12 @@ pub struct Options {
     pub block_revs: Option<usize>,
     /// Shaft orders 1..=n counted as regular.
     pub shaft_orders: usize,
+    /// A machine file (`--machine`): every shaft's speed from its ratio chain on the tracked angle, every
+    /// stage's lines, a TSA per shaft, the planets of a planetary stage. `shaft_hz` is then the speed of the
+    /// machine's `speed.shaft` (else its reference shaft) and `teeth` must not be given; the tachometer, the
+    /// nominal speed and the sensors' unit come from the file unless given. A profile stores it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine: Option<crate::scene::machine::MachineFile>,
     /// Amplitude spectra of every analysed channel, not only of the deciding one (the first): the text,
     /// the JSON and the images use the deciding channel's alone; a library caller may want them all.
     #[serde(skip)]
@@ -522,6 +545,7 @@ impl Default for Options {
             min_revolutions: 8,
             block_revs: None,
             shaft_orders: 2,
+            machine: None,
             all_spectra: false,
         }
     }

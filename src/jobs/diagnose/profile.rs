@@ -36,6 +36,10 @@ pub struct Profile {
     pub baseline: BaselineFacts,
     /// Per gear and channel, each deciding indicator's distribution over the healthy blocks.
     pub reference: Reference,
+    /// With a machine that has a planetary stage: the healthy planet-fault energies of each planet (absent
+    /// from profiles without one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planets: Option<Vec<crate::report::summary::PlanetBaseline>>,
 }
 
 /// A `learn` call: healthy recordings (files or directories), the options they are analysed with, and
@@ -74,6 +78,7 @@ pub fn learn(job: &LearnJob) -> Result<Profile, Error> {
         geometry,
         baseline: facts,
         reference,
+        planets: p.planets,
     };
     let text = serde_json::to_string_pretty(&profile).map_err(|e| bad(&job.output, e))?;
     crate::io::write_atomic(&job.output, text.as_bytes())?;

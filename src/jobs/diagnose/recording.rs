@@ -8,6 +8,19 @@ use super::*;
 /// # Errors
 /// Unreadable file, bad channel or sample rate, constant or non-finite data, too short for the TSA.
 pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result<Diagnosis, Error> {
+    if let Some(m) = &o.machine {
+        return super::machine::diagnose(path, o, m.machine(), geometry);
+    }
+    let (rec, o) = read(path, o)?;
+    analyse(path, rec, &o, geometry)
+}
+
+/// Reads the channels of `path` that the diagnosis uses (units applied), and the options with the
+/// tachometer in use (given, or the sidecar's).
+///
+/// # Errors
+/// Unreadable file.
+pub(super) fn read(path: &Path, o: &Options) -> Result<(Recording<'static>, Options), Error> {
     // with one channel asked for, only it and the tachometer are decoded (a long multi-channel WAV then
     // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
     // tachometer in use are not decoded either (they are never analysed as vibration)
@@ -28,7 +41,7 @@ pub fn diagnose(path: &Path, o: &Options, geometry: Option<&Geometry>) -> Result
     };
     let mut rec = io::read_recording_channels(path, keep.as_deref())?;
     apply_units(&mut rec, o, tacho);
-    analyse(path, rec, &Options { tacho_channel: tacho, ..o.clone() }, geometry)
+    Ok((rec, Options { tacho_channel: tacho, ..o.clone() }))
 }
 
 /// Diagnoses a recording held in memory under `name` (no sidecar: a tachometer channel must be named by
@@ -42,6 +55,9 @@ pub fn diagnose_in_memory(
     o: &Options,
     geometry: Option<&Geometry>,
 ) -> Result<Diagnosis, Error> {
+    if let Some(m) = &o.machine {
+        return super::machine::diagnose_in_memory(name, rec, o, m.machine(), geometry);
+    }
     apply_units(&mut rec, o, o.tacho_channel);
     analyse(name, rec, o, geometry)
 }
@@ -265,4 +281,31 @@ pub(super) fn check_recording(
         warnings.extend(w);
     }
     Ok(Checked { tacho, channels, moments, samples: n, fs })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch's catch ([`caught`](super::caught)): a panic while one recording is diagnosed, in its
+    /// thread or a worker's, becomes that recording's error naming the file (the batch goes on and the
+    /// exit code says it failed); a result passes through.
+    #[test]
+    fn a_panic_in_one_recording_is_its_error() {
+        let file = Path::new("hour-long.wav");
+        let e =
+            caught(file, || -> Result<(), Error> { panic!("index out of bounds: the len is 33 but the index is 38") })
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("hour-long.wav") && e.contains("internal error") && e.contains("the index is 38"), "{e}");
+        let e = caught(file, || {
+            let v: Vec<usize> =
+                (0..64usize).into_par_iter().map(|i| if i == 9 { panic!("worker {i}") } else { i }).collect();
+            Ok(v.len())
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("hour-long.wav") && e.contains("worker 9"), "{e}");
+        assert_eq!(caught(file, || Ok(5)).unwrap(), 5);
+    }
 }

@@ -15,6 +15,8 @@ pub(super) struct Nominal {
     pub(super) confidence: f64,
     /// Mesh order from the ratio of the repetition period to the mesh lag (estimated speed only).
     pub(super) mesh_order: Option<usize>,
+    /// Why an estimated speed is too doubtful for a verdict of health to rest on it.
+    pub(super) doubt: Option<String>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -33,7 +35,13 @@ pub(super) fn nominal_speed(
         let pulses = speed::tacho_pulses(&rec.channels[t - 1])
             .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
             .map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
-        return Ok(Nominal { map: pulses, source: SpeedSource::Tachometer, confidence: 1.0, mesh_order: None });
+        return Ok(Nominal {
+            map: pulses,
+            source: SpeedSource::Tachometer,
+            confidence: 1.0,
+            mesh_order: None,
+            doubt: None,
+        });
     }
     if let Some(hz) = o.shaft_hz {
         let fs = fs
@@ -48,6 +56,7 @@ pub(super) fn nominal_speed(
             source: SpeedSource::Given,
             confidence: 1.0,
             mesh_order: None,
+            doubt: None,
         });
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
@@ -58,13 +67,24 @@ pub(super) fn nominal_speed(
             // the baseline's period: a mesh-dominated recording is followed on its mesh line as the
             // baseline was (a 1 % speed fluctuation smears the raw repetition of a whole revolution), and
             // the shaft found there is kept when it is the baseline's within the accepted speed change
+            // with the teeth, the mesh comb as the baseline's own speed was found (one pipeline), kept when it
+            // is the baseline's within the accepted speed change
+            let comb = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs));
+            if let Some(found) = comb.filter(|f| (f.period_samples / p - 1.0).abs() <= MAX_SPEED_DIFFERENCE) {
+                return Ok(found.nominal(n, warnings));
+            }
             let mesh_order = geometry.and_then(|g| g.mesh_order).or(pinion_teeth);
             if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
                 return Ok(found.nominal(n, warnings));
             }
             speed::refine_near(fft, &views, p, 0.03)
         }
-        None => speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2)),
+        None => {
+            if let Some(found) = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs)) {
+                return Ok(found.nominal(n, warnings));
+            }
+            speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2))
+        }
     }
     .map_err(|e| bad(path, e))?;
     // a mesh-dominated signal (its shortest strong repetition is a tooth mesh): the shaft is sought on the
@@ -121,6 +141,7 @@ pub(super) fn nominal_speed(
                 source: SpeedSource::Estimated,
                 confidence: est.confidence,
                 mesh_order: None,
+                doubt: None,
             });
         }
     }
@@ -133,6 +154,12 @@ pub(super) fn nominal_speed(
             .map(|m| (est.period_samples / m).round() as usize)
             .map(|z| fundamental_mesh(&views, est.period_samples, z))
             .filter(|&z| z >= 8),
+        doubt: (est.confidence < UNSURE_REPETITION).then(|| {
+            format!(
+                "the shaft speed was estimated from a repetition of autocorrelation {:.2} (under {UNSURE_REPETITION}): the signal hardly repeats there, so averages on that period cannot clear the machine; give the speed (--rpm) or a tachometer channel",
+                est.confidence
+            )
+        }),
     })
 }
 
@@ -211,6 +238,7 @@ fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, zw: usize) 
         mesh_order: None,
         confidence: top.standing as f64 / top.predicted as f64,
         note,
+        from_comb: false,
     })
 }
 
@@ -241,7 +269,19 @@ struct MeshShaft {
     confidence: f64,
     /// What was done, for the warnings.
     note: String,
+    /// Whether the speed came from the mesh comb (its confidence is then on [`UNSURE_SPEED`]'s scale).
+    from_comb: bool,
 }
+
+/// Confidence of a speed estimated from the teeth (the mesh comb's) under which no verdict of health rests
+/// on it: on generated machines of another physics every wrong comb speed scored under it or called no
+/// gear healthy, while the right ones on clear spectra score 0.5-1. (The autocorrelation's confidence of
+/// the other routes is on another scale: a real rig's right period repeats at 0.16-0.3.)
+const UNSURE_SPEED: f64 = 0.2;
+/// Normalised autocorrelation at an estimated repetition period under which no verdict of health rests on
+/// it: a real rig's right periods repeat at 0.16-0.47 (the bundled SpectraQuest recordings), the wrong
+/// periods taken on generated machines with a broken tooth at 0.03.
+const UNSURE_REPETITION: f64 = 0.1;
 
 impl MeshShaft {
     /// The constant nominal speed over `n` samples, its note added to `warnings`.
@@ -252,6 +292,12 @@ impl MeshShaft {
             source: SpeedSource::Estimated,
             confidence: self.confidence,
             mesh_order: self.mesh_order,
+            doubt: (self.confidence < UNSURE_SPEED && self.from_comb).then(|| {
+                format!(
+                    "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the speed (--rpm) or a tachometer channel",
+                    self.confidence
+                )
+            }),
         }
     }
 }
@@ -280,6 +326,150 @@ fn shaft_near(
     ((found.period_samples / period - 1.0).abs() <= MAX_SPEED_DIFFERENCE).then_some(found)
 }
 
+/// The record resampled on the angle of the line repeating every `mesh_lag` samples, followed on the first
+/// of `channels` where it stands [`MIN_TRACKING_SNR_DB`] over its band: the mean tracked cycle (samples)
+/// and [`MESH_CYCLE_POINTS`] points per cycle.
+///
+/// # Errors
+/// The line cannot be followed on any channel.
+fn follow_line(channels: &[&[f32]], mesh_lag: f64) -> Result<(f64, Vec<f64>), crate::signal::SignalError> {
+    let p = MESH_CYCLE_POINTS;
+    let mut last = None;
+    let found =
+        channels.iter().find_map(|x| match angle::track_mesh(x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES) {
+            Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
+            Ok(_) => None,
+            Err(e) => {
+                last = Some(e);
+                None
+            }
+        });
+    let Some((x, tracked)) = found else {
+        return Err(
+            last.unwrap_or_else(|| crate::signal::SignalError::Invalid("the mesh line is too weak to follow".into()))
+        );
+    };
+    let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
+    let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
+    let mut y = vec![0.0; points];
+    tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
+    Ok((cycle, y))
+}
+
+/// Largest relative difference between the mean cycle of the followed comb line and the comb's spacing
+/// for the line to be that harmonic (the tracked mean is good to 1e-4, the comb's spacing to its grid and
+/// the refinement on the averaged spectrum of a wandering speed: 2 %).
+const COMB_AGREEMENT: f64 = 0.02;
+/// How far (nats of power: 0.69 = 3 dB) every one of the first multiples of m of the best comb must stand
+/// over the comb's lines beside it for the m-th multiple to be the mesh: on a meshing gear the mesh
+/// harmonics stand 5-20 dB over the shaft lines and sidebands around them, while a true mesh comb's
+/// harmonics fall or rise by a few dB from one to the next, seldom alternating over four multiples.
+const MESH_OVER_SHAFT_LINES: f64 = 0.69;
+/// Evidence (nats per segment and channel) from which a mesh comb counts as plainly there: on generated
+/// machines of another physics (noise at 0.35-0.7 of the signal) the right comb scored 8-33 when nothing
+/// masked it, and every comb under 2 that won was a wrong one; the speed's confidence scales down below.
+const STRONG_COMB: f64 = 8.0;
+/// Share of the best candidate's evidence from which the second is said to stand close.
+const CLOSE_COMB: f64 = 0.6;
+/// Highest mesh frequency sought without a speed, cycles per sample: the TSA needs a few samples per
+/// mesh cycle (a quarter of the sample rate leaves four).
+const MESH_HIGHEST: f64 = 0.25;
+
+/// Without a speed but with the teeth `zp`, `zw`: the mesh is the harmonic series of lines that stands
+/// highest in short segments of the record ([`mesh_comb::comb_candidates`], a pinion of at least
+/// `min_revs` revolutions and [`MIN_SAMPLES_PER_REV`] samples per revolution); the pinion revolution is
+/// `zp` of its cycles, the mean cycle from following its strongest low harmonic. The three best combs and
+/// their evidence go into the note (with `fs`, in Hz), and a second comb close to the first is said to be.
+/// (Sidebands on the followed angle were tried as a tie-break and decided wrongly on generated machines
+/// whose sidebands sit in the noise: the comb's own evidence is the stronger.)
+fn shaft_from_comb(
+    fft: &mut Fft,
+    views: &[&[f32]],
+    full: &[&[f32]],
+    (zp, zw): (usize, usize),
+    min_revs: usize,
+    fs: Option<f64>,
+) -> Option<MeshShaft> {
+    let n = full.iter().map(|c| c.len()).min()?;
+    // a pinion of min_revs revolutions with two to spare, its mesh below a quarter of the sample rate
+    let (z_p, z_w) = (zp as f64, zw as f64);
+    let slowest = (min_revs.max(2) + 2) as f64 / n as f64;
+    // (and a revolution long enough for the TSA to resolve both mesh orders with their sidebands:
+    // analysis::check_mesh_order's 2 z + 8 orders within half its points)
+    let fastest = (MESH_HIGHEST / z_p).min(1.0 / MIN_SAMPLES_PER_REV).min(1.0 / (4 * zp.max(zw) + 16) as f64);
+    let evidence = mesh_comb::comb_candidates(
+        fft,
+        views,
+        slowest * z_p.min(z_w) / z_w,
+        MESH_HIGHEST,
+        (zp * min_revs.max(2)) as f64 / n as f64,
+    )
+    .ok()?;
+    // each comb read as the mesh. (Adding the evidence of the two shafts' own combs was tried: a comb at
+    // the mesh rate is also a shaft comb of a shaft turning that fast, and the wander each segment is
+    // allowed blurs a pinion comb into a wheel comb of nearby speed, so it decided worse on the generated
+    // machines than the mesh comb alone.)
+    let score = |fp: f64| evidence.at(z_p * fp);
+    let mut candidates: Vec<(f64, f64)> = evidence
+        .peaks
+        .iter()
+        .map(|c| c.frequency / z_p)
+        .filter(|&fp| (slowest..=fastest).contains(&fp))
+        .map(|fp| (fp, score(fp)))
+        .collect();
+    candidates.sort_by(|a, b| b.1.total_cmp(&a.1));
+    candidates.dedup_by(|a, b| (a.0 / b.0 - 1.0).abs() < 0.03);
+    let &(top, best) = candidates.first()?;
+    // a rich spectrum (every harmonic of both shafts a line) makes a comb of every divisor of the mesh as
+    // strong as the mesh comb: the smallest multiple m of the best whose multiples stand over the lines
+    // beside them is the mesh
+    let fp = (2..=2 * zp)
+        .take_while(|&m| top * m as f64 <= fastest)
+        .find(|&m| evidence.multiples_stand_out(z_p * top, m).is_some_and(|w| w >= MESH_OVER_SHAFT_LINES))
+        .map_or(top, |m| top * m as f64);
+    let first = evidence.peaks.iter().find(|c| (c.frequency / (z_p * fp) - 1.0).abs() < 0.03);
+    // the mesh comb's strongest low harmonic is followed for the mean cycle (a line that cannot be
+    // followed leaves the speed the comb gives)
+    let k = first.map_or(1, |c| c.strongest);
+    let mesh = first.map_or(z_p * fp, |c| c.frequency);
+    let lag = 1.0 / (k as f64 * mesh);
+    let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
+    let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| (zp * k) as f64 * cycle);
+    let hz =
+        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let listed: Vec<String> =
+        candidates.iter().take(3).map(|&(f, e)| format!("{} (evidence {e:.1})", hz(1.0 / f))).collect();
+    let mut note = format!(
+        "pinion speed estimated from the teeth: {} (the mesh comb of {zp} teeth, {}); candidates by their evidence: {}; give the speed or a tachometer channel when known",
+        hz(period),
+        if followed.is_some() {
+            format!("the mesh followed on its harmonic {k}")
+        } else {
+            "the mesh too weak to follow".into()
+        },
+        listed.join(", ")
+    );
+    if fp > top * 1.5 {
+        note.push_str(&format!(
+            "; the combs of the mesh's divisors (pinion {} and below) are as strong in this spectrum of many shaft lines, and the mesh was told from them by its lines standing over the lines beside them",
+            hz(1.0 / top)
+        ));
+    }
+    // a rival is a comb that is neither a divisor of the mesh nor a multiple of a shaft below it: those
+    // are one family of lines with the chosen speed
+    let whole = |x: f64| x >= 0.98 && x <= z_p.max(z_w) && (x - x.round()).abs() < (0.015 * x).min(0.1);
+    let family = |f: f64| whole(fp / f) || whole(f / fp * z_p) || whole(f / fp * z_w);
+    let second = candidates.iter().find(|c| !family(c.0)).map_or(0.0, |s| s.1);
+    if second > CLOSE_COMB * best {
+        note.push_str(&format!(
+            "; the second candidate stands close ({:.0} % of the evidence): a tachometer or the nameplate speed would decide",
+            100.0 * second / best
+        ));
+    }
+    let confidence = (1.0 - second / best).clamp(0.0, 1.0) * (best / STRONG_COMB).min(1.0);
+    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true })
+}
+
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
 /// samples (the shortest strong repetition: a tooth mesh or its harmonic) is tracked on the first channel
 /// where it can be, the record is resampled to [`MESH_CYCLE_POINTS`] points per tracked cycle, and the
@@ -301,28 +491,8 @@ fn shaft_through_mesh(
     wheel_teeth: Option<usize>,
 ) -> Result<Option<MeshShaft>, crate::signal::SignalError> {
     let p = MESH_CYCLE_POINTS;
-    let mut last = None;
-    let (x, tracked) = match channels.iter().find_map(|x| {
-        let t = angle::track_mesh(x, MESH_TRACK_CYCLES * mesh_lag, MESH_TRACK_CYCLES);
-        match t {
-            Ok(t) if t.line_snr_db >= MIN_TRACKING_SNR_DB => Some((*x, t)),
-            Ok(_) => None,
-            Err(e) => {
-                last = Some(e);
-                None
-            }
-        }
-    }) {
-        Some(found) => found,
-        None => {
-            return Err(last
-                .unwrap_or_else(|| crate::signal::SignalError::Invalid("the mesh line is too weak to follow".into())));
-        }
-    };
-    let cycle = tracked.map.mean_period_samples() / MESH_TRACK_CYCLES;
-    let points = ((tracked.map.revolutions() as f64 * MESH_TRACK_CYCLES) as usize * p).min(1 << 22);
-    let mut y = vec![0.0; points];
-    tracked.map.resample(x, 0.0, 1.0 / (MESH_TRACK_CYCLES * p as f64), &mut y);
+    let (cycle, y) = follow_line(channels, mesh_lag)?;
+    let points = y.len();
     if let (Some(zp), Some(zw)) = (pinion_teeth, wheel_teeth) {
         if let Some(found) = shaft_from_teeth(fft, &y, cycle, zp, zw) {
             return Ok(Some(found));
@@ -347,6 +517,7 @@ fn shaft_through_mesh(
             note: format!(
                 "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
             ),
+            from_comb: false,
         }));
     };
     let confidence = c[q];
@@ -379,6 +550,7 @@ fn shaft_through_mesh(
         note: format!(
             "shaft speed estimated on the mesh line's angle (line tracked, {cycle:.3} samples per cycle on average; {what}; autocorrelation {confidence:.2}); give the speed or a tachometer channel when known"
         ),
+        from_comb: false,
     }))
 }
 

@@ -180,8 +180,16 @@ pub(super) fn check_orders(job: &IdentifyJob, p: &GearPairParams) -> Result<(), 
             format!("{} with {z2} wheel teeth: use at most {}", job.wheel_orders, (z2 - 1) / 2),
         ));
     }
-    if !(job.pit_width_teeth.is_finite() && job.pit_width_teeth > 0.0 && job.pit_width_teeth <= 3.0) {
-        return Err(value("pit width", format!("must be in (0, 3] tooth pitches, got {}", job.pit_width_teeth)));
+    // a pit's Gaussian needs about 6.2 z / w harmonics of the gear angle: 1e-6 pitches asked for 2.7 GB
+    // (an abort), 1e-300 overflowed, and below 0.01 the transfer's solve cannot meet its tolerance
+    if !(job.pit_width_teeth.is_finite() && (0.01..=3.0).contains(&job.pit_width_teeth)) {
+        return Err(value(
+            "pit width",
+            format!(
+                "must be in [0.01, 3] tooth pitches (a narrower pit's profile needs more harmonics than the model resolves), got {:e}",
+                job.pit_width_teeth
+            ),
+        ));
     }
     Ok(())
 }

@@ -30,6 +30,17 @@ pub struct Figure {
     pub charts: Vec<Chart>,
 }
 
+/// With a machine whose verdict names a gear on `shaft`: that gear's name and teeth.
+fn named_gear_teeth(d: &Diagnosis, shaft: &Shaft) -> Option<(String, u32)> {
+    let (Shaft::Named(name), Some(md), Some(k)) = (shaft, &d.machine, d.verdict.stage) else { return None };
+    if d.verdict.shaft.as_deref() != Some(&**name) {
+        return None;
+    }
+    let stage = md.stages.get(k.checked_sub(1)?)?;
+    let g = stage.gears.iter().find(|g| g.gear == d.verdict.gear && g.shaft.as_deref() == Some(&**name))?;
+    Some((format!("(stage {k} {})", g.gear.name()), g.teeth))
+}
+
 /// The images of one diagnosis, as [`diagnosis`] writes them (file names start with the recording's stem).
 pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
     let stem = Path::new(&d.file).file_stem().and_then(|s| s.to_str()).unwrap_or("recording").to_string();
@@ -47,14 +58,29 @@ pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
         .tsas()
         .filter(|(g, _, _)| g.channel == ch)
         .flat_map(|(g, t, _)| {
-            let z = g.mesh_order as f64;
+            // with a machine, a shaft carrying the named gear is drawn in that gear's teeth (an intermediate
+            // shaft's average otherwise counts its first gear's)
+            let named = named_gear_teeth(d, &g.gear);
+            let z = named.as_ref().map_or(g.mesh_order as f64, |(_, t)| f64::from(*t));
             let along = |v: &[f64]| -> Vec<(f64, f64)> {
                 v.iter().enumerate().map(|(i, y)| (z * i as f64 / v.len() as f64, *y)).collect()
+            };
+            // with a machine only the tracked shaft (the first average) has the tachometer's origin
+            let origin = match d.gears.first() {
+                Some(t) if d.machine.is_some() && t.gear != g.gear && origin.starts_with("origin at") => {
+                    "origin relative: its angle at the tracked shaft's pulse"
+                }
+                _ => origin,
             };
             let x_label = if g.gear == Shaft::Estimated {
                 format!("mesh cycle [cycle k spans k-1 to k of {}; {origin}]", g.mesh_order)
             } else {
-                format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order)
+                match named {
+                    Some((gear, teeth)) => {
+                        format!("{} {gear} tooth in mesh [tooth k spans k-1 to k of {teeth}; {origin}]", g.gear)
+                    }
+                    None => format!("{} tooth in mesh [tooth k spans k-1 to k of {}; {origin}]", g.gear, g.mesh_order),
+                }
             };
             let mut tsa_series = Vec::new();
             // the healthy baseline's TSA of the same channel and gear (aligned only with a tachometer)
@@ -146,7 +172,11 @@ pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
         });
     }
     // zooms in Hz only at a steady speed: a run-up smears every line over the speed range
-    let zooms = if d.order_map.is_none() { mesh_zooms(&stem, d, ch) } else { Vec::new() };
+    let zooms = match (&d.order_map, &d.machine) {
+        (None, Some(md)) => super::machine::machine_zooms(d, md, ch),
+        (None, None) => mesh_zooms(&stem, d, ch),
+        _ => Vec::new(),
+    };
     if !zooms.is_empty() {
         figures.push(Figure {
             file: format!("{stem}-zoom.png"),
@@ -298,17 +328,17 @@ fn standing_out(d: &Diagnosis, amp: &crate::signal::Spectrum, shaft: Shaft, k: O
 
 /// The shafts whose sidebands a diagnosis labels.
 fn shafts(d: &Diagnosis) -> Vec<Shaft> {
-    match d.shaft_hz {
-        ShaftHz::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
-        ShaftHz::Pinion { .. } => vec![Shaft::Pinion],
-        ShaftHz::Estimated { .. } => vec![Shaft::Estimated],
-    }
+    d.shaft_hz.shafts()
 }
 
 /// The amplitude spectrum up to 3.6 mesh frequencies: the healthy baseline light grey behind, this
 /// recording over it, the mesh harmonics marked, and dots only on the sidebands that stand out.
 fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Chart {
-    let fm = d.mesh_hz.unwrap_or(0.0);
+    // with a machine, up to 1.2 times the highest stage's third mesh harmonic
+    let fm = match &d.machine {
+        Some(md) => md.stages.iter().filter_map(|s| s.mesh_hz).fold(0.0, f64::max),
+        None => d.mesh_hz.unwrap_or(0.0),
+    };
     let max_f = if fm > 0.0 { 3.6 * fm } else { f64::INFINITY }.min(*amp.freqs_hz.last().unwrap_or(&1.0));
     let pts = in_band(amp, max_f);
     let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
@@ -322,6 +352,21 @@ fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Ch
         });
     }
     series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+    if let Some(md) = &d.machine {
+        let (marks, markers) = super::machine::machine_marks(md, amp, 0.0, max_f, None);
+        series.extend(marks);
+        return Chart {
+            title: format!("amplitude spectrum, channel {ch} (Hann window, averaged): every stage's mesh lines"),
+            x_label: "frequency [Hz]".into(),
+            y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+            y_log: true,
+            x_range: Some((0.0, max_f)),
+            y_range: Some((peak * 1e-5, peak * 3.0)),
+            series,
+            markers,
+            ..Default::default()
+        };
+    }
     for (i, shaft) in shafts(d).into_iter().enumerate() {
         let pts = standing_out(d, amp, shaft, None);
         if !pts.is_empty() {
@@ -365,12 +410,15 @@ fn order_spectrum_chart(d: &Diagnosis, m: &crate::signal::order_map::OrderMap) -
     let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
     let top = m.orders.last().copied().unwrap_or(1.0);
     let z = d.mesh_order as f64;
-    let markers = (1..)
-        .map(|k| k as f64 * z)
-        .take_while(|o| *o <= top)
-        .enumerate()
-        .map(|(i, o)| Marker { x: o, label: format!("{}x mesh", i + 1), color: 0 })
-        .collect();
+    let markers = match &d.machine {
+        Some(md) => super::machine::stage_order_markers(md, top),
+        None => (1..)
+            .map(|k| k as f64 * z)
+            .take_while(|o| *o <= top)
+            .enumerate()
+            .map(|(i, o)| Marker { x: o, label: format!("{}x mesh", i + 1), color: 0 })
+            .collect(),
+    };
     let reference = reference_shaft(d);
     Chart {
         title: format!(
@@ -383,16 +431,23 @@ fn order_spectrum_chart(d: &Diagnosis, m: &crate::signal::order_map::OrderMap) -
         y_log: true,
         x_range: Some((0.0, top)),
         y_range: Some((peak * 1e-5, peak * 3.0)),
-        series: vec![Series { name: "mean over the speed range".into(), points: pts, style: Style::Line, color: 4 }],
+        series: {
+            let staged = d.machine.as_ref().map(|md| super::machine::stage_order_series(md, &pts, top));
+            let mut series =
+                vec![Series { name: "mean over the speed range".into(), points: pts, style: Style::Line, color: 4 }];
+            series.extend(staged.unwrap_or_default());
+            series
+        },
         markers,
         ..Default::default()
     }
 }
 
 fn reference_shaft(d: &Diagnosis) -> &'static str {
-    match d.shaft_hz {
+    match &d.shaft_hz {
         ShaftHz::Pair { .. } | ShaftHz::Pinion { .. } => "pinion",
         ShaftHz::Estimated { .. } => "shaft of the estimated period",
+        ShaftHz::Machine(m) => m.0.first().map_or("tracked shaft", |s| s.0.name()),
     }
 }
 

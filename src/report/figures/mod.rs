@@ -10,6 +10,7 @@ use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 
 mod diagnose;
+mod machine;
 mod simulate;
 mod sweep;
 
@@ -17,6 +18,7 @@ pub use diagnose::{
     Figure, TREND_PANEL_PX, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names,
     sideband_words, trend, trend_charts,
 };
+pub use machine::{family_words, stage_words, stands as machine_sideband_stands_out};
 pub use simulate::{multipliers, simulation};
 pub use sweep::{bench, parameter_label, stability_map};
 

@@ -4,21 +4,34 @@ use crate::signal::Spectrum;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// A shaft of the gear pair, or the shaft of an estimated period when the teeth are not known.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+/// A shaft of the gear pair, or the shaft of an estimated period when the teeth are not known, or a shaft
+/// of a machine file named by its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Shaft {
     /// The input (pinion) shaft.
-    #[serde(rename = "pinion")]
     Pinion,
     /// The output (wheel) shaft.
-    #[serde(rename = "wheel")]
     Wheel,
     /// The shaft whose period was estimated from the signal (teeth unknown).
-    #[serde(rename = "shaft of the estimated period")]
     Estimated,
+    /// A shaft of a machine file (`diagnose --machine`), by its name (interned: see [`Shaft::named`]).
+    Named(&'static str),
 }
 
 impl Shaft {
+    /// The shaft of a machine file called `name`. Names are interned once per process (a machine has a few
+    /// shafts, so the table stays small whatever the number of recordings), which keeps `Shaft` a `Copy` key.
+    pub fn named(name: &str) -> Self {
+        static NAMES: std::sync::Mutex<Vec<&'static str>> = std::sync::Mutex::new(Vec::new());
+        let mut names = NAMES.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(n) = names.iter().find(|n| **n == name) {
+            return Self::Named(n);
+        }
+        let n: &'static str = Box::leak(name.to_string().into_boxed_str());
+        names.push(n);
+        Self::Named(n)
+    }
+
     /// The shaft as a baseline knows it: the shaft of an estimated period is the reference shaft, as the
     /// pinion is when its speed was given or measured (a baseline and a recording whose speeds came
     /// different ways still compare their reference shafts).
@@ -35,7 +48,26 @@ impl Shaft {
             Self::Pinion => "pinion",
             Self::Wheel => "wheel",
             Self::Estimated => "shaft of the estimated period",
+            Self::Named(n) => n,
         }
+    }
+}
+
+impl Serialize for Shaft {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Shaft {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        Ok(match name.as_str() {
+            "pinion" => Self::Pinion,
+            "wheel" => Self::Wheel,
+            "shaft of the estimated period" => Self::Estimated,
+            other => Self::named(other),
+        })
     }
 }
 
@@ -48,7 +80,7 @@ impl std::fmt::Display for Shaft {
 /// Shaft frequencies in Hz (`null` when the sample rate is unknown): pinion and wheel when the teeth are
 /// known, the pinion alone when its speed was given or measured without the teeth, else the one shaft
 /// of the estimated period.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum ShaftHz {
     /// Both shafts of a pair with known teeth.
@@ -69,29 +101,59 @@ pub enum ShaftHz {
         /// Its frequency, Hz.
         estimated_shaft: Option<f64>,
     },
+    /// Every shaft of a machine file, by name, the tracked shaft first, Hz.
+    Machine(NamedHz),
+}
+
+/// Frequencies of a machine's shafts, in the machine file's order with the tracked shaft first; written as
+/// a JSON object keyed by the shafts' names.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedHz(pub Vec<(Shaft, Option<f64>)>);
+
+impl Serialize for NamedHz {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k.name(), v)?;
+        }
+        m.end()
+    }
 }
 
 impl ShaftHz {
     /// The reference shaft's frequency (the pinion, or the estimated shaft), Hz.
     pub fn reference(&self) -> Option<f64> {
-        match *self {
-            Self::Pair { pinion, .. } | Self::Pinion { pinion } => pinion,
-            Self::Estimated { estimated_shaft } => estimated_shaft,
+        match self {
+            Self::Pair { pinion, .. } | Self::Pinion { pinion } => *pinion,
+            Self::Estimated { estimated_shaft } => *estimated_shaft,
+            Self::Machine(m) => m.0.first().and_then(|s| s.1),
         }
     }
     /// The pinion's frequency when its shaft is known to be the reference, Hz.
     pub fn pinion(&self) -> Option<f64> {
-        match *self {
-            Self::Pair { pinion, .. } | Self::Pinion { pinion } => pinion,
+        match self {
+            Self::Pair { pinion, .. } | Self::Pinion { pinion } => *pinion,
             Self::Estimated { .. } => None,
+            Self::Machine(m) => m.0.first().and_then(|s| s.1),
         }
     }
     /// (shaft, frequency) pairs in display order.
     pub fn entries(&self) -> Vec<(&'static str, Option<f64>)> {
-        match *self {
-            Self::Pair { pinion, wheel } => vec![("pinion", pinion), ("wheel", wheel)],
-            Self::Pinion { pinion } => vec![("pinion", pinion)],
-            Self::Estimated { estimated_shaft } => vec![("estimated_shaft", estimated_shaft)],
+        match self {
+            Self::Pair { pinion, wheel } => vec![("pinion", *pinion), ("wheel", *wheel)],
+            Self::Pinion { pinion } => vec![("pinion", *pinion)],
+            Self::Estimated { estimated_shaft } => vec![("estimated_shaft", *estimated_shaft)],
+            Self::Machine(m) => m.0.iter().map(|(s, f)| (s.name(), *f)).collect(),
+        }
+    }
+    /// The shafts in display order.
+    pub fn shafts(&self) -> Vec<Shaft> {
+        match self {
+            Self::Pair { .. } => vec![Shaft::Pinion, Shaft::Wheel],
+            Self::Pinion { .. } => vec![Shaft::Pinion],
+            Self::Estimated { .. } => vec![Shaft::Estimated],
+            Self::Machine(m) => m.0.iter().map(|s| s.0).collect(),
         }
     }
 }
@@ -230,6 +292,15 @@ pub enum VerdictGear {
     /// No gear (healthy).
     #[serde(rename = "none")]
     None,
+    /// The sun of a planetary stage (`diagnose --machine`).
+    #[serde(rename = "sun")]
+    Sun,
+    /// A planet of a planetary stage (which one: `Verdict::planet`).
+    #[serde(rename = "planet")]
+    Planet,
+    /// The ring of a planetary stage.
+    #[serde(rename = "ring")]
+    Ring,
 }
 
 impl VerdictGear {
@@ -240,6 +311,9 @@ impl VerdictGear {
             Self::Wheel => "wheel",
             Self::Unknown => "unknown (teeth not given)",
             Self::None => "none",
+            Self::Sun => "sun",
+            Self::Planet => "planet",
+            Self::Ring => "ring",
         }
     }
 }
@@ -249,7 +323,7 @@ impl From<Shaft> for VerdictGear {
         match s {
             Shaft::Pinion => Self::Pinion,
             Shaft::Wheel => Self::Wheel,
-            Shaft::Estimated => Self::Unknown,
+            Shaft::Estimated | Shaft::Named(_) => Self::Unknown,
         }
     }
 }
@@ -460,27 +534,58 @@ pub struct Verdict {
     /// hold the faulty gear's impulses, smeared), not second faults.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub cross_talk: Vec<String>,
+    /// With a machine: the name of the shaft that carries the faulty gear (`gear` is then `pinion` for the
+    /// stage's driving gear, `wheel` for its driven gear, or `sun`, `planet`, `ring`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shaft: Option<String>,
+    /// With a machine: the stage of the faulty gear, 1-based (machine file order).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<usize>,
+    /// With a machine and a faulty planet: the planet, 1-based (the order they pass the sensor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet: Option<usize>,
+    /// The average (gear or shaft) whose indicators decided a suspect or faulty verdict.
+    #[serde(skip)]
+    pub deciding: Option<Shaft>,
 }
 
 impl Verdict {
     /// The gear and, when placed, the tooth, in words: "pinion, tooth 3 (counted from the tachometer
     /// pulse)".
     pub fn place(&self) -> String {
+        let gear = match (&self.shaft, self.stage, self.planet) {
+            (_, Some(k), Some(p)) => format!("stage {k} planet {p}"),
+            (Some(s), Some(k), None) => format!("stage {k} {} on shaft `{s}`", self.gear.name()),
+            _ => self.gear.name().to_string(),
+        };
         match (self.tooth, self.tooth_origin) {
             (Some(t), Some(ToothOrigin::Tachometer)) => {
-                format!("{}, tooth {t} (counted from the tachometer pulse)", self.gear.name())
+                format!("{gear}, tooth {t} (counted from the tachometer pulse)")
             }
-            (Some(t), _) => format!(
-                "{}, tooth {t} (counted from an arbitrary origin: no tachometer, so only the distance between teeth is meaningful)",
-                self.gear.name()
+            (Some(t), Some(ToothOrigin::Relative)) => format!(
+                "{gear}, tooth {t} (counted from a relative origin: no tachometer on this shaft, so only the distance between teeth is meaningful)"
             ),
-            _ => self.gear.name().to_string(),
+            (Some(t), _) => format!(
+                "{gear}, tooth {t} (counted from an arbitrary origin: no tachometer, so only the distance between teeth is meaningful)"
+            ),
+            _ => gear,
         }
     }
 
     /// A verdict without a tooth or cross-talk.
     pub fn new(state: VerdictState, gear: VerdictGear, reasons: Vec<String>) -> Self {
-        Self { state, gear, reasons, tooth: None, tooth_origin: None, cross_talk: Vec::new() }
+        Self {
+            state,
+            gear,
+            reasons,
+            tooth: None,
+            tooth_origin: None,
+            cross_talk: Vec::new(),
+            shaft: None,
+            stage: None,
+            planet: None,
+            deciding: None,
+        }
     }
 }
 
@@ -494,6 +599,11 @@ pub enum ToothOrigin {
     /// is meaningful (another recording of the same machine may number them from elsewhere).
     #[serde(rename = "arbitrary (no tachometer)")]
     Arbitrary,
+    /// With a machine: a shaft that the tachometer does not watch; tooth 1 is where its angle stood at the
+    /// tracked shaft's first pulse (the tracked angle times the exact ratio), which depends on how many
+    /// revolutions the machine had turned: only the distance between teeth is meaningful.
+    #[serde(rename = "relative (no tachometer on this shaft)")]
+    Relative,
 }
 
 /// One line of the model comparison.
@@ -547,8 +657,13 @@ pub struct Diagnosis {
     pub shaft_period_samples: f64,
     /// Where the speed came from.
     pub speed_source: SpeedSource,
-    /// Confidence of an estimated speed (autocorrelation at the period, 0..1); 1 when given.
+    /// Confidence of an estimated speed, 0..1 (autocorrelation at the period; from the teeth, the mesh comb's
+    /// margin over the best comb of another line family times its strength); 1 when given or measured.
     pub speed_confidence: f64,
+    /// Why the estimated speed is too doubtful for a verdict of health to rest on it (the verdict is then
+    /// at best not judged); absent when the speed is trusted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_doubt: Option<String>,
     /// The pinion speed the user gave (a nominal speed, Hz), when given: the speed used is the one measured
     /// on the mesh line within the given tolerance (`shaft_hz`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -608,6 +723,10 @@ pub struct Diagnosis {
     /// over the recording (orders of the reference shaft; speeds in rev/sample).
     #[serde(skip)]
     pub order_map: Option<crate::signal::order_map::OrderMap>,
+    /// With a machine file (`diagnose --machine`): every stage's lines, the planetary stages' orders and
+    /// per-planet averages.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine: Option<super::MachineDiagnosis>,
 }
 
 impl Diagnosis {

@@ -3,9 +3,11 @@
 
 mod diagnosis;
 mod identify;
+mod machine;
 
 pub use diagnosis::*;
 pub use identify::*;
+pub use machine::*;
 
 use crate::scene::Scene;
 use crate::solver::SteadyState;
