@@ -118,16 +118,20 @@ impl Band {
     }
 }
 
+/// What [`solve_refined`] returns: the solution x, its correction d, and the LU factors with their pivots
+/// (for further solves with the same matrix).
+pub(super) type Refined = (Vec<C64>, Vec<C64>, Band, Vec<usize>);
+
 /// A class system solved with one step of iterative refinement: x from the LU, the residual r = b - A x,
 /// the correction A d = r with the same factors, x + d returned with d. The size of d against x is the
 /// rounding error the LU left (a near-singular system, as at a multiplier near +1, makes it large).
-pub(super) fn solve_refined(a: Band, mut b: Vec<C64>, refine: bool) -> Option<(Vec<C64>, Vec<C64>)> {
+pub(super) fn solve_refined(a: Band, mut b: Vec<C64>, refine: bool) -> Option<Refined> {
     if !refine {
         let mut lu = a;
         let pivots = lu.factor()?;
         lu.solve_factored(&pivots, &mut b);
         let zero = vec![C64::new(0.0, 0.0); b.len()];
-        return Some((b, zero));
+        return Some((b, zero, lu, pivots));
     }
     let original = Band { n: a.n, kl: a.kl, ku: a.ku, ab: a.ab.clone() };
     let mut lu = a;
@@ -139,5 +143,5 @@ pub(super) fn solve_refined(a: Band, mut b: Vec<C64>, refine: bool) -> Option<(V
     let mut d: Vec<C64> = rhs.iter().zip(&ax).map(|(r, v)| r - v).collect();
     lu.solve_factored(&pivots, &mut d);
     let x = b.iter().zip(&d).map(|(x, dx)| x + dx).collect();
-    Some((x, d))
+    Some((x, d, lu, pivots))
 }

@@ -10,10 +10,15 @@
 //!   exp(A^ tau), A^ = [P f; 0 0], and z = c^T x^, so every integral is exact (Van Loan's block exponentials):
 //!   int_0^h c^T exp((A^ - i k w) tau) dtau is the corner of exp([[0, c^T], [0, A^ - i k w]] h), and
 //!   int_0^h exp(A^T tau) c c^T exp(A^ tau) dtau = F22^T F12 of exp([[-A^T, c c^T], [0, A^]] h);
-//! - otherwise: 4-point Gauss-Legendre quadrature on sub-intervals of every step, short enough that
-//!   (|lambda|max + k w) h_sub is small, on the solver's dense output (a partial step from a node).
+//! - rk4 steps: the dense output is the cubic Hermite interpolant of the node states and slopes x' = P x + f
+//!   (fourth order, like the nodes); for a linear probe z is a cubic on each step, so its lines (moments of
+//!   the Hermite basis against e^{-i k w h s} on runs of equal steps), RMS and extremes (roots of z') are
+//!   closed forms;
+//! - otherwise (a derivative probe, magnus4 on smooth coefficients): 4-point Gauss-Legendre quadrature on
+//!   sub-intervals of every step, short enough that (|lambda|max + k w) h_sub is small, on that dense output
+//!   (magnus4: a partial step from a node).
 //!
-//! Extremes come from a global search: every sample interval of the whole period whose bound
+//! Extremes (where not in closed form) come from a global search: every sample interval of the whole period whose bound
 //! max(z_i, z_i+1) + h^2 |z''| / 8 reaches the best sample is refined by golden section on the solution.
 
 use super::steady::{SteadyState, Trajectory};
@@ -108,9 +113,13 @@ pub fn response(
     tolerance: f64,
 ) -> Response {
     match traj {
-        Trajectory::Fourier(sol) => fourier_response(sol, probe, kmax, period_s, d),
+        Trajectory::Fourier(sol) => fourier_response(sol, probe, kmax, period_s, d, None).0,
         Trajectory::Grid { grid, states, scheme } if *scheme == rk4::Scheme::Magnus4 && sys.piecewise_constant() => {
             piecewise_response(sys, grid, states, probe, kmax, period_s, d, tolerance)
+        }
+        Trajectory::Grid { grid, states, scheme } if *scheme == rk4::Scheme::Rk4 && !probe.derivative => {
+            hermite_response(sys, grid, states, probe, kmax, period_s, d)
+                .unwrap_or_else(|| gauss_response(sys, grid, states, *scheme, probe, kmax, period_s, d, tolerance))
         }
         Trajectory::Grid { grid, states, scheme } => {
             gauss_response(sys, grid, states, *scheme, probe, kmax, period_s, d, tolerance)
@@ -128,7 +137,18 @@ fn row_gain(c: &DVector<f64>, d: &[f64]) -> f64 {
     d.iter().enumerate().map(|(i, s)| (c[i] * s).abs()).sum()
 }
 
-fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f64, d: &[f64]) -> Response {
+/// The response of a harmonic-balance solution and the times of its extremes (s). With `near` (the times of
+/// another solution's extremes and a window half-width, s), the extremes are searched only within those
+/// windows: the comparison solution of an error estimate, whose extremes are the printed one's moved by
+/// its error.
+fn fourier_response(
+    sol: &HillSolution,
+    probe: &Probe,
+    kmax: usize,
+    period_s: f64,
+    d: &[f64],
+    near: Option<([f64; 2], f64)>,
+) -> (Response, [f64; 2]) {
     let h = sol.harmonics;
     let z: Vec<C64> = (0..=h)
         .map(|k| {
@@ -139,40 +159,72 @@ fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f6
     let rms = (z[0].re * z[0].re + 2.0 * z.iter().skip(1).map(|c| c.norm_sqr()).sum::<f64>()).sqrt();
     // a rigorous bound on |z''| from the coefficients: sum 2 |Z_k| (k w)^2
     let curvature: f64 = z.iter().enumerate().map(|(k, c)| 2.0 * c.norm() * (k as f64 * sol.omega).powi(2)).sum();
-    let m = (8 * h).max(1024).next_power_of_two().min(1 << 22);
-    let spec: Vec<(f64, f64)> =
-        (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
-    let samples = crate::signal::spectrum::Fft::new().inverse(&spec, m);
-    let dt = period_s / m as f64;
     // the refinement evaluates only the harmonics present (a long period's solution is mostly zeros: the
-    // unforced residue classes), each by its own sin_cos
-    let present: Vec<(f64, C64)> = z
-        .iter()
-        .enumerate()
-        .skip(1)
-        .filter(|(_, c)| c.norm_sqr() > 0.0)
-        .map(|(k, c)| (k as f64 * sol.omega, *c))
-        .collect();
+    // unforced residue classes): e^{i k w t} chained from the previous present harmonic by the phasor of the
+    // gap, one sin_cos per distinct gap (a gear's lines sit on a few regular gaps: mesh harmonics and their
+    // sidebands)
+    let present: Vec<(usize, C64)> =
+        z.iter().enumerate().skip(1).filter(|(_, c)| c.norm_sqr() > 0.0).map(|(k, c)| (k, *c)).collect();
     let sparse = 4 * present.len() < h;
+    let mut gaps: Vec<usize> = present.iter().scan(0, |last, &(k, _)| Some(k - std::mem::replace(last, k))).collect();
+    let mut distinct = gaps.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let chained = distinct.len() <= 64;
+    for g in &mut gaps {
+        *g = distinct.partition_point(|d| d < g);
+    }
     let value = |t: f64| {
         if !sparse {
             return fourier_value(&z, sol.omega, t);
         }
-        present.iter().fold(z[0].re, |acc, (kw, c)| {
-            let (s, co) = (kw * t).sin_cos();
-            acc + 2.0 * (c.re * co - c.im * s)
+        if !chained {
+            return present.iter().fold(z[0].re, |acc, (k, c)| {
+                let (s, co) = (*k as f64 * sol.omega * t).sin_cos();
+                acc + 2.0 * (c.re * co - c.im * s)
+            });
+        }
+        let steps: Vec<C64> = distinct.iter().map(|g| C64::from_polar(1.0, *g as f64 * sol.omega * t)).collect();
+        let mut e = C64::new(1.0, 0.0);
+        present.iter().zip(&gaps).fold(z[0].re, |acc, ((_, c), g)| {
+            e *= steps[*g];
+            acc + 2.0 * (c * e).re
         })
     };
-    let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
-    ts[m] = period_s;
-    let mut zs = samples.clone();
-    zs.push(samples[0]);
-    let bound = vec![curvature; m];
     // one evaluation costs a complex product per harmonic (dense) or a sin_cos per line present (~5 of
     // them): the intervals refined are as many as the budget allows, the rest reported as slack
     let cost = if sparse { 5 * present.len() } else { h }.max(1) as f64;
     let refined = ((REFINE_BUDGET / (GOLDEN_EVALUATIONS * cost)) as usize).clamp(16, MAX_CANDIDATES);
-    let (max, min, slack) = extremes(&[Segment { ts, zs, curvature: Some(bound) }], &|_, t| value(t), refined);
+    let (max, min, slack, at) = match near {
+        Some((at, w)) => {
+            let local = |sign: f64, t: f64| {
+                let (v, _) = golden(&|x| sign * value(x), t - w, t + w);
+                sign * v.max(sign * value(t))
+            };
+            (local(1.0, at[0]), local(-1.0, at[1]), 0.0, at)
+        }
+        None => {
+            // samples at 2 H per period; where the search leaves intervals unrefined (a strong harmonic near
+            // H: a pinion error of order 1e5), once more at 8 H, whose tighter bounds leave fewer
+            let mut m = sample_count(h);
+            let mut rounds = 0;
+            loop {
+                let dt = period_s / m as f64;
+                let spec: Vec<(f64, f64)> =
+                    (0..=m / 2).map(|k| z.get(k).map_or((0.0, 0.0), |c| (c.re * m as f64, c.im * m as f64))).collect();
+                let mut zs = crate::signal::spectrum::Fft::new().inverse(&spec, m);
+                zs.push(zs[0]);
+                let mut ts: Vec<f64> = (0..=m).map(|i| i as f64 * dt).collect();
+                ts[m] = period_s;
+                let found = extremes(&[Segment { ts, zs, curvature: Some(curvature) }], &|_, t| value(t), refined);
+                if found.2 <= 0.0 || rounds == 1 || m >= 1 << 22 {
+                    break found;
+                }
+                m = (4 * m).min(1 << 22);
+                rounds += 1;
+            }
+        }
+    };
     // |dz| <= sum_c |w_c| e size_c for a relative coefficient error e per component (the measure of
     // harmonic balance's estimates: sum_n |dY_n| over sum_n |Y_n|, times n w for velocities)
     let gain: f64 = probe
@@ -193,7 +245,14 @@ fn fourier_response(sol: &HillSolution, probe: &Probe, kmax: usize, period_s: f6
     let _ = d;
     let mut lines = z;
     lines.resize(kmax + 1, C64::new(0.0, 0.0));
-    Response { lines, rms, max, min, gain, extreme_slack: slack }
+    (Response { lines, rms, max, min, gain, extreme_slack: slack }, at)
+}
+
+/// Samples per period of the extreme search on a harmonic-balance solution of H harmonics: a power of two,
+/// at least 2 H (the branch and bound is exact whatever the spacing; denser samples only prune more
+/// intervals, and on the gear scenes cost more than the refinements they saved).
+fn sample_count(h: usize) -> usize {
+    (2 * h).max(1024).next_power_of_two().min(1 << 22)
 }
 
 /// z(t) = Re Z_0 + 2 Re sum_k Z_k e^{i k w t}: one complex multiplication per harmonic.
@@ -208,12 +267,11 @@ pub fn fourier_value(z: &[C64], omega: f64, t: f64) -> f64 {
     acc
 }
 
-/// Samples of z on one step (times increasing, ends included) and, when known, a bound on |z''| per
-/// interval.
+/// Samples of z on one step (times increasing, ends included) and, when known, a bound on |z''| over it.
 struct Segment {
     ts: Vec<f64>,
     zs: Vec<f64>,
-    curvature: Option<Vec<f64>>,
+    curvature: Option<f64>,
 }
 
 /// Most intervals refined per extreme: beyond it the search reports how much the others could still add.
@@ -232,15 +290,26 @@ const GOLDEN_EVALUATIONS: f64 = 42.0;
 /// max(z_i, z_i+1) + h^2 |z''| / 8 reaches the best sample is refined by golden section on `value(segment,
 /// t)`, at most `max_candidates` of them (the bound of the next one left gives the slack). |z''| is the
 /// segment's bound when given, else twice the largest second divided difference of the neighbouring samples.
-fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64, max_candidates: usize) -> (f64, f64, f64) {
+/// Returns the maximum, the minimum, the slack and the times of the two extremes.
+fn extremes(
+    segments: &[Segment],
+    value: &dyn Fn(usize, f64) -> f64,
+    max_candidates: usize,
+) -> (f64, f64, f64, [f64; 2]) {
     let mut out = [0.0; 2];
+    let mut at = [0.0; 2];
     let mut slack: f64 = 0.0;
     for (slot, sign) in [1.0, -1.0].into_iter().enumerate() {
-        let best = segments.iter().flat_map(|s| s.zs.iter()).map(|v| sign * v).fold(f64::NEG_INFINITY, f64::max);
+        let (mut best, mut best_t) = (f64::NEG_INFINITY, 0.0);
+        for (v, t) in segments.iter().flat_map(|s| s.zs.iter().zip(&s.ts)) {
+            if sign * v > best {
+                (best, best_t) = (sign * v, *t);
+            }
+        }
         let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
         for (j, s) in segments.iter().enumerate() {
             let m = s.ts.len();
-            let dd: Vec<f64> = (1..m.saturating_sub(1))
+            let dd: Vec<f64> = (1..if s.curvature.is_some() { 0 } else { m.saturating_sub(1) })
                 .map(|i| {
                     let (h0, h1) = (s.ts[i] - s.ts[i - 1], s.ts[i + 1] - s.ts[i]);
                     if h0 <= 0.0 || h1 <= 0.0 {
@@ -252,7 +321,7 @@ fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64, max_candida
             for i in 0..m.saturating_sub(1) {
                 let h = s.ts[i + 1] - s.ts[i];
                 let c2 = match &s.curvature {
-                    Some(c) => c[i],
+                    Some(c) => *c,
                     None => {
                         let near = |k: usize| dd.get(k).copied().unwrap_or(0.0);
                         2.0 * near(i.wrapping_sub(1)).max(near(i)).max(near(i + 1))
@@ -279,17 +348,21 @@ fn extremes(segments: &[Segment], value: &dyn Fn(usize, f64) -> f64, max_candida
             }
             let s = &segments[j];
             let f = |t: f64| sign * value(j, t);
-            found = found.max(golden(&f, s.ts[i], s.ts[i + 1]));
+            let (v, t) = golden(&f, s.ts[i], s.ts[i + 1]);
+            if v > found {
+                (found, best_t) = (v, t);
+            }
         }
         slack = slack.max(left - found);
         out[slot] = sign * found;
+        at[slot] = best_t;
     }
-    (out[0], out[1], slack)
+    (out[0], out[1], slack, at)
 }
 
 /// Largest value of `f` on [a, b] by golden section (40 steps: the bracket shrinks by 4e-9, so the value,
 /// quadratic near the maximum, is within 2e-17 (b - a)^2 |f''| of it).
-fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
     let (mut a, mut b) = (a, b);
     let r = 0.5 * (5f64.sqrt() - 1.0);
     let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
@@ -307,7 +380,7 @@ fn golden(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
             fd = f(d);
         }
     }
-    fc.max(fd)
+    if fc > fd { (fc, c) } else { (fd, d) }
 }
 
 /// States of a grid trajectory at `times` (each in [0, T]): a partial step of `scheme` from the node at or
@@ -335,6 +408,232 @@ const GAUSS_NODES: [f64; 4] =
     [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
 const GAUSS_WEIGHTS: [f64; 4] =
     [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+
+/// Node values of a grid trajectory: per step the slopes x' = P x + f at its start (right limit) and end
+/// (left limit), and the probe there.
+struct NodeSlopes {
+    start: Vec<f64>,
+    end: Vec<f64>,
+    z_start: Vec<f64>,
+    z_end: Vec<f64>,
+}
+
+fn node_slopes(sys: &dyn PeriodicSystem, grid: &rk4::Grid, states: &[f64], probe: &Probe) -> NodeSlopes {
+    let n = sys.dim();
+    let m = grid.steps();
+    let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    let mut out =
+        NodeSlopes { start: vec![0.0; m * n], end: vec![0.0; m * n], z_start: vec![0.0; m], z_end: vec![0.0; m] };
+    for (j, w) in grid.nodes.windows(2).enumerate() {
+        let (xa, xb) = (&states[j * n..(j + 1) * n], &states[(j + 1) * n..(j + 2) * n]);
+        sys.eval(w[0], Side::Right, &mut p, &mut f);
+        crate::system::state_derivative(&p, &f, xa, &mut out.start[j * n..(j + 1) * n]);
+        out.z_start[j] = probe.value(xa, &p, &f);
+        sys.eval(w[1], Side::Left, &mut p, &mut f);
+        crate::system::state_derivative(&p, &f, xb, &mut out.end[j * n..(j + 1) * n]);
+        out.z_end[j] = probe.value(xb, &p, &f);
+    }
+    out
+}
+
+/// The cubic Hermite interpolant of step j at time t from its end states and slopes: an RK4 trajectory's
+/// dense output. Its error, h^4 |x''''| / 384, is of the scheme's own order and below the global error of
+/// the nodes (which gather the local errors of about 1 / (zeta w h) steps), so the printed quantities keep
+/// fourth order and the comparison of two resolutions still estimates their error.
+fn hermite(grid: &rk4::Grid, states: &[f64], slopes: &NodeSlopes, j: usize, t: f64, x: &mut [f64]) {
+    let n = x.len();
+    let (ta, tb) = (grid.nodes[j], grid.nodes[j + 1]);
+    let h = tb - ta;
+    let s = ((t - ta) / h).clamp(0.0, 1.0);
+    let (s2, s3) = (s * s, s * s * s);
+    let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
+    for (c, out) in x.iter_mut().enumerate() {
+        *out = h00 * states[j * n + c]
+            + h01 * states[(j + 1) * n + c]
+            + h * (h10 * slopes.start[j * n + c] + h11 * slopes.end[j * n + c]);
+    }
+}
+
+/// Z_k = sum_i v_i e^{-i k w t_i}, k = 0..=kmax: each point's phasor advanced by one multiplication per
+/// harmonic, in four independent lanes of separate real and imaginary parts (so the loop runs at the
+/// multipliers' throughput and vectorises).
+fn phasor_sums(values: &[f64], times: &[f64], omega: f64, kmax: usize) -> Vec<C64> {
+    let m = values.len();
+    let (mut cr, mut ci): (Vec<f64>, Vec<f64>) =
+        times.iter().map(|t| (omega * t).sin_cos()).map(|(s, c)| (c, -s)).unzip();
+    let (mut er, mut ei) = (values.to_vec(), vec![0.0; m]);
+    // padded to a multiple of four with zero values (their phasors stay zero)
+    let padded = m.div_ceil(4) * 4;
+    for v in [&mut cr, &mut ci, &mut er, &mut ei] {
+        v.resize(padded, 0.0);
+    }
+    let mut lines = Vec::with_capacity(kmax + 1);
+    for _ in 0..=kmax {
+        let (mut sr, mut si) = ([0.0f64; 4], [0.0f64; 4]);
+        for (((a, b), c), d) in
+            er.chunks_exact_mut(4).zip(ei.chunks_exact_mut(4)).zip(cr.chunks_exact(4)).zip(ci.chunks_exact(4))
+        {
+            for l in 0..4 {
+                let (x, y) = (a[l], b[l]);
+                sr[l] += x;
+                si[l] += y;
+                a[l] = x * c[l] - y * d[l];
+                b[l] = x * d[l] + y * c[l];
+            }
+        }
+        lines.push(C64::new((sr[0] + sr[1]) + (sr[2] + sr[3]), (si[0] + si[1]) + (si[2] + si[3])));
+    }
+    lines
+}
+
+/// M_p(phi) = int_0^1 s^p e^{-i phi s} ds for p = 0..=3: the series for |phi| < 1.5 (no cancellation), else
+/// integration by parts upwards, M_0 = (1 - e^{-i phi}) / (i phi), M_p = (p M_{p-1} - e^{-i phi}) / (i phi).
+fn power_moments(phi: f64) -> [C64; 4] {
+    let mut out = [C64::new(0.0, 0.0); 4];
+    if phi.abs() < 1.5 {
+        // (-i phi)^j / j! until far below rounding (|phi|^30 / 30! < 1e-26)
+        let mut term = C64::new(1.0, 0.0);
+        for j in 0..30 {
+            for (p, o) in out.iter_mut().enumerate() {
+                *o += term / (j + p + 1) as f64;
+            }
+            term *= C64::new(0.0, -phi) / (j + 1) as f64;
+        }
+    } else {
+        let e = C64::from_polar(1.0, -phi);
+        let i_phi = C64::new(0.0, phi);
+        out[0] = (C64::new(1.0, 0.0) - e) / i_phi;
+        for p in 1..4 {
+            out[p] = (out[p - 1] * p as f64 - e) / i_phi;
+        }
+    }
+    out
+}
+
+/// Exact lines, RMS and extremes of a linear probe along the cubic Hermite dense output of an rk4 trajectory
+/// (the same dense output as [`gauss_response`]): on each step z(t_j + h s) = a0 + a1 s + a2 s^2 + a3 s^3 from
+/// the probe and its slope c . x' at both ends, so
+/// - RMS: int z^2 in closed form per step;
+/// - extremes: the step ends and the roots of the quadratic z' inside;
+/// - lines: on a run of equal steps, int_0^1 z(s) e^{-i phi s} ds (phi = k w h) is a combination of the four
+///   moments M_p(phi) of the Hermite basis, so Z_k needs only two phasor sums over the run's nodes (of z and
+///   of h z'), not one per quadrature point.
+///
+/// `None` when the grid has more than one run per 16 steps (a table of many short pieces), where the
+/// per-run moments would cost more than quadrature.
+#[allow(clippy::too_many_arguments)]
+fn hermite_response(
+    sys: &dyn PeriodicSystem,
+    grid: &rk4::Grid,
+    states: &[f64],
+    probe: &Probe,
+    kmax: usize,
+    period_s: f64,
+    d: &[f64],
+) -> Option<Response> {
+    let n = sys.dim();
+    let m = grid.steps();
+    let period = sys.period_s();
+    let breaks = rk4::sorted_breaks(sys);
+    // runs of equal steps with no jump of the coefficients inside: [first step, end step)
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut first = 0;
+    for j in 1..=m {
+        let h0 = grid.nodes[first + 1] - grid.nodes[first];
+        let split = j == m
+            || rk4::is_break(&breaks, grid.nodes[j], period)
+            || ((grid.nodes[j + 1] - grid.nodes[j]) - h0).abs() > 1e-9 * h0;
+        if split {
+            runs.push((first, j));
+            first = j;
+        }
+    }
+    if 16 * runs.len() > m.max(16) {
+        return None;
+    }
+    let slopes = node_slopes(sys, grid, states, probe);
+    let dot = |v: &[f64]| probe.weights.iter().zip(v).map(|(w, x)| w * x).sum::<f64>();
+    let zd_start: Vec<f64> = slopes.start.chunks(n).map(dot).collect();
+    let zd_end: Vec<f64> = slopes.end.chunks(n).map(dot).collect();
+    // RMS and extremes step by step
+    let (mut square, mut max, mut min) = (0.0, f64::NEG_INFINITY, f64::INFINITY);
+    for j in 0..m {
+        let h = grid.nodes[j + 1] - grid.nodes[j];
+        let (z0, z1, d0, d1) = (slopes.z_start[j], slopes.z_end[j], h * zd_start[j], h * zd_end[j]);
+        let a = [z0, d0, 3.0 * (z1 - z0) - 2.0 * d0 - d1, 2.0 * (z0 - z1) + d0 + d1];
+        let mut integral = 0.0;
+        for p in 0..4 {
+            for q in 0..4 {
+                integral += a[p] * a[q] / (p + q + 1) as f64;
+            }
+        }
+        square += h * integral;
+        let at = |s: f64| a[0] + s * (a[1] + s * (a[2] + s * a[3]));
+        let mut consider = |v: f64| {
+            max = f64::max(max, v);
+            min = f64::min(min, v);
+        };
+        consider(z0);
+        consider(z1);
+        // z'(s) / 1 = a1 + 2 a2 s + 3 a3 s^2
+        let (qa, qb, qc) = (3.0 * a[3], 2.0 * a[2], a[1]);
+        if qa.abs() > 1e-300 {
+            let disc = qb * qb - 4.0 * qa * qc;
+            if disc >= 0.0 {
+                // the stable pair of roots: q = -(b + sign(b) sqrt(disc)) / 2, s = q / a and c / q
+                let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+                for s in [q / qa, if q != 0.0 { qc / q } else { f64::NAN }] {
+                    if s > 0.0 && s < 1.0 {
+                        consider(at(s));
+                    }
+                }
+            }
+        } else if qb.abs() > 1e-300 {
+            let s = -qc / qb;
+            if s > 0.0 && s < 1.0 {
+                consider(at(s));
+            }
+        }
+    }
+    // lines, run by run
+    let omega = 2.0 * std::f64::consts::PI / period_s;
+    let mut lines = vec![C64::new(0.0, 0.0); kmax + 1];
+    for &(j0, j1) in &runs {
+        let steps = j1 - j0;
+        let h = (grid.nodes[j1] - grid.nodes[j0]) / steps as f64;
+        // node values of the run: z_i and h z'_i (the right slope, the left one at the run's last node)
+        let times = &grid.nodes[j0..=j1];
+        let mut zv: Vec<f64> = slopes.z_start[j0..j1].to_vec();
+        zv.push(slopes.z_end[j1 - 1]);
+        let mut dv: Vec<f64> = zd_start[j0..j1].iter().map(|v| h * v).collect();
+        dv.push(h * zd_end[j1 - 1]);
+        let sz = phasor_sums(&zv, times, omega, kmax);
+        let sd = phasor_sums(&dv, times, omega, kmax);
+        // phasors of the run's end nodes, advanced harmonic by harmonic
+        let (r0, r1) = (C64::from_polar(1.0, -omega * times[0]), C64::from_polar(1.0, -omega * times[steps]));
+        let (mut e0, mut e1) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
+        let (z_first, z_last, d_first, d_last) = (zv[0], zv[steps], dv[0], dv[steps]);
+        for (k, line) in lines.iter_mut().enumerate() {
+            let phi = k as f64 * omega * h;
+            let mo = power_moments(phi);
+            // the Hermite basis h00, h01, h10, h11 against e^{-i phi s}
+            let ba = mo[3] * 2.0 - mo[2] * 3.0 + mo[0];
+            let bb = mo[2] * 3.0 - mo[3] * 2.0;
+            let bc = mo[3] - mo[2] * 2.0 + mo[1];
+            let bd = mo[3] - mo[2];
+            let shift = C64::from_polar(1.0, phi);
+            let z_lo = sz[k] - e1 * z_last; // nodes 0..K-1
+            let z_hi = sz[k] - e0 * z_first; // nodes 1..K
+            let d_lo = sd[k] - e1 * d_last;
+            let d_hi = sd[k] - e0 * d_first;
+            *line += (ba * z_lo + bb * shift * z_hi + bc * d_lo + bd * shift * d_hi) * (h / period_s);
+            e0 *= r0;
+            e1 *= r1;
+        }
+    }
+    let gain = row_gain(&probe.row(&DMatrix::zeros(n, n), &DVector::zeros(n)), d) * balanced_scale(states, d);
+    Some(Response { lines, rms: (square / period_s).max(0.0).sqrt(), max, min, gain, extreme_slack: 0.0 })
+}
 
 #[allow(clippy::too_many_arguments)]
 fn gauss_response(
@@ -370,8 +669,20 @@ fn gauss_response(
             }
         }
     }
+    let slopes = node_slopes(sys, grid, states, probe);
+    // the dense output: cubic Hermite on the nodes for rk4 (no evaluation of P), a partial step of the
+    // scheme from the node before for magnus4 (A-stable steps can be far longer than 1 / |lambda|, where a
+    // cubic through the ends would miss the fast transients inside the step)
+    let hermite_output = scheme == rk4::Scheme::Rk4;
     let mut xs = Vec::new();
-    grid_states(sys, grid, states, scheme, &times, &mut xs);
+    if hermite_output {
+        xs.resize(times.len() * n, 0.0);
+        for (i, (&t, &j)) in times.iter().zip(&owner).enumerate() {
+            hermite(grid, states, &slopes, j, t, &mut xs[i * n..(i + 1) * n]);
+        }
+    } else {
+        grid_states(sys, grid, states, scheme, &times, &mut xs);
+    }
     let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
     let mut gain_row: f64 = 0.0;
     let mut zs = Vec::with_capacity(times.len());
@@ -385,44 +696,39 @@ fn gauss_response(
     if !probe.derivative {
         gain_row = row_gain(&probe.row(&p, &f), d);
     }
-    // lines harmonic by harmonic over all points (each point's e^{-i k w t} advanced by one multiplication)
-    let rot: Vec<C64> = times.iter().map(|t| C64::from_polar(1.0, -omega * t)).collect();
-    let mut e: Vec<C64> = zs.iter().zip(&weights).map(|(z, w)| C64::new(z * w / period_s, 0.0)).collect();
-    let mut lines = Vec::with_capacity(kmax + 1);
-    for _ in 0..=kmax {
-        lines.push(e.iter().sum::<C64>());
-        e.iter_mut().zip(&rot).for_each(|(v, r)| *v *= r);
-    }
+    let scaled: Vec<f64> = zs.iter().zip(&weights).map(|(z, w)| z * w / period_s).collect();
+    let lines = phasor_sums(&scaled, &times, omega, kmax);
     let rms = (zs.iter().zip(&weights).map(|(z, w)| z * z * w).sum::<f64>() / period_s).max(0.0).sqrt();
     // segments per step: start node (right limit), the Gauss points, end node (left limit)
     let mut segments = Vec::with_capacity(grid.steps());
     let mut at = 0;
     for (j, w) in grid.nodes.windows(2).enumerate() {
         let mut ts = vec![w[0]];
-        let mut vs = Vec::new();
-        sys.eval(w[0], Side::Right, &mut p, &mut f);
-        vs.push(probe.value(&states[j * n..(j + 1) * n], &p, &f));
+        let mut vs = vec![slopes.z_start[j]];
         while at < owner.len() && owner[at] == j {
             ts.push(times[at]);
             vs.push(zs[at]);
             at += 1;
         }
-        sys.eval(w[1], Side::Left, &mut p, &mut f);
         ts.push(w[1]);
-        vs.push(probe.value(&states[(j + 1) * n..(j + 2) * n], &p, &f));
+        vs.push(slopes.z_end[j]);
         segments.push(Segment { ts, zs: vs, curvature: None });
     }
     let value = |j: usize, t: f64| {
-        let mut st = rk4::Stepper::with_scheme(sys, scheme);
         let mut x = states[j * n..(j + 1) * n].to_vec();
-        if t > grid.nodes[j] {
+        if hermite_output {
+            hermite(grid, states, &slopes, j, t, &mut x);
+        } else if t > grid.nodes[j] {
+            let mut st = rk4::Stepper::with_scheme(sys, scheme);
             st.step(grid.nodes[j], t, &mut x, &[1.0], false);
         }
         let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
-        sys.eval(t, if t >= grid.nodes[j + 1] { Side::Left } else { Side::Right }, &mut p, &mut f);
+        if probe.derivative {
+            sys.eval(t, if t >= grid.nodes[j + 1] { Side::Left } else { Side::Right }, &mut p, &mut f);
+        }
         probe.value(&x, &p, &f)
     };
-    let (max, min, slack) = extremes(&segments, &value, MAX_CANDIDATES);
+    let (max, min, slack, _) = extremes(&segments, &value, MAX_CANDIDATES);
     let gain = gain_row * balanced_scale(states, d);
     Response { lines, rms, max, min, gain, extreme_slack: slack }
 }
@@ -541,7 +847,7 @@ fn piecewise_response(
         let x0 = DVector::from_fn(n + 1, |r, _| if r < n { states[j * n + r] / d[r] } else { 1.0 });
         c.dot(&((a * (t - grid.nodes[j])).exp() * x0))
     };
-    let (max, min, slack) = extremes(&segments, &value, MAX_CANDIDATES);
+    let (max, min, slack, _) = extremes(&segments, &value, MAX_CANDIDATES);
     let gain = gain_row * balanced_scale(states, d);
     Response { lines, rms: (square / period_s).max(0.0).sqrt(), max, min, gain, extreme_slack: slack }
 }
@@ -588,7 +894,14 @@ pub fn estimated_response(
     tolerance: f64,
 ) -> (Response, Estimates) {
     let d = super::steady::state_scales(sys);
-    let main = response(sys, &steady.trajectory, steady.period_s, probe, kmax, &d, tolerance);
+    // a harmonic-balance pair: the comparison's extremes are searched near the printed ones only
+    let (main, near) = match &steady.trajectory {
+        Trajectory::Fourier(sol) => {
+            let (r, at) = fourier_response(sol, probe, kmax, steady.period_s, &d, None);
+            (r, Some((at, steady.period_s / sample_count(sol.harmonics) as f64)))
+        }
+        traj => (response(sys, traj, steady.period_s, probe, kmax, &d, tolerance), None),
+    };
     let top = main.amplitudes().iter().fold(0.0f64, |a, v| a.max(*v));
     // peak-to-peak relative to itself, or to the output's size when smaller (a constant output)
     let p2p = main.max - main.min;
@@ -601,7 +914,12 @@ pub fn estimated_response(
     );
     match &steady.comparison {
         Some(c) => {
-            let other = response(sys, &c.trajectory, steady.period_s, probe, kmax, &d, tolerance);
+            let other = match (&c.trajectory, near) {
+                (Trajectory::Fourier(sol), Some(near)) => {
+                    fourier_response(sol, probe, kmax, steady.period_s, &d, Some(near)).0
+                }
+                (traj, _) => response(sys, traj, steady.period_s, probe, kmax, &d, tolerance),
+            };
             // the printed amplitudes' change (a phase change of a resonant line is not printed)
             let lines =
                 main.amplitudes().iter().zip(other.amplitudes()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -705,6 +1023,35 @@ mod tests {
         }
     }
 
+    /// x'' + 0.3 x' + k(t) x = cos(2 pi t) + 0.2 with k = 50 on [0, 1/2), 40 after: several oscillations per
+    /// period, so the probe has interior extremes on many steps.
+    struct Oscillator;
+
+    impl PeriodicSystem for Oscillator {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn period_s(&self) -> f64 {
+            1.0
+        }
+        fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+            let tau = t.rem_euclid(1.0);
+            let first = if side == Side::Right { tau < 0.5 } else { tau > 0.0 && tau <= 0.5 };
+            p[(0, 0)] = 0.0;
+            p[(0, 1)] = 1.0;
+            p[(1, 0)] = if first { -50.0 } else { -40.0 };
+            p[(1, 1)] = -0.3;
+            f[0] = 0.0;
+            f[1] = (2.0 * std::f64::consts::PI * t).cos() + 0.2;
+        }
+        fn breakpoints(&self) -> Vec<f64> {
+            vec![0.5]
+        }
+        fn max_harmonic(&self) -> usize {
+            1
+        }
+    }
+
     /// The exact periodic solution: x = 1 - A e^-t on the first half, B e^-(t - 1/2) on the second, with
     /// B = 1 - A e^-1/2 and A = 1 - B e^-1/2 (continuity at both ends).
     fn exact(t: f64) -> f64 {
@@ -712,6 +1059,30 @@ mod tests {
         let a = (1.0 - e) / (1.0 - e * e);
         let b = 1.0 - a * e;
         if t < 0.5 { 1.0 - a * (-t).exp() } else { b * (-(t - 0.5)).exp() }
+    }
+
+    /// The closed forms on the cubic Hermite dense output (moments per run, z^2 per step, roots of z') against
+    /// fine 4-point Gauss quadrature and the golden-section extreme search on the same dense output, on a
+    /// grid of two runs of different step (41 steps, a jump at 0.5) with a probe mixing the state and a constant.
+    #[test]
+    fn hermite_closed_forms_match_quadrature_of_the_same_dense_output() {
+        let sys = Oscillator;
+        let grid = rk4::Grid::new(1.0, &[0.5], 41);
+        let x0 = DVector::from_vec(vec![0.02, -0.1]);
+        let states = rk4::trajectory(&sys, &grid, &x0);
+        let probe = Probe { weights: vec![-2.5, 0.3], derivative: false };
+        let closed = hermite_response(&sys, &grid, &states, &probe, 12, 1.0, &[1.0, 1.0]).expect("two runs");
+        // theta clamps to 0.05 at 1e-15: the quadrature's own error is near 2.9e-7 (0.025)^8 ~ 5e-20
+        let quad = gauss_response(&sys, &grid, &states, rk4::Scheme::Rk4, &probe, 12, 1.0, &[1.0, 1.0], 1e-15);
+        let scale = closed.max.abs().max(closed.min.abs());
+        for (k, (a, b)) in closed.lines.iter().zip(&quad.lines).enumerate() {
+            // sums of ~1e3 terms of size 1: rounding far below 1e-13
+            assert!((a - b).norm() < 1e-13 * scale, "line {k}: {a} against {b}");
+        }
+        assert!((closed.rms - quad.rms).abs() < 1e-13 * scale, "{} against {}", closed.rms, quad.rms);
+        // golden section ends within 2e-17 (b - a)^2 |z''| of an interior extreme
+        assert!((closed.max - quad.max).abs() < 1e-13 * scale, "{} against {}", closed.max, quad.max);
+        assert!((closed.min - quad.min).abs() < 1e-13 * scale, "{} against {}", closed.min, quad.min);
     }
 
     #[test]

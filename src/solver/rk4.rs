@@ -220,14 +220,14 @@ pub struct Rk4Run {
 
 /// True when `t` is within 1e-12 periods of a breakpoint; `breaks` sorted ([`sorted_breaks`]): a binary
 /// search, so a table of 1e5 pieces costs 1e5 log 1e5 lookups per pass, not 1e10.
-fn is_break(breaks: &[f64], t: f64, period: f64) -> bool {
+pub(super) fn is_break(breaks: &[f64], t: f64, period: f64) -> bool {
     let tol = 1e-12 * period;
     let i = breaks.partition_point(|&b| b < t - tol);
     breaks.get(i).is_some_and(|b| (b - t).abs() <= tol)
 }
 
 /// The system's breakpoints in increasing order.
-fn sorted_breaks(sys: &dyn PeriodicSystem) -> Vec<f64> {
+pub(super) fn sorted_breaks(sys: &dyn PeriodicSystem) -> Vec<f64> {
     let mut breaks = sys.breakpoints();
     breaks.sort_by(f64::total_cmp);
     breaks
