@@ -77,27 +77,27 @@ impl CombEvidence {
 /// Multiples of a comb's m-th harmonic checked by [`CombEvidence::multiples_stand_out`]: the mesh's first
 /// four harmonics stand over the shaft lines beside them on a meshing gear, the fifth and higher may sink
 /// among its sidebands.
-const STANDING_MULTIPLES: usize = 4;
+pub const STANDING_MULTIPLES: usize = 4;
 
 /// Power over the local floor from which a predicted line counts for a candidate: the power averaged over
 /// 16 or more half-overlapping Hann segments is a chi-square of about 40 degrees of freedom around its mean
 /// (standard deviation about 0.22 of it), so the largest of a few bins of noise exceeds 2.5 times the
 /// median with a probability well below 1e-4, while any mesh harmonic of a meshing gear stands far higher.
-const LINE_RATIO: f64 = 2.5;
+pub const LINE_RATIO: f64 = 2.5;
 /// Cost of a predicted line that is absent (nats): bounded, so one missing harmonic (a zero of the tooth
 /// impulse's spectrum, an anti-resonance of the housing) does not outweigh several clear ones.
-const ABSENT_COST: f64 = 1.0;
+pub const ABSENT_COST: f64 = 1.0;
 /// Cap of one line's evidence (nats, e^5 = 150 times the floor): one huge line (mains hum, a fan) must not
 /// make every divisor of its frequency a comb.
-const LINE_CAP: f64 = 5.0;
+pub const LINE_CAP: f64 = 5.0;
 /// Power over a single segment's local floor (its lower quartile, [`FLOOR_QUANTILE`]) from which a bin
 /// counts as a line: one segment's noise power is exponential about its mean (lower quartile 0.29 of it),
 /// exceeding 10 times the quartile (2.9 times the mean) with probability 6 %, and the sum over a hundred
 /// or more segments averages that chance away while a line stands in every one.
-const SEGMENT_RATIO: f64 = 10.0;
+pub const SEGMENT_RATIO: f64 = 10.0;
 /// Quantile of a block of bins taken as its floor: the lower quartile stays between the lines where a
 /// broken tooth's dense comb of shaft harmonics fills half of the bins (a median would sit on them).
-const FLOOR_QUANTILE: f64 = 0.25;
+pub const FLOOR_QUANTILE: f64 = 0.25;
 
 /// The local floor of a power spectrum: the median of each block of 128 bins (a line or a smeared hump
 /// occupies a few of them), one value per bin.
@@ -146,12 +146,12 @@ fn search_half(b: f64) -> f64 {
 /// Relative speed change within which each segment's comb may sit around a candidate: a machine's speed
 /// wanders by 0.5-2 % (a motor under a fluctuating load), so a comb fixed over ten seconds smears its
 /// harmonics into the floor while each short segment keeps them sharp near its own speed.
-const SEGMENT_WANDER: f64 = 0.025;
+pub const SEGMENT_WANDER: f64 = 0.025;
 /// Relative step of the grid of candidate spacings (a tenth of [`SEGMENT_WANDER`]'s half-window per step).
-const GRID_STEP: f64 = 0.0025;
+pub const GRID_STEP: f64 = 0.0025;
 /// Harmonics scored per candidate: enough that the true spacing beats its half (every other line absent)
 /// and its double (the odd harmonics lost), few enough that a housing resonance far up does not dominate.
-const MAX_HARMONICS: usize = 16;
+pub const MAX_HARMONICS: usize = 16;
 
 /// Harmonic series of lines in `channels` with fundamental between `lowest` and `highest` (cycles per
 /// sample), best first. Each half-overlapping Hann segment (short: a few bins per lowest spacing) scores
