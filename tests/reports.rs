@@ -70,6 +70,29 @@ fn diagnose_report_writes_images() {
     assert!(dir.join("index.html").exists());
 }
 
+/// `--spectrum db` and `psd` draw the spectrum image on those scales (the numbers: the PSD unit test in
+/// `signal::spectrum`, against Welch and Parseval; the images were opened and read), each a different image
+/// from the default amplitude one, and another value is refused naming the flag and the values it takes.
+#[test]
+fn diagnose_spectrum_in_db_or_as_a_psd() {
+    let rec = repo("data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav");
+    let stem = "gear-z14z39-fs10kHz-cracked-pinion-tooth3";
+    let mut images = Vec::new();
+    for scale in ["amplitude", "db", "psd"] {
+        let dir = temp_dir(&format!("report-spectrum-{scale}"));
+        let out = dir.to_string_lossy().into_owned();
+        let run = gearvib(&["diagnose", &rec, "--spectrum", scale, "--report", &out]);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        let png = dir.join(format!("{stem}-spectrum.png"));
+        assert_eq!(png_size(&png), (W, 600));
+        images.push(std::fs::read(png).unwrap());
+    }
+    assert!(images[0] != images[1] && images[0] != images[2] && images[1] != images[2]);
+    let run = gearvib(&["diagnose", &rec, "--spectrum", "loud"]);
+    assert_eq!(run.code, 2);
+    assert!(run.stderr.contains("--spectrum") && run.stderr.contains("psd"), "{}", run.stderr);
+}
+
 #[test]
 fn empty_or_non_finite_data_is_refused_not_drawn_blank() {
     let dir = temp_dir("report-bad");

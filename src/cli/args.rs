@@ -184,6 +184,10 @@ pub struct DiagnoseArgs {
     /// is 300 kW to 50 MW, group 2 15 to 300 kW, on rigid or flexible supports.
     #[arg(long, value_parser = ["group1-rigid", "group1-flexible", "group2-rigid", "group2-flexible"])]
     pub iso_class: Option<String>,
+    /// How the report's spectrum image shows levels: amplitude (log axis, the signal's unit), db (20 log10
+    /// of the amplitude re 1 unit) or psd (power spectral density, unit^2/Hz).
+    #[arg(long, value_parser = ["amplitude", "db", "psd"])]
+    pub spectrum: Option<String>,
     /// Exit with code 1 when any recording is at least this bad.
     #[arg(long, value_enum)]
     pub fail_on: Option<FailOn>,

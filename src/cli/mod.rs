@@ -367,6 +367,11 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
         report: a.report.as_ref().map(PathBuf::from),
         in_memory: Vec::new(),
         iso_class: a.iso_class.as_deref().and_then(crate::signal::velocity::MachineClass::from_name),
+        spectrum_scale: a
+            .spectrum
+            .as_deref()
+            .and_then(crate::report::summary::SpectrumScale::from_name)
+            .unwrap_or_default(),
     })
 }
 

@@ -282,6 +282,7 @@ pub(super) fn analyse_parts<'a>(
         speed_source: source,
         speed_confidence: confidence,
         speed_doubt,
+        spectrum_scale: Default::default(),
         speed_given_hz: speed_given.map(|g| g.0),
         speed_deviation_percent: speed_given.map(|g| g.1),
         speed_profile,

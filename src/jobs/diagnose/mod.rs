@@ -79,6 +79,8 @@ pub struct DiagnoseJob<'a> {
     pub in_memory: Vec<(PathBuf, Recording<'a>)>,
     /// Machine class whose ISO 10816-3 velocity zones the report states (none: the velocity alone).
     pub iso_class: Option<crate::signal::velocity::MachineClass>,
+    /// How the report's spectrum images show their levels.
+    pub spectrum_scale: crate::report::summary::SpectrumScale,
 }
 
 /// What [`run`] produced: one diagnosis per recording that could be diagnosed, in the order given, the
@@ -134,7 +136,8 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         // every output checked before the first is written: a refusal leaves no half report set
         check_report_outputs(dir, &done, done.len() >= 2 && reference)?;
         let mut sections = Vec::new();
-        for d in &done {
+        for d in done.iter_mut() {
+            d.spectrum_scale = job.spectrum_scale;
             let files = write_report(d, dir)?;
             let images: Vec<PathBuf> =
                 files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();

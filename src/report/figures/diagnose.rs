@@ -160,7 +160,7 @@ pub fn diagnosis_figures(d: &Diagnosis) -> Vec<Figure> {
             file: format!("{stem}-spectrum.png"),
             width: PAGE_WIDTH_PX,
             height: 600,
-            charts: titled(&stem, vec![spectrum_chart(d, ch, amp)]),
+            charts: titled(&stem, vec![scaled(spectrum_chart(d, ch, amp), d.spectrum_scale, amp, &d.unit)]),
         });
     } else if let Some(chart) = tsa_order_spectrum_chart(d, ch) {
         // no sample rate: the order spectrum of the deciding gear's TSA stands in for the spectrum in Hz
@@ -389,6 +389,46 @@ fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Ch
         markers,
         ..Default::default()
     }
+}
+
+/// An amplitude spectrum chart shown on `scale`: as it is, in dB re 1 unit (20 log10 A, a linear axis
+/// 100 dB deep like the amplitude's five decades), or as the PSD of the same segments (every series' amplitudes
+/// squared times [`crate::signal::spectrum::hann_psd_per_amplitude2`], nine decades). `amp` gives the segment
+/// length; `unit` the signal's unit.
+fn scaled(mut c: Chart, scale: SpectrumScale, amp: &crate::signal::Spectrum, unit: &str) -> Chart {
+    let unit = unit_or(unit);
+    let (to, y_label, title) = match scale {
+        SpectrumScale::Amplitude => return c,
+        SpectrumScale::Db => (
+            Box::new(|a: f64| 20.0 * a.max(1e-300).log10()) as Box<dyn Fn(f64) -> f64>,
+            format!("amplitude [dB re 1 {unit}]"),
+            "amplitude spectrum in dB",
+        ),
+        SpectrumScale::Psd => {
+            let bins = amp.values.len().max(2);
+            let n = 2 * (bins - 1);
+            let factor = crate::signal::spectrum::hann_psd_per_amplitude2(
+                n,
+                amp.freqs_hz.get(1).copied().unwrap_or(1.0) * n as f64,
+            );
+            (
+                Box::new(move |a: f64| a * a * factor) as Box<dyn Fn(f64) -> f64>,
+                format!("PSD [({unit})^2/Hz]"),
+                "power spectral density",
+            )
+        }
+    };
+    for s in &mut c.series {
+        s.points.iter_mut().for_each(|p| p.1 = to(p.1));
+    }
+    let peak = c.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).fold(f64::MIN, f64::max);
+    (c.y_log, c.y_range) = match scale {
+        SpectrumScale::Db => (false, Some((peak - 100.0, peak + 5.0))),
+        _ => (true, Some((peak * 1e-9, peak * 9.0))),
+    };
+    c.y_label = y_label;
+    c.title = c.title.replacen("amplitude spectrum", title, 1);
+    c
 }
 
 /// The legend words for the sidebands of `shaft` that stand out, as the text says them.

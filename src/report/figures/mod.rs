@@ -5,7 +5,9 @@ use super::format::{num, sig};
 use super::plot::{
     BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
 };
-use super::summary::{BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Sideband, Simulation, SweepPoint};
+use super::summary::{
+    BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Sideband, Simulation, SpectrumScale, SweepPoint,
+};
 use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 

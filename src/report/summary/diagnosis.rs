@@ -170,6 +170,32 @@ pub enum SpeedSource {
     Estimated,
 }
 
+/// How the spectrum image shows its levels (`diagnose --spectrum`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpectrumScale {
+    /// Amplitude of each line (Hann window, amplitude-corrected, averaged) on a log axis, signal unit.
+    #[default]
+    Amplitude,
+    /// The same amplitude as 20 log10(A / 1 unit), dB re 1 unit, on a linear axis.
+    Db,
+    /// Power spectral density, unit^2/Hz (one-sided, Welch): the amplitude times the Hann window's factor
+    /// [`crate::signal::spectrum::hann_psd_per_amplitude2`], so that its integral is the signal's variance.
+    Psd,
+}
+
+impl SpectrumScale {
+    /// The scale named `amplitude`, `db` or `psd`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "amplitude" => Some(Self::Amplitude),
+            "db" => Some(Self::Db),
+            "psd" => Some(Self::Psd),
+            _ => None,
+        }
+    }
+}
+
 /// How the shaft angle was followed through the recording.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum Tracking {
@@ -660,6 +686,9 @@ pub struct Diagnosis {
     /// Confidence of an estimated speed, 0..1 (autocorrelation at the period; from the teeth, the mesh comb's
     /// margin over the best comb of another line family times its strength); 1 when given or measured.
     pub speed_confidence: f64,
+    /// How the spectrum image shows its levels (display only).
+    #[serde(skip)]
+    pub spectrum_scale: SpectrumScale,
     /// Why the estimated speed is too doubtful for a verdict of health to rest on it (the verdict is then
     /// at best not judged); absent when the speed is trusted.
     #[serde(skip_serializing_if = "Option::is_none")]
