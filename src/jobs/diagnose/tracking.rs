@@ -123,7 +123,7 @@ pub(super) fn nominal_speed(
         // the signal may repeat over several pinion revolutions (a hunting period): the pinion revolution
         // is the fraction of the period where the given mesh order has its strongest line
         let line = |k: usize| -> f64 {
-            let f = (zp * k) as f64 / est.period_samples;
+            let f = zp as f64 * k as f64 / est.period_samples;
             if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.3 / est.period_samples)).sum() }
         };
         // the smallest k whose line reaches a quarter of the strongest (k = 2 would otherwise take the
@@ -396,13 +396,13 @@ fn shaft_from_comb(
     let slowest = (min_revs.max(2) + 2) as f64 / n as f64;
     // (and a revolution long enough for the TSA to resolve both mesh orders with their sidebands:
     // analysis::check_mesh_order's 2 z + 8 orders within half its points)
-    let fastest = (MESH_HIGHEST / z_p).min(1.0 / MIN_SAMPLES_PER_REV).min(1.0 / (4 * zp.max(zw) + 16) as f64);
+    let fastest = (MESH_HIGHEST / z_p).min(1.0 / MIN_SAMPLES_PER_REV).min(1.0 / (4.0 * z_p.max(z_w) + 16.0));
     let evidence = mesh_comb::comb_candidates(
         fft,
         views,
         slowest * z_p.min(z_w) / z_w,
         MESH_HIGHEST,
-        (zp * min_revs.max(2)) as f64 / n as f64,
+        z_p * min_revs.max(2) as f64 / n as f64,
     )
     .ok()?;
     // each comb read as the mesh. (Adding the evidence of the two shafts' own combs was tried: a comb at
@@ -434,7 +434,7 @@ fn shaft_from_comb(
     let mesh = first.map_or(z_p * fp, |c| c.frequency);
     let lag = 1.0 / (k as f64 * mesh);
     let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
-    let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| (zp * k) as f64 * cycle);
+    let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| z_p * k as f64 * cycle);
     let hz =
         |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
     let listed: Vec<String> =
