@@ -299,6 +299,11 @@ fn damaged_tachometers_absurd_teeth_and_wrong_pulse_counts_are_refused() {
             &["tacho-every-third-pulse-missing-i16.wav", "tachometer pulses missing"],
         ),
         (&["diagnose", HEALTHY, "--teeth", "100000,100000"], &["healthy.wav", "mesh order 100000"]),
+        // no speed and no tachometer: the teeth-only speed search with the largest count there is
+        (
+            &["diagnose", chatter, "--channel", "1", "--teeth", "18446744073709551615,14"],
+            &["tacho-chatter-every-40-samples-i16.wav", "mesh order 18446744073709551615"],
+        ),
         (&["diagnose", HEALTHY, "--teeth", "100000,14", "--rpm", "1800"], &["healthy.wav", "mesh order 100000"]),
         (&["diagnose", HEALTHY, "--tacho-channel", "2", "--pulses-per-rev", "0"], &["--pulses-per-rev", "at least 1"]),
         // the bundled tachometer gives one pulse per revolution: with 2 the pinion's average spans two
