@@ -352,34 +352,34 @@ fn spectrum_chart(d: &Diagnosis, ch: usize, amp: &crate::signal::Spectrum) -> Ch
         });
     }
     series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
-    if let Some(md) = &d.machine {
-        let (marks, markers) = super::machine::machine_marks(md, amp, 0.0, max_f, None);
-        series.extend(marks);
-        return Chart {
-            title: format!("amplitude spectrum, channel {ch} (Hann window, averaged): every stage's mesh lines"),
-            x_label: "frequency [Hz]".into(),
-            y_label: format!("amplitude [{}]", unit_or(&d.unit)),
-            y_log: true,
-            x_range: Some((0.0, max_f)),
-            y_range: Some((peak * 1e-5, peak * 3.0)),
-            series,
-            markers,
-            ..Default::default()
-        };
-    }
-    for (i, shaft) in shafts(d).into_iter().enumerate() {
-        let pts = standing_out(d, amp, shaft, None);
-        if !pts.is_empty() {
-            series.push(Series { name: sideband_words(shaft), points: pts, style: Style::Points, color: 1 + i });
+    let (markers, what) = match &d.machine {
+        Some(md) => {
+            let (marks, markers) = super::machine::machine_marks(md, amp, 0.0, max_f, None);
+            series.extend(marks);
+            (markers, ": every stage's mesh lines")
         }
-    }
-    let markers = d
-        .mesh_harmonics
-        .iter()
-        .filter_map(|h| h.frequency_hz.map(|f| Marker { x: f, label: format!("{}x mesh", h.k), color: 0 }))
-        .collect();
+        None => {
+            for (i, shaft) in shafts(d).into_iter().enumerate() {
+                let pts = standing_out(d, amp, shaft, None);
+                if !pts.is_empty() {
+                    series.push(Series {
+                        name: sideband_words(shaft),
+                        points: pts,
+                        style: Style::Points,
+                        color: 1 + i,
+                    });
+                }
+            }
+            let markers = d
+                .mesh_harmonics
+                .iter()
+                .filter_map(|h| h.frequency_hz.map(|f| Marker { x: f, label: format!("{}x mesh", h.k), color: 0 }))
+                .collect();
+            (markers, "")
+        }
+    };
     Chart {
-        title: format!("amplitude spectrum, channel {ch} (Hann window, averaged)"),
+        title: format!("amplitude spectrum, channel {ch} (Hann window, averaged){what}"),
         x_label: "frequency [Hz]".into(),
         y_label: format!("amplitude [{}]", unit_or(&d.unit)),
         y_log: true,
