@@ -148,6 +148,11 @@ const GLOSSARY: &[(&str, &[&str], &str)] = &[
     ),
     ("spectral change", &["spectral change"], "the distance in dB of a block's order spectrum from the baseline's."),
     (
+        "local change",
+        &["local change"],
+        "the gear's residual signal less the baseline's mean residual (shifted to the same angle and scaled to the same load): the energy of that difference over the tooth pitch where it is largest, over the median pitch's. Healthy recordings differ by 1.5-4; a crack, spall or broken tooth raises it at its tooth. It counts from 2.5 times what the baseline's own files show among themselves.",
+    ),
+    (
         "spreads",
         &["spreads"],
         "how far an indicator lies from the healthy baseline's centre, in units of the baseline's spread (1.4826 times the median absolute deviation of its blocks, on a logarithmic scale for ratio indicators): a robust z-score.",

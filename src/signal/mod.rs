@@ -11,6 +11,7 @@ pub mod planetary;
 pub mod spectrum;
 pub mod speed;
 pub mod tsa;
+pub mod tsa_change;
 pub mod velocity;
 
 /// Errors of the signal layer.

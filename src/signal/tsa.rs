@@ -170,7 +170,8 @@ pub fn tsa<T: Sample>(x: &[T], map: &AngleMap, ratio: f64, points: usize, min_re
 
 /// [`tsa`] of several channels sampled alike and, in the same pass, the averages of consecutive blocks of
 /// `block_revs` revolutions (the revolutions after the last whole block count in the full average only),
-/// each handed to `on_block` as it completes (with an `Fft` of its thread and the channel's index in `xs`):
+/// each handed to `on_block` as it completes (with an `Fft` of its thread, the channel's index in `xs` and the
+/// block's index from the recording's start):
 /// what it returns is kept, the block's average is not (a 60 s recording's blocks of four channels would
 /// hold 20 MB). Each revolution's sample positions and interpolation taps are found once for all
 /// channels, and runs of whole blocks are averaged in parallel; the full averages sum the runs' partial
@@ -185,7 +186,7 @@ pub fn tsa_with_blocks<T: Sample, B: Send>(
     points: usize,
     min_revs: usize,
     block_revs: usize,
-    on_block: impl Fn(&mut Fft, usize, &[f64]) -> B + Sync,
+    on_block: impl Fn(&mut Fft, usize, usize, &[f64]) -> B + Sync,
 ) -> Result<Vec<(Tsa, Vec<B>)>, SignalError> {
     use rayon::prelude::*;
     let per = block_revs.max(1);
@@ -199,7 +200,9 @@ pub fn tsa_with_blocks<T: Sample, B: Send>(
             .map(|(k, x)| {
                 let full = tsa(x, map, ratio, points, min_revs)?;
                 let blocks = (0..full.revolutions / per)
-                    .map(|b| on_block(&mut fft, k, &tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per)))
+                    .map(|b| {
+                        on_block(&mut fft, k, b, &tsa_of_revolutions(x, map, ratio, points, b * per..(b + 1) * per))
+                    })
                     .collect();
                 Ok((full, blocks))
             })
@@ -237,7 +240,7 @@ pub fn tsa_with_blocks<T: Sample, B: Send>(
                     }
                     if (j + 1) % per == 0 && j < blocks * per {
                         block[k].iter_mut().for_each(|v| *v /= per as f64);
-                        done[k].push(on_block(&mut fft, k, &block[k]));
+                        done[k].push(on_block(&mut fft, k, j / per, &block[k]));
                         block[k].iter_mut().for_each(|v| *v = 0.0);
                     }
                 }

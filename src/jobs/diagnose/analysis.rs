@@ -115,8 +115,8 @@ pub(super) fn analyse_parts<'a>(
         || {
             let mut out = Vec::new();
             for (gi, &(_, ratio, z)) in gears.iter().enumerate() {
-                let on_block = |fft: &mut Fft, _: usize, b: &[f64]| match z {
-                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, others(gi), o.shaft_orders)),
+                let on_block = |fft: &mut Fft, _: usize, i: usize, b: &[f64]| match z {
+                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, others(gi), o.shaft_orders, i)),
                     None => PendingBlock::Raw(b.to_vec()),
                 };
                 let per_channel =
@@ -207,9 +207,10 @@ pub(super) fn analyse_parts<'a>(
                     let mut g = gear_indicators(&mut fft, name, c, z, others, t, o.shaft_orders);
                     g.blocks = blocks
                         .into_iter()
-                        .map(|b| match b {
+                        .enumerate()
+                        .map(|(i, b)| match b {
                             PendingBlock::Done(b) => b,
-                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders),
+                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders, i),
                         })
                         .collect();
                     g
@@ -299,6 +300,7 @@ pub(super) fn analyse_parts<'a>(
         envelope: None,
         cepstrum: None,
         scores: Vec::new(),
+        local_change: Vec::new(),
         unit: rec.units.get(channels[0] - 1).cloned().unwrap_or_default(),
         warnings,
         spectra,
@@ -474,22 +476,35 @@ pub(super) enum PendingBlock {
     Raw(Vec<f64>),
 }
 
+/// Blocks from a recording's start whose residual order spectrum is kept for the local-change indicator
+/// (256 blocks of 16 revolutions: 4096 revolutions, 16 MB at most per gear and channel).
+const SPECTRUM_BLOCKS: usize = 256;
+/// Highest order of a block's residual spectrum kept (a crack's change lives up to the housing's
+/// resonances, far above the mesh harmonics: 4096 orders of a 12 Hz shaft reach 49 kHz).
+const SPECTRUM_ORDERS: usize = 4096;
+
 /// Indicators of one block average of a gear (consecutive blocks of whole revolutions; the statistical
 /// baseline's samples; a recording under test is scored by the median of its own blocks, so both sides
-/// average the same number of revolutions).
+/// average the same number of revolutions); `index` counts the blocks from the recording's start.
 pub(super) fn block_indicators(
     fft: &mut Fft,
     block: &[f64],
     z: usize,
     others: &OtherLines,
     shaft_orders: usize,
+    index: usize,
 ) -> crate::report::summary::Block {
     let (mut indicators, d) = tsa_indicators(fft, block, z, others, shaft_orders);
     let n = d.residual.len() as f64;
     let mean = d.residual.iter().sum::<f64>() / n;
     indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
     indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
-    crate::report::summary::Block { indicators, amplitudes: d.amplitudes }
+    let residual_spectrum = if index < SPECTRUM_BLOCKS {
+        crate::signal::tsa_change::order_spectrum(fft, &d.residual, SPECTRUM_ORDERS)
+    } else {
+        Vec::new()
+    };
+    crate::report::summary::Block { indicators, amplitudes: d.amplitudes, residual_spectrum }
 }
 
 /// Mesh harmonics and sidebands (3 per shaft on each side) from the raw amplitude spectrum when the

@@ -13,7 +13,9 @@
 
 use super::JobError;
 use crate::Error;
-use crate::report::summary::{Block, Diagnosis, GearIndicators, Scale, Score, Shaft};
+use crate::report::summary::{Block, Diagnosis, GearIndicators, LocalChange, Scale, Score, Shaft};
+use crate::signal::spectrum::Fft;
+use crate::signal::tsa_change::{self, OrderSpectrum};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -60,6 +62,22 @@ pub const DECIDING: [(&str, &str, &str); 8] = [
     ("si", "SI", "the first sidebands of the mesh line have grown"),
     ("spectral_change", "spectral change", "the order spectrum of the average has changed"),
 ];
+
+/// How far a recording's local change must rise over the largest of the baseline files' (each against the
+/// others) to count as evidence. Healthy generated recordings of four machines of another physics (three
+/// per machine, each against its two siblings) stand at most 2.2x over their siblings' largest (1.9x on the
+/// tachometer's angle); their 10 % cracks 1.9-27x on the tachometer's angle (six of eight over 5x), 25-50 %
+/// cracks and spalls far more. Two files give a thin picture of how healthy recordings differ, so the
+/// limit keeps a margin over what they showed.
+pub const LOCAL_RISE: f64 = 2.5;
+/// Least local change that counts at all: over z pitches of noise alone the largest pitch holds 1.5-3
+/// times the median's energy.
+pub const LOCAL_MIN: f64 = 3.0;
+
+/// Smallest normalised correlation of a recording's mean residual with the baseline's for the local
+/// change to be scored: below it the two averages do not line up (another gear, or a residual of noise
+/// alone), and their difference would read as a change everywhere.
+pub const MIN_ALIGNMENT: f64 = 0.2;
 
 /// Deciding indicators that scale with the absolute level of the signal (the others are ratios of the
 /// signal to itself): they cannot decide when the two sides' units differ or one is unknown.
@@ -151,6 +169,15 @@ struct GearReference {
     floor: f64,
     /// Median TSA RMS of the blocks (scale for near-zero amplitudes).
     rms: f64,
+    /// Mean complex order spectrum (re, im) of the baseline files' residuals, each shifted onto the first
+    /// file's angle origin: the local-change indicator's reference (empty in profiles written before it,
+    /// which then do not score it).
+    #[serde(default)]
+    residual_mean: Vec<(f64, f64)>,
+    /// The local change of each baseline file's mean residual against the other files': how far healthy
+    /// recordings of the gear differ locally (empty from one file).
+    #[serde(default)]
+    local_healthy: Vec<f64>,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -201,6 +228,8 @@ impl TryFrom<ReferenceFile> for Reference {
         let mut gears = BTreeMap::new();
         for g in f.gears {
             let ok = g.reference.log_spectrum.iter().all(|v| v.is_finite())
+                && g.reference.residual_mean.iter().all(|c| c.0.is_finite() && c.1.is_finite())
+                && g.reference.local_healthy.iter().all(|v| v.is_finite() && *v > 0.0)
                 && g.reference.stats.values().all(|s| s.spread > 0.0 && s.centre.is_finite() && s.count > 0)
                 && g.reference.residual_var > 0.0;
             if !ok {
@@ -247,14 +276,19 @@ fn value(block: &Block, key: &str) -> f64 {
 /// A gear and channel with fewer than [`MIN_BASELINE_BLOCKS`] blocks over all baseline files.
 pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Error> {
     let mut pooled: BTreeMap<(Shaft, usize), Vec<&Block>> = BTreeMap::new();
+    let mut per_file: BTreeMap<(Shaft, usize), Vec<Vec<&Block>>> = BTreeMap::new();
     let mut revs: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
+    let mut teeth: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
     for d in baselines {
         for g in &d.gears {
             let key = (g.gear.baseline_key(), g.channel);
             pooled.entry(key).or_default().extend(&g.blocks);
+            per_file.entry(key).or_default().push(g.blocks.iter().collect());
             *revs.entry(key).or_default() += g.revolutions;
+            teeth.insert(key, g.mesh_order);
         }
     }
+    let mut fft = Fft::new();
     let mut gears = BTreeMap::new();
     for (key, blocks) in pooled {
         if blocks.len() < MIN_BASELINE_BLOCKS {
@@ -289,6 +323,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 rms_db(l, &others)
             })
             .collect();
+        let (residual_mean, local_healthy) = local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
         for (k, _, _) in DECIDING {
             let values: Vec<f64> = match k {
@@ -300,15 +335,108 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
             stats.insert(k.to_string(), Stat::of(&values, scale));
         }
         let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
-        gears.insert(key, GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms });
+        gears.insert(
+            key,
+            GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms, residual_mean, local_healthy },
+        );
     }
     Ok(Reference { gears, files: baselines.len() })
+}
+
+fn slices(v: &[OrderSpectrum]) -> Vec<&[(f64, f64)]> {
+    v.iter().map(|s| s.as_slice()).collect()
+}
+
+/// The residual spectra of the blocks that kept one.
+fn spectra(blocks: &[&Block]) -> Vec<OrderSpectrum> {
+    blocks.iter().map(|b| b.residual_spectrum.clone()).filter(|s| s.len() > 1).collect()
+}
+
+/// The local-change reference of one gear and channel of `z` teeth from the baseline's blocks grouped by
+/// file: the mean residual spectrum of the files, each shifted onto their common origin, and the local
+/// change of each file's mean against the mean of the other files (a new recording differs from the
+/// baseline by its load, speed and noise, as the files differ among themselves). One file gives no healthy
+/// values: the halves of one recording differ by less than separate recordings do (the real rig's healthy
+/// file, channel 2: 2.9 between the quarters of one half, 11.4 between its two halves), so the local
+/// change needs two healthy files at least.
+fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpectrum, Vec<f64>) {
+    let files: Vec<Vec<OrderSpectrum>> = files.iter().map(|f| spectra(f)).filter(|s| !s.is_empty()).collect();
+    if files.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let means: Vec<OrderSpectrum> = files.iter().map(|f| tsa_change::mean(&slices(f))).collect();
+    // every file shifted onto the first's origin, then onto the mean of them all
+    let mut shifts = vec![0.0; means.len()];
+    let mut reference = means[0].clone();
+    let mut aligned = means.clone();
+    for _ in 0..2 {
+        for (s, m) in shifts.iter_mut().zip(&means) {
+            *s = tsa_change::align(fft, m, &reference).shift;
+        }
+        aligned = means.iter().zip(&shifts).map(|(m, s)| tsa_change::advanced(m, *s)).collect();
+        reference = tsa_change::mean(&slices(&aligned));
+    }
+    let mut ratio = |x: &[(f64, f64)], r: &[(f64, f64)]| tsa_change::concentration(fft, x, r, z).map(|c| c.ratio);
+    let healthy = if aligned.len() >= 2 {
+        (0..aligned.len())
+            .filter_map(|f| {
+                let others: Vec<&[(f64, f64)]> =
+                    aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
+                ratio(&aligned[f], &tsa_change::mean(&others))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    (reference, healthy)
+}
+
+/// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
+/// onto the recording's angle origin), with the tooth where it is largest. `None` when the reference has no
+/// residual or healthy values, or the recording's residual does not line up with it (correlation under
+/// [`MIN_ALIGNMENT`]).
+fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Option<LocalChange> {
+    let healthy = r.local_healthy.iter().copied().fold(f64::NAN, f64::max);
+    if r.residual_mean.len() < 2 || !healthy.is_finite() {
+        return None;
+    }
+    let blocks: Vec<&Block> = g.blocks.iter().collect();
+    let own = spectra(&blocks);
+    if own.is_empty() {
+        return None;
+    }
+    let mean = tsa_change::mean(&slices(&own));
+    let a = tsa_change::align(fft, &mean, &r.residual_mean);
+    if a.correlation < MIN_ALIGNMENT {
+        return None;
+    }
+    let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
+    let z = g.mesh_order;
+    let c = tsa_change::concentration(fft, &mean, &reference, z)?;
+    let n = tsa_change::points(mean.len().min(reference.len()), z);
+    let tooth = tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::verdict::impulse_tooth(&d, z));
+    Some(LocalChange {
+        gear: g.gear,
+        channel: g.channel,
+        value: c.ratio,
+        healthy,
+        limit: (LOCAL_RISE * healthy).max(LOCAL_MIN),
+        alignment: a.correlation,
+        tooth,
+    })
 }
 
 impl Reference {
     /// Whether the reference holds the gear and channel of `g`.
     pub fn covers(&self, g: &GearIndicators) -> bool {
         self.gears.contains_key(&(g.gear.baseline_key(), g.channel))
+    }
+
+    /// The local change of gear `g` against this baseline (`None` when the baseline lacks the gear or holds no
+    /// residual, as profiles written before it, or when the averages do not line up).
+    pub fn local_change(&self, g: &GearIndicators) -> Option<LocalChange> {
+        let r = self.gears.get(&(g.gear.baseline_key(), g.channel))?;
+        local_change_of(&mut Fft::new(), g, r)
     }
 }
 

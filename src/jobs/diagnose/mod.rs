@@ -379,7 +379,11 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.baseline_tsas = tsas.clone();
     }
     history.apply(&mut d);
+    if let Some(r) = &p.reference {
+        d.local_change = d.gears.iter().filter_map(|g| r.local_change(g)).collect();
+    }
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
+    verdict::local_change_evidence(&mut d);
     match &p.facts {
         Some(b) => {
             if let Some(e) = &b.envelope {

@@ -363,6 +363,15 @@ fn place_tooth(d: &mut Diagnosis) {
         VerdictGear::Wheel => Shaft::Wheel,
         _ => return,
     };
+    let origin =
+        if d.speed_profile.tracking.tachometer_origin() { ToothOrigin::Tachometer } else { ToothOrigin::Arbitrary };
+    // the local change against the baseline, when it counts, names the tooth where the average changed
+    let changed = d.local_change.iter().find(|c| c.gear == shaft && c.value >= c.limit);
+    if let Some(tooth) = changed.and_then(|c| c.tooth) {
+        d.verdict.tooth = Some(tooth);
+        d.verdict.tooth_origin = Some(origin);
+        return;
+    }
     let Some(g) = d.gears.iter().find(|g| g.gear == shaft) else { return };
     // the difference signal (first-order sidebands removed too) for an impulse; the residual (mesh lines
     // alone removed) for a smoother local fault such as a pit, whose sidebands carry it
@@ -373,11 +382,7 @@ fn place_tooth(d: &mut Diagnosis) {
     };
     if let Some(tooth) = impulse_tooth(signal, g.mesh_order) {
         d.verdict.tooth = Some(tooth);
-        d.verdict.tooth_origin = Some(if d.speed_profile.tracking.tachometer_origin() {
-            ToothOrigin::Tachometer
-        } else {
-            ToothOrigin::Arbitrary
-        });
+        d.verdict.tooth_origin = Some(origin);
     }
 }
 
@@ -481,6 +486,45 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
             if matches!(line.shaft, Shaft::Named(_)) {
                 d.verdict.deciding = Some(line.shaft);
             }
+        }
+        _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
+        _ => d.verdict.reasons.push(reason),
+    }
+}
+
+/// Adds the local change against the baseline as evidence (each gear's, computed by `baseline::Reference::
+/// local_change` into `d.local_change`): a gear whose average changed at one tooth by over its limit
+/// (2.5 times what the baseline's own files show among themselves) has a local fault there. One value per
+/// recording, so like the envelope it makes a healthy or not-judged verdict suspect on that gear, never
+/// faulty on its own, and supports a suspect or faulty one on the same gear.
+pub fn local_change_evidence(d: &mut Diagnosis) {
+    let strongest = d
+        .local_change
+        .iter()
+        .filter(|c| c.value >= c.limit)
+        .max_by(|a, b| (a.value / a.limit).total_cmp(&(b.value / b.limit)))
+        .cloned();
+    let Some(c) = strongest else { return };
+    let at = c.tooth.map_or(String::new(), |t| format!(" at tooth {t}"));
+    let reason = format!(
+        "{} (channel {}): local change {}{at} against the baseline's average (the largest tooth pitch of the difference holds {} times the median pitch's energy; the baseline's own files differ by at most {}, the limit is {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
+        c.gear,
+        c.channel,
+        num(c.value),
+        num(c.value),
+        num(c.healthy),
+        num(c.limit)
+    );
+    let gear = VerdictGear::from(c.gear);
+    match d.verdict.state {
+        VerdictState::Healthy | VerdictState::NotJudged => {
+            d.verdict.state = VerdictState::Suspect;
+            d.verdict.gear = gear;
+            d.verdict.reasons.insert(0, reason);
+            if matches!(c.gear, Shaft::Named(_)) {
+                d.verdict.deciding = Some(c.gear);
+            }
+            place_tooth(d);
         }
         _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
         _ => d.verdict.reasons.push(reason),

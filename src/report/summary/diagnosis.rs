@@ -425,6 +425,10 @@ pub struct Block {
     pub indicators: BTreeMap<String, f64>,
     /// TSA amplitude by order 0..=K (K about 3.5 mesh harmonics), for the spectral-change indicator.
     pub amplitudes: Vec<f64>,
+    /// Complex order spectrum (re, im) of the block's residual signal, orders 0..=K (K at most 4096; DC
+    /// zero), for the local-change indicator; empty on the blocks past the first few hundred of a long
+    /// recording.
+    pub residual_spectrum: Vec<(f64, f64)>,
 }
 
 /// Where an indicator is scored: ratios of moments and energies vary by factors between blocks (their
@@ -538,6 +542,28 @@ pub struct Score {
     pub faulty_at: f64,
     /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
     pub decides: bool,
+}
+
+/// Where one gear's average changed against the baseline's: the phase-aligned difference of its residual
+/// signal from the baseline's mean residual, and how much of that difference's energy one tooth pitch holds.
+#[derive(Clone, Debug, Serialize)]
+pub struct LocalChange {
+    /// Gear (shaft).
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// Energy of the difference over the tooth pitch where it is largest, over the median pitch's.
+    pub value: f64,
+    /// The largest of the same measure between the baseline's own files (each against the others).
+    pub healthy: f64,
+    /// From here the change counts as evidence of a local fault: 2.5 times `healthy`, at least 3.
+    pub limit: f64,
+    /// Normalised correlation of the recording's residual with the baseline's at the best shift (1: the same
+    /// pattern).
+    pub alignment: f64,
+    /// The tooth (1-based, from the recording's angle origin) where the change is largest.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<usize>,
 }
 
 /// The verdict.
@@ -730,6 +756,9 @@ pub struct Diagnosis {
     /// Indicators scored against the statistical baseline (empty without a baseline).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub scores: Vec<Score>,
+    /// Each gear's local change against the baseline (with a baseline of two files or more).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub local_change: Vec<LocalChange>,
     /// Model comparison, with `--scene`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub comparison: Option<Comparison>,
