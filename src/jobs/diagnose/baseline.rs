@@ -364,16 +364,12 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpec
     if files.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let means: Vec<OrderSpectrum> = files.iter().map(|f| tsa_change::mean(&slices(f))).collect();
-    // every file shifted onto the first's origin, then onto the mean of them all
-    let mut shifts = vec![0.0; means.len()];
-    let mut reference = means[0].clone();
-    let mut aligned = means.clone();
+    // every file's blocks shifted onto the first file's mean, then onto the mean of them all: block by
+    // block, so that a tracked angle's slow wander between blocks does not smear the high orders
+    let mut reference = tsa_change::mean(&slices(&files[0]));
+    let mut aligned: Vec<OrderSpectrum> = Vec::new();
     for _ in 0..2 {
-        for (s, m) in shifts.iter_mut().zip(&means) {
-            *s = tsa_change::align(fft, m, &reference).shift;
-        }
-        aligned = means.iter().zip(&shifts).map(|(m, s)| tsa_change::advanced(m, *s)).collect();
+        aligned = files.iter().map(|f| aligned_mean(fft, f, &reference)).collect();
         reference = tsa_change::mean(&slices(&aligned));
     }
     let mut ratio = |x: &[(f64, f64)], r: &[(f64, f64)]| tsa_change::concentration(fft, x, r, z).map(|c| c.ratio);
@@ -391,6 +387,13 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpec
     (reference, healthy)
 }
 
+/// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first.
+fn aligned_mean(fft: &mut Fft, blocks: &[OrderSpectrum], reference: &[(f64, f64)]) -> OrderSpectrum {
+    let shifted: Vec<OrderSpectrum> =
+        blocks.iter().map(|b| tsa_change::advanced(b, tsa_change::align(fft, b, reference).shift)).collect();
+    tsa_change::mean(&slices(&shifted))
+}
+
 /// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
 /// onto the recording's angle origin), with the tooth where it is largest. `None` when the reference has no
 /// residual or healthy values, or the recording's residual does not line up with it (correlation under
@@ -405,11 +408,14 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     if own.is_empty() {
         return None;
     }
-    let mean = tsa_change::mean(&slices(&own));
-    let a = tsa_change::align(fft, &mean, &r.residual_mean);
+    let a = tsa_change::align(fft, &tsa_change::mean(&slices(&own)), &r.residual_mean);
     if a.correlation < MIN_ALIGNMENT {
         return None;
     }
+    // each block shifted onto the baseline's origin (a tracked angle wanders slowly between blocks), then
+    // the mean and the baseline's delayed together onto the recording's own origin, so that teeth count
+    // from the recording's
+    let mean = tsa_change::advanced(&aligned_mean(fft, &own, &r.residual_mean), -a.shift);
     let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
     let z = g.mesh_order;
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
