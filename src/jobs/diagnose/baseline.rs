@@ -70,6 +70,14 @@ pub const DECIDING: [(&str, &str, &str); 8] = [
 /// cracks and spalls far more. Two files give a thin picture of how healthy recordings differ, so the
 /// limit keeps a margin over what they showed.
 pub const LOCAL_RISE: f64 = 2.5;
+/// How far a recording's sideband growth must rise over the largest of the baseline files' (each against
+/// the others), and the least growth that counts: healthy generated recordings of four machines reach 6.9
+/// (against siblings that show 5.4 among themselves), 3.2x their siblings' where those are small; their
+/// eccentric gears 7.7-91, their worn gears up to 51 (and under 8 on the other gear of the pair).
+pub const SIDEBAND_RISE: f64 = 3.0;
+/// See [`SIDEBAND_RISE`].
+pub const SIDEBAND_MIN: f64 = 8.0;
+
 /// Least local change that counts at all: over z pitches of noise alone the largest pitch holds 1.5-3
 /// times the median's energy.
 pub const LOCAL_MIN: f64 = 3.0;
@@ -178,6 +186,9 @@ struct GearReference {
     /// recordings of the gear differ locally (empty from one file).
     #[serde(default)]
     local_healthy: Vec<f64>,
+    /// The sideband growth of each baseline file against the other files'.
+    #[serde(default)]
+    sidebands_healthy: Vec<f64>,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -323,7 +334,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 rms_db(l, &others)
             })
             .collect();
-        let (residual_mean, local_healthy) = local_reference(&mut fft, &per_file[&key], teeth[&key]);
+        let (residual_mean, local_healthy, sidebands_healthy) = local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
         for (k, _, _) in DECIDING {
             let values: Vec<f64> = match k {
@@ -337,7 +348,16 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
         let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
         gears.insert(
             key,
-            GearReference { stats, residual_var, log_spectrum: log_ref, floor, rms, residual_mean, local_healthy },
+            GearReference {
+                stats,
+                residual_var,
+                log_spectrum: log_ref,
+                floor,
+                rms,
+                residual_mean,
+                local_healthy,
+                sidebands_healthy,
+            },
         );
     }
     Ok(Reference { gears, files: baselines.len() })
@@ -359,10 +379,10 @@ fn spectra(blocks: &[&Block]) -> Vec<OrderSpectrum> {
 /// values: the halves of one recording differ by less than separate recordings do (the real rig's healthy
 /// file, channel 2: 2.9 between the quarters of one half, 11.4 between its two halves), so the local
 /// change needs two healthy files at least.
-fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpectrum, Vec<f64>) {
+fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpectrum, Vec<f64>, Vec<f64>) {
     let files: Vec<Vec<OrderSpectrum>> = files.iter().map(|f| spectra(f)).filter(|s| !s.is_empty()).collect();
     if files.is_empty() {
-        return (Vec::new(), Vec::new());
+        return (Vec::new(), Vec::new(), Vec::new());
     }
     // every file's blocks shifted onto the first file's mean, then onto the mean of them all: block by
     // block, so that a tracked angle's slow wander between blocks does not smear the high orders
@@ -372,19 +392,19 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpec
         aligned = files.iter().map(|f| aligned_mean(fft, f, &reference)).collect();
         reference = tsa_change::mean(&slices(&aligned));
     }
-    let mut ratio = |x: &[(f64, f64)], r: &[(f64, f64)]| tsa_change::concentration(fft, x, r, z).map(|c| c.ratio);
-    let healthy = if aligned.len() >= 2 {
-        (0..aligned.len())
-            .filter_map(|f| {
-                let others: Vec<&[(f64, f64)]> =
-                    aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
-                ratio(&aligned[f], &tsa_change::mean(&others))
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
-    (reference, healthy)
+    let mut healthy = Vec::new();
+    let mut sidebands = Vec::new();
+    for f in 0..aligned.len() {
+        if aligned.len() < 2 {
+            break;
+        }
+        let others: Vec<&[(f64, f64)]> =
+            aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
+        let r = tsa_change::mean(&others);
+        healthy.extend(tsa_change::concentration(fft, &aligned[f], &r, z).map(|c| c.ratio));
+        sidebands.extend(tsa_change::sideband_growth(&aligned[f], &r, z));
+    }
+    (reference, healthy, sidebands)
 }
 
 /// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first.
@@ -419,6 +439,8 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
     let z = g.mesh_order;
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
+    let sidebands = tsa_change::sideband_growth(&mean, &reference, z).unwrap_or(f64::NAN);
+    let sidebands_healthy = r.sidebands_healthy.iter().copied().fold(f64::NAN, f64::max);
     let n = tsa_change::points(mean.len().min(reference.len()), z);
     let tooth = tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::verdict::impulse_tooth(&d, z));
     Some(LocalChange {
@@ -429,6 +451,9 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
         limit: (LOCAL_RISE * healthy).max(LOCAL_MIN),
         alignment: a.correlation,
         tooth,
+        sidebands,
+        sidebands_healthy,
+        sidebands_limit: (SIDEBAND_RISE * sidebands_healthy).max(SIDEBAND_MIN),
     })
 }
 

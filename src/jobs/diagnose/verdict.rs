@@ -492,42 +492,80 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
     }
 }
 
-/// Adds the local change against the baseline as evidence (each gear's, computed by `baseline::Reference::
-/// local_change` into `d.local_change`): a gear whose average changed at one tooth by over its limit
-/// (2.5 times what the baseline's own files show among themselves) has a local fault there. One value per
-/// recording, so like the envelope it makes a healthy or not-judged verdict suspect on that gear, never
-/// faulty on its own, and supports a suspect or faulty one on the same gear.
+/// Adds the change of each gear's average against the baseline's as evidence (computed by
+/// `baseline::Reference::local_change` into `d.local_change`): a gear whose average changed at one tooth by
+/// over its limit (2.5 times what the baseline's own files show among themselves) has a local fault there;
+/// one whose mesh sidebands grew over theirs is modulated once per revolution. One value per recording
+/// each, so like the envelope the strongest makes a healthy or not-judged verdict suspect on its gear,
+/// never faulty on its own, and each supports a suspect or faulty verdict on the same gear.
 pub fn local_change_evidence(d: &mut Diagnosis) {
-    let strongest = d
-        .local_change
-        .iter()
-        .filter(|c| c.value >= c.limit)
-        .max_by(|a, b| (a.value / a.limit).total_cmp(&(b.value / b.limit)))
-        .cloned();
-    let Some(c) = strongest else { return };
-    let at = c.tooth.map_or(String::new(), |t| format!(" at tooth {t}"));
-    let reason = format!(
-        "{} (channel {}): local change {}{at} against the baseline's average (the largest tooth pitch of the difference holds {} times the median pitch's energy; the baseline's own files differ by at most {}, the limit is {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
-        c.gear,
-        c.channel,
-        num(c.value),
-        num(c.value),
-        num(c.healthy),
-        num(c.limit)
-    );
-    let gear = VerdictGear::from(c.gear);
-    match d.verdict.state {
-        VerdictState::Healthy | VerdictState::NotJudged => {
-            d.verdict.state = VerdictState::Suspect;
-            d.verdict.gear = gear;
-            d.verdict.reasons.insert(0, reason);
-            if matches!(c.gear, Shaft::Named(_)) {
-                d.verdict.deciding = Some(c.gear);
-            }
-            place_tooth(d);
+    let mut found: Vec<(f64, Shaft, String)> = Vec::new();
+    for c in &d.local_change {
+        if c.value >= c.limit {
+            let at = c.tooth.map_or(String::new(), |t| format!(" at tooth {t}"));
+            found.push((
+                c.value / c.limit,
+                c.gear,
+                format!(
+                    "{} (channel {}): local change {}{at} against the baseline's average (the largest tooth pitch of the difference holds {} times the median pitch's energy; the baseline's own files differ by at most {}, the limit is {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    c.gear,
+                    c.channel,
+                    num(c.value),
+                    num(c.value),
+                    num(c.healthy),
+                    num(c.limit)
+                ),
+            ));
         }
-        _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
-        _ => d.verdict.reasons.push(reason),
+        if c.sidebands >= c.sidebands_limit {
+            found.push((
+                c.sidebands / c.sidebands_limit,
+                c.gear,
+                format!(
+                    "{} (channel {}): sideband growth {} against the baseline's average (the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline; its own files at most {}, the limit is {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    c.gear,
+                    c.channel,
+                    num(c.sidebands),
+                    num(c.sidebands),
+                    num(c.sidebands_healthy),
+                    num(c.sidebands_limit)
+                ),
+            ));
+        }
+    }
+    found.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let on_verdict_gear = found.iter().any(|f| VerdictGear::from(f.1) == d.verdict.gear);
+    for (i, (_, shaft, reason)) in found.into_iter().enumerate() {
+        let gear = VerdictGear::from(shaft);
+        match d.verdict.state {
+            // a suspect verdict from indicators both gears' averages share (the spectral change, the mesh
+            // lines' energy) moves to the gear whose own orders changed, when its own did not
+            VerdictState::Suspect if i == 0 && d.verdict.gear != gear && !on_verdict_gear => {
+                d.verdict.cross_talk.push(format!(
+                    "the {}'s indicators moved too, but its own orders did not change against the baseline's while the {}'s did: read as the {}'s fault seen in the {}'s average",
+                    d.verdict.gear, shaft, shaft, d.verdict.gear
+                ));
+                d.verdict.gear = gear;
+                d.verdict.tooth = None;
+                d.verdict.tooth_origin = None;
+                d.verdict.reasons.insert(0, reason);
+                if matches!(shaft, Shaft::Named(_)) {
+                    d.verdict.deciding = Some(shaft);
+                }
+                place_tooth(d);
+            }
+            VerdictState::Healthy | VerdictState::NotJudged if i == 0 => {
+                d.verdict.state = VerdictState::Suspect;
+                d.verdict.gear = gear;
+                d.verdict.reasons.insert(0, reason);
+                if matches!(shaft, Shaft::Named(_)) {
+                    d.verdict.deciding = Some(shaft);
+                }
+                place_tooth(d);
+            }
+            _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
+            _ => d.verdict.reasons.push(reason),
+        }
     }
 }
 

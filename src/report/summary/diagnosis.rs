@@ -564,6 +564,13 @@ pub struct LocalChange {
     /// The tooth (1-based, from the recording's angle origin) where the change is largest.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tooth: Option<usize>,
+    /// Sideband growth: the difference's energy at the first-order sidebands (k z +- 1) over the baseline's
+    /// own there; a change once per revolution (an eccentric gear, uneven wear) raises it.
+    pub sidebands: f64,
+    /// The largest of the same between the baseline's own files.
+    pub sidebands_healthy: f64,
+    /// From here the growth counts as evidence: 3 times `sidebands_healthy`, at least 8.
+    pub sidebands_limit: f64,
 }
 
 /// The verdict.
