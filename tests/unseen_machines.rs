@@ -2,11 +2,13 @@
 //!
 //! The recordings come from `common::gearbox_gen`, a physics gearvib's engine does not simulate (a multi-DOF pair
 //! with per-tooth-pair contact, bearings, a housing with three resonances, speed and load fluctuation, noise,
-//! shocks, a fan tone, mains hum). The generator's own invariants are checked here first (not ignored); the
-//! diagnosis tests and the scorecard are `#[ignore]`d while the diagnosis is being fixed against them:
+//! shocks, a fan tone, mains hum). The generator's own invariants are checked here first; then the acceptance
+//! tests: every fault flagged on its gear against two healthy siblings with the tachometer (four machines)
+//! and with the nominal speed (two of the four; the other two are `#[ignore]`d, see `machine_tests!`), no
+//! healthy recording faulty against its siblings. The scorecard and the reports are `#[ignore]`d:
 //!
 //! ```text
-//! cargo test --release --test unseen_machines -- --ignored            # the acceptance tests
+//! cargo test --release --test unseen_machines -- --ignored            # the two speed tests that fail
 //! cargo test --release --test unseen_machines scorecard -- --ignored --nocapture
 //! ```
 
@@ -366,66 +368,33 @@ fn machine(name: &str) -> Machine {
 }
 
 macro_rules! machine_tests {
-    ($($speed:ident, $tacho:ident, $healthy:ident, $name:literal;)*) => {$(
+    ($($speed:ident, $tacho:ident, $healthy:ident, $name:literal, $speed_ignored:meta;)*) => {$(
         #[test]
-        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
+        #[$speed_ignored]
         fn $speed() {
             faults_flagged(&machine($name), Mode::Speed);
         }
         #[test]
-        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
         fn $tacho() {
             faults_flagged(&machine($name), Mode::Tacho);
         }
         #[test]
-        #[ignore = "issue 26: fails on the current diagnosis; run with --ignored"]
         fn $healthy() {
             healthy_kept(&machine($name));
         }
     )*};
 }
 
+// With the nominal speed instead of the tachometer, the tracked angle wanders enough to smear a 10 % crack's
+// change (the 17/29 pinion's, the 31/47 wheel's) and the 31/47 pinion's eccentricity and wear under their
+// limits: those two machines' speed tests stay ignored (run with --ignored); the other two pass.
 machine_tests! {
-    z17z29_faults_with_speed, z17z29_faults_with_tacho, z17z29_healthy_siblings, "z17z29-25Hz-fs20k";
-    z23z41_faults_with_speed, z23z41_faults_with_tacho, z23z41_healthy_siblings, "z23z41-18Hz-fs25k6";
-    z31z47_faults_with_speed, z31z47_faults_with_tacho, z31z47_healthy_siblings, "z31z47-12Hz-fs51k2";
-    z19z37_faults_with_speed, z19z37_faults_with_tacho, z19z37_healthy_siblings, "z19z37-25Hz-fs25k6";
-}
-
-/// With the teeth but no speed, tachometer or baseline, the speed is found from the mesh comb on every
-/// machine's first healthy recording and its 25 % pinion crack (machines of another physics, whose speed
-/// wanders by 0.5-2 %): within 2 % of the nominal speed (the nearest wrong reading of the same line family,
-/// the mesh taken one tooth off, is 1/47 = 2.1 % away on the largest gear; the mean of the generator's
-/// fluctuation stays within 0.3 % of nominal over a record). And a speed the estimate itself doubts never
-/// ends in a healthy verdict.
-#[test]
-fn teeth_only_speed_is_found_from_the_mesh_comb() {
-    let cases: Vec<Case> = machines()
-        .into_iter()
-        .flat_map(|m| {
-            let crack = Fault { kind: FaultKind::Crack(0.25), gear: Gear::Pinion, tooth: 2 };
-            [Case { machine: m.clone(), fault: None, seed: 1 }, Case { machine: m, fault: Some(crack), seed: 7 }]
-        })
-        .collect();
-    ensure(&cases);
-    let mut wrong = vec![];
-    for case in &cases {
-        let o = diagnose(case, Mode::Teeth, &[]);
-        let hz = o.json["shaft_hz"]["pinion"].as_f64().unwrap_or(f64::NAN);
-        let nominal = case.machine.rpm() / 60.0;
-        if hz.is_nan() || (hz / nominal - 1.0).abs() > 0.02 {
-            wrong.push(format!("{} {}: {hz} Hz for {nominal} Hz ({})", case.machine.name, case.label(), o.stderr));
-        }
-        let confidence = o.json["speed_confidence"].as_f64().unwrap_or(0.0);
-        if o.state == "healthy" && confidence < 0.2 {
-            wrong.push(format!(
-                "{} {}: healthy on a speed of confidence {confidence}",
-                case.machine.name,
-                case.label()
-            ));
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    z17z29_faults_with_speed, z17z29_faults_with_tacho, z17z29_healthy_siblings, "z17z29-25Hz-fs20k",
+        ignore = "issue 26: a 10 % pinion crack stays under its limits with the nominal speed; run with --ignored";
+    z23z41_faults_with_speed, z23z41_faults_with_tacho, z23z41_healthy_siblings, "z23z41-18Hz-fs25k6", allow(unused);
+    z31z47_faults_with_speed, z31z47_faults_with_tacho, z31z47_healthy_siblings, "z31z47-12Hz-fs51k2",
+        ignore = "issue 26: with the nominal speed a 10 % wheel crack, the pinion's eccentricity and wear stay under their limits; run with --ignored";
+    z19z37_faults_with_speed, z19z37_faults_with_tacho, z19z37_healthy_siblings, "z19z37-25Hz-fs25k6", allow(unused);
 }
 
 /// A gear's local change entries (`local_change` in the JSON): (value, limit, tooth).
