@@ -484,6 +484,60 @@ fn a_ten_percent_crack_changes_the_average_at_its_tooth() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
+/// A profile learned from two healthy siblings holds the baseline's mean residual and how the siblings differ:
+/// `diagnose --profile` gives the same local change and sideband growth as `--baseline` with the same two
+/// files (a JSON round trip of f64 is exact; the values agree to rounding) and the same verdict.
+#[test]
+fn a_profile_keeps_the_local_change() {
+    let m = machine("z23z41-18Hz-fs25k6");
+    let (healthy, faults) = test_set(&m);
+    let crack = faults.into_iter().find(|c| c.label() == "wheel-crack10-t12").unwrap();
+    ensure(&healthy.iter().chain([&crack]).cloned().collect::<Vec<_>>());
+    let dir = temp_dir("unseen-profile");
+    let profile = dir.join("z23z41.json").to_string_lossy().into_owned();
+    let (h1, h2) = (healthy[0].path().to_string_lossy().into_owned(), healthy[1].path().to_string_lossy().into_owned());
+    let teeth = format!("{},{}", m.zp, m.zw);
+    let common = ["--channel", "1", "--teeth", teeth.as_str(), "--tacho-channel", "2"];
+    let mut learn = vec!["learn", h1.as_str(), h2.as_str(), "-o", profile.as_str()];
+    learn.extend(common);
+    let run = gearvib(&learn);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let rec = crack.path().to_string_lossy().into_owned();
+    // the profile fixes the machine and its processing (teeth, channel, tachometer)
+    let with_profile = vec!["diagnose", rec.as_str(), "--json", "--profile", profile.as_str()];
+    let mut with_baseline =
+        vec!["diagnose", rec.as_str(), "--json", "--baseline", h1.as_str(), "--baseline", h2.as_str()];
+    with_baseline.extend(common);
+    let json = |args: &[&str]| -> serde_json::Value {
+        let run = gearvib(args);
+        serde_json::from_str(run.stdout.lines().next().unwrap_or("null")).unwrap_or_default()
+    };
+    let (a, b) = (json(&with_profile), json(&with_baseline));
+    assert_eq!(a["verdict"]["state"], b["verdict"]["state"]);
+    assert_eq!(a["verdict"]["gear"], "wheel", "{}", a["verdict"]);
+    let changes = |x: &serde_json::Value| -> Vec<[f64; 4]> {
+        x["local_change"]
+            .as_array()
+            .map(|v| {
+                v.iter()
+                    .map(|c| {
+                        ["value", "healthy", "sidebands", "sidebands_healthy"]
+                            .map(|k| c[k].as_f64().unwrap_or(f64::NAN))
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let (ca, cb) = (changes(&a), changes(&b));
+    assert_eq!(ca.len(), 2, "both gears: {}", a["local_change"]);
+    assert_eq!(ca.len(), cb.len());
+    for (x, y) in ca.iter().zip(&cb) {
+        for (p, q) in x.iter().zip(y) {
+            assert!((p - q).abs() <= 1e-9 * q.abs().max(1.0), "{x:?} against {y:?}");
+        }
+    }
+}
+
 /// Without a baseline, a spall and a broken tooth whose TSA indicators stay under the absolute limits are
 /// raised by their envelope order line (over 30 dB above its neighbourhood) on their own gear, and no
 /// healthy recording of those machines has an envelope line over that limit (they reach 22 dB).

@@ -507,10 +507,9 @@ pub fn local_change_evidence(d: &mut Diagnosis) {
                 c.value / c.limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): local change {}{at} against the baseline's average (the largest tooth pitch of the difference holds {} times the median pitch's energy; the baseline's own files differ by at most {}, the limit is {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): local change{at} against the baseline's average: the difference's largest tooth pitch holds {} times the median pitch's energy (the baseline's own files differ by at most {}; limit {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
-                    num(c.value),
                     num(c.value),
                     num(c.healthy),
                     num(c.limit)
@@ -522,10 +521,9 @@ pub fn local_change_evidence(d: &mut Diagnosis) {
                 c.sidebands / c.sidebands_limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): sideband growth {} against the baseline's average (the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline; its own files at most {}, the limit is {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (its own files at most {}; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
-                    num(c.sidebands),
                     num(c.sidebands),
                     num(c.sidebands_healthy),
                     num(c.sidebands_limit)
