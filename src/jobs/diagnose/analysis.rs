@@ -111,12 +111,14 @@ pub(super) fn analyse_parts<'a>(
             (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
         }
     };
+    // the first blocks keep their residual's order spectrum when a baseline's change will be measured
+    let keep = |i: usize| o.residual_spectra && i < SPECTRUM_BLOCKS;
     let (tsas, early_scan) = rayon::join(
         || {
             let mut out = Vec::new();
             for (gi, &(_, ratio, z)) in gears.iter().enumerate() {
                 let on_block = |fft: &mut Fft, _: usize, i: usize, b: &[f64]| match z {
-                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, others(gi), o.shaft_orders, i)),
+                    Some(z) => PendingBlock::Done(block_indicators(fft, b, z, others(gi), o.shaft_orders, keep(i))),
                     None => PendingBlock::Raw(b.to_vec()),
                 };
                 let per_channel =
@@ -210,7 +212,7 @@ pub(super) fn analyse_parts<'a>(
                         .enumerate()
                         .map(|(i, b)| match b {
                             PendingBlock::Done(b) => b,
-                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders, i),
+                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders, keep(i)),
                         })
                         .collect();
                     g
@@ -485,21 +487,21 @@ const SPECTRUM_ORDERS: usize = 4096;
 
 /// Indicators of one block average of a gear (consecutive blocks of whole revolutions; the statistical
 /// baseline's samples; a recording under test is scored by the median of its own blocks, so both sides
-/// average the same number of revolutions); `index` counts the blocks from the recording's start.
+/// average the same number of revolutions); with `spectrum` the block keeps its residual's order spectrum.
 pub(super) fn block_indicators(
     fft: &mut Fft,
     block: &[f64],
     z: usize,
     others: &OtherLines,
     shaft_orders: usize,
-    index: usize,
+    spectrum: bool,
 ) -> crate::report::summary::Block {
     let (mut indicators, d) = tsa_indicators(fft, block, z, others, shaft_orders);
     let n = d.residual.len() as f64;
     let mean = d.residual.iter().sum::<f64>() / n;
     indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
     indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
-    let residual_spectrum = if index < SPECTRUM_BLOCKS {
+    let residual_spectrum = if spectrum {
         crate::signal::tsa_change::order_spectrum(fft, &d.residual, SPECTRUM_ORDERS)
     } else {
         Vec::new()
