@@ -115,6 +115,8 @@ struct Classes {
     w: f64,
     co: Coefficients,
     stride: usize,
+    /// gcd of the coefficient harmonics present (0 when none: then every harmonic is its own class).
+    g: usize,
     band_blocks: usize,
     h: isize,
     /// Per entry e = i N + l: whether M_e or C_e has a harmonic besides the mean.
@@ -157,10 +159,17 @@ impl Classes {
             coupling,
             co,
             stride,
+            g,
             band_blocks: hc.checked_div(g).unwrap_or(0),
             h: h_trunc as isize,
             varying,
         }
+    }
+
+    /// The same operator truncated at H = `h_trunc` instead.
+    fn set_truncation(&mut self, h_trunc: usize) {
+        self.h = h_trunc as isize;
+        self.stride = if self.g == 0 { 2 * h_trunc + 1 } else { self.g };
     }
 
     /// Harmonics of class r within [-H, H] (Y_{-n} = conj(Y_n): only r <= g / 2 is ever solved).
@@ -222,18 +231,44 @@ impl Classes {
         v
     }
 
-    /// The inverse of the diagonal block L_nn (column-major) and delta(n): |L_nn^-1| times a bound on the
+    /// r -= L_nm y for the block (row harmonic n, column harmonic m) and `y` the nd values of harmonic m:
+    /// [`Classes::entry`] with the block's index and frequency computed once.
+    #[inline]
+    fn couple(&self, n: isize, m: isize, y: &[C64], r: &mut [C64]) {
+        let hc = self.co.h as isize;
+        if (n - m).abs() > hc {
+            return;
+        }
+        let kk = (n - m + hc) as usize;
+        let wm = m as f64 * self.w;
+        let (mass, damp) = (C64::new(-wm * wm, 0.0), C64::new(0.0, wm));
+        let nd = self.nd;
+        for (i, ri) in r.iter_mut().enumerate() {
+            for (l, yl) in y.iter().enumerate() {
+                let e = i * nd + l;
+                let mut v = self.co.stiffness[e][kk];
+                if kk == self.co.h || self.varying[e] {
+                    v += self.co.mass[e][kk] * mass + self.co.damping[e][kk] * damp;
+                }
+                *ri -= v * yl;
+            }
+        }
+    }
+
+    /// Appends the inverse of the diagonal block L_nn (column-major) to `out`; returns delta(n): |L_nn^-1| times a bound on the
     /// sum of every off-diagonal block |L_no| of row n (infinity norms), from the coefficients' sums:
     /// |L_no| <= |K_k| + (o w)^2 |M_k| + |o w| |C_k| with |o| <= |n| + hc. `None` when L_nn is singular.
-    fn dominance(&self, n: isize) -> Option<(Vec<C64>, f64)> {
+    fn dominance(&self, n: isize, out: &mut Vec<C64>) -> Option<f64> {
         let nd = self.nd;
+        let at = out.len();
         // one division for one DOF
-        let inv: Vec<C64> = if nd == 1 {
-            vec![C64::new(1.0, 0.0) / self.entry(n, n, 0, 0)]
+        if nd == 1 {
+            out.push(C64::new(1.0, 0.0) / self.entry(n, n, 0, 0));
         } else {
             let diag = DMatrix::from_fn(nd, nd, |i, l| self.entry(n, n, i, l));
-            diag.try_inverse()?.as_slice().to_vec()
-        };
+            out.extend_from_slice(diag.try_inverse()?.as_slice());
+        }
+        let inv = &out[at..];
         if inv.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
             return None;
         }
@@ -250,14 +285,18 @@ impl Classes {
                     .sum::<f64>()
             })
             .fold(0.0, f64::max);
-        Some((inv, inv_norm * coupling))
+        Some(inv_norm * coupling)
     }
 
     /// The smallest n0 >= 1 such that every harmonic n0 < n <= `up_to` has a dominant diagonal block
     /// (delta(n) < 1/2, see [`Classes::dominance`]): beyond a truncation at n0 the continuation of
     /// [`Classes::extend`] holds. `None` when harmonic `up_to` itself is not dominant.
     fn dominant_from(&self, up_to: isize) -> Option<isize> {
-        let dominant = |n: isize| self.dominance(n).is_some_and(|(_, d)| d < 0.5);
+        let mut inv = Vec::new();
+        let mut dominant = |n: isize| {
+            inv.clear();
+            self.dominance(n, &mut inv).is_some_and(|d| d < 0.5)
+        };
         let mut n0 = up_to;
         while n0 >= 1 && dominant(n0) {
             n0 -= 1;
@@ -320,20 +359,15 @@ impl Classes {
             let mut inv_ring = Vec::new();
             for (jr, &n) in ring.iter().enumerate().take_while(|(_, n)| n.abs() <= h + hc) {
                 for j in near(n) {
-                    for i in 0..nd {
-                        for l in 0..nd {
-                            r[jr * nd + i] -= self.entry(n, members[j], i, l) * x[j * nd + l];
-                        }
-                    }
+                    self.couple(n, members[j], &x[j * nd..(j + 1) * nd], &mut r[jr * nd..(jr + 1) * nd]);
                 }
                 if n.unsigned_abs() <= hf {
                     for i in 0..nd {
                         r[jr * nd + i] += forcing[i][(n + hf as isize) as usize];
                     }
                 }
-                let Some((inv, d)) = self.dominance(n) else { return f64::INFINITY };
+                let Some(d) = self.dominance(n, &mut inv_ring) else { return f64::INFINITY };
                 delta = delta.max(d);
-                inv_ring.extend(inv);
             }
             rs.push(r);
             inverses.push(inv_ring);
@@ -371,15 +405,13 @@ impl Classes {
                         corr[i][(h2 - n) as usize] += e[i].conj();
                     }
                 }
+                // b holds -B e_out until the solve
                 for j in near(n) {
-                    for i in 0..nd {
-                        for (l, el) in e.iter().enumerate() {
-                            b[j * nd + i] += self.entry(members[j], n, i, l) * el;
-                        }
-                    }
+                    self.couple(members[j], n, e, &mut b[j * nd..(j + 1) * nd]);
                 }
             }
         }
+        b.iter_mut().for_each(|v| *v = -*v);
         // the inside answer to the dropped harmonics: e_in = -L_in^-1 B e_out
         lu.solve_factored(pivots, &mut b);
         for (j, &m) in members.iter().enumerate() {
@@ -433,14 +465,21 @@ impl Classes {
         let (m0, last) = (members.first().copied().unwrap_or(r0), members.len() as isize - 1);
         let starts = [h + 1 + (r0 - (h + 1)).rem_euclid(g), -h - 1 - (-h - 1 - r0).rem_euclid(g)];
         for (side, start) in [1isize, -1].into_iter().zip(starts) {
+            if nd == 1 && !self.varying[0] {
+                if !self.extend_scalar(side, start, members, x, forcing, hf, weight, h_cap, small, beyond) {
+                    return false;
+                }
+                continue;
+            }
             // continued values of this side, nd per harmonic start + side j g
             let mut ext: Vec<C64> = Vec::new();
+            let mut r = vec![zero; nd];
             for j in 0.. {
                 let n = start + side * j * g;
                 if n.abs() > h_cap {
                     break;
                 }
-                let mut r = vec![zero; nd];
+                r.fill(zero);
                 if n.unsigned_abs() <= hf {
                     for (i, ri) in r.iter_mut().enumerate() {
                         *ri = forcing[i][(n + hf as isize) as usize];
@@ -450,29 +489,23 @@ impl Classes {
                 let lo = (n - hc - m0 + g - 1).div_euclid(g).max(0);
                 let hi = (n + hc - m0).div_euclid(g).min(last);
                 for jm in lo..=hi {
-                    let m = members[jm as usize];
-                    for (i, ri) in r.iter_mut().enumerate() {
-                        for l in 0..nd {
-                            *ri -= self.entry(n, m, i, l) * x[jm as usize * nd + l];
-                        }
-                    }
+                    let jm = jm as usize;
+                    self.couple(n, members[jm], &x[jm * nd..(jm + 1) * nd], &mut r);
                 }
                 // continued members within hc of n (those before it on this side)
                 for jp in (j - hc / g).max(0)..j {
-                    let m = start + side * jp * g;
-                    for (i, ri) in r.iter_mut().enumerate() {
-                        for l in 0..nd {
-                            *ri -= self.entry(n, m, i, l) * ext[jp as usize * nd + l];
-                        }
-                    }
+                    let at = jp as usize * nd;
+                    self.couple(n, start + side * jp * g, &ext[at..at + nd], &mut r);
                 }
-                let y: Vec<C64> = if nd == 1 {
-                    vec![r[0] / self.entry(n, n, 0, 0)]
+                let at = ext.len();
+                if nd == 1 {
+                    ext.push(r[0] / self.entry(n, n, 0, 0));
                 } else {
                     let diag = DMatrix::from_fn(nd, nd, |i, l| self.entry(n, n, i, l));
                     let Some(inv) = diag.try_inverse() else { return false };
-                    (inv * DVector::from_vec(r)).iter().copied().collect()
-                };
+                    ext.extend((inv * DVector::from_column_slice(&r)).iter());
+                }
+                let y = &ext[at..];
                 if y.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
                     return false;
                 }
@@ -482,8 +515,73 @@ impl Classes {
                     beyond[i][slot][0] += weight * v;
                     beyond[i][slot][1] += weight * v * (n as f64 * self.w).abs();
                 }
-                ext.extend(y);
                 if ext.len() >= band * nd && ext[ext.len() - band * nd..].iter().all(|v| v.norm_sqr().sqrt() <= small) {
+                    break;
+                }
+            }
+        }
+        true
+    }
+
+    /// One side of [`Classes::extend`] for one DOF with constant mass and damping (the gear pair): the
+    /// coupling is K alone, so harmonic n = start + side j g takes the band of the class's values before
+    /// it (inside members, then the continuation) through K_{+-d g}, d = 1..hc / g, a strided dot product.
+    #[allow(clippy::too_many_arguments)]
+    fn extend_scalar(
+        &self,
+        side: isize,
+        start: isize,
+        members: &[isize],
+        x: &[C64],
+        forcing: &[Vec<C64>],
+        hf: usize,
+        weight: f64,
+        h_cap: isize,
+        small: f64,
+        beyond: &mut [Vec<[f64; 2]>],
+    ) -> bool {
+        let (g, hc, h) = (self.stride as isize, self.co.h as isize, self.h);
+        let band = (hc / g) as usize;
+        let k = &self.co.stiffness[0];
+        // K_{side d g} for d = 1..band: the coupling of n to the value d places before it on this side
+        let kd: Vec<C64> = (1..=band as isize).map(|d| k[(hc + side * d * g) as usize]).collect();
+        // the class's values in the order of this side: inside members toward it, then the continuation
+        let mut seq: Vec<C64> = if side > 0 { x.to_vec() } else { x.iter().rev().copied().collect() };
+        debug_assert_eq!(members.len(), x.len());
+        let coupling: f64 = kd.iter().map(|k| k.norm_sqr().sqrt()).sum();
+        for j in 0.. {
+            let n = start + side * j * g;
+            if n.abs() > h_cap {
+                break;
+            }
+            let r = if n.unsigned_abs() <= hf { forcing[0][(n + hf as isize) as usize] } else { C64::new(0.0, 0.0) };
+            // two partial sums: the products are independent, the sum's latency is the loop's bound
+            let (mut even, mut odd) = (r, C64::new(0.0, 0.0));
+            let mut pairs = kd.iter().zip(seq.iter().rev());
+            while let Some((k1, y1)) = pairs.next() {
+                even -= k1 * y1;
+                if let Some((k2, y2)) = pairs.next() {
+                    odd -= k2 * y2;
+                }
+            }
+            let diag = self.entry(n, n, 0, 0);
+            let y = (even + odd) / diag;
+            if !y.re.is_finite() || !y.im.is_finite() {
+                return false;
+            }
+            let v = y.norm_sqr().sqrt();
+            let slot = (n.abs() - h - 1) as usize;
+            beyond[0][slot][0] += weight * v;
+            beyond[0][slot][1] += weight * v * (n as f64 * self.w).abs();
+            seq.push(y);
+            // every later value is at most q = sum |K_dg| / |L_nn| (falling with n) times the largest of the
+            // band before it, so all of them together at most q / (1 - q) times the band's largest
+            let q = coupling / diag.norm_sqr().sqrt();
+            if n.unsigned_abs() >= hf && q < 0.5 {
+                // (squared, no root per value)
+                let largest = seq.iter().rev().take(band).map(|v| v.norm_sqr()).fold(0.0, f64::max);
+                let bound = small * (1.0 - q) / q;
+                if largest <= bound * bound {
                     break;
                 }
             }
@@ -570,21 +668,36 @@ fn solve_order_extended(
 ) -> Result<(HillSolution, f64, Option<Tail>), SolverError> {
     let classes = Classes::new(form, h_trunc);
     let (forcing, hf) = complex_forcing(&form.forcing);
-    let mut coeffs = vec![vec![C64::new(0.0, 0.0); 2 * h_trunc + 1]; form.dof];
+    solve_classes(&classes, &forcing, hf, refine, want_tail, extension)
+}
+
+/// [`solve_order_extended`] on the operator `classes` (truncated at its H) with complex forcing
+/// coefficients `forcing[i][n + hf]`.
+fn solve_classes(
+    classes: &Classes,
+    forcing: &[Vec<C64>],
+    hf: usize,
+    refine: bool,
+    want_tail: bool,
+    extension: Option<Extension>,
+) -> Result<(HillSolution, f64, Option<Tail>), SolverError> {
+    let h_trunc = classes.h as usize;
+    let dof = classes.nd;
+    let mut coeffs = vec![vec![C64::new(0.0, 0.0); 2 * h_trunc + 1]; dof];
     let mut rounding = coeffs.clone();
-    let mut sums = vec![[0.0; 2]; form.dof];
+    let mut sums = vec![[0.0; 2]; dof];
     let mut delta: f64 = 0.0;
     let h2 = h_trunc + 2 * classes.co.h;
-    let mut corr = vec![vec![C64::new(0.0, 0.0); 2 * h2 + 1]; form.dof];
+    let mut corr = vec![vec![C64::new(0.0, 0.0); 2 * h2 + 1]; dof];
     for r in 0..=classes.count() / 2 {
         let members = classes.members(r);
-        let Some(rhs) = (!members.is_empty()).then(|| classes.rhs(&members, &forcing, hf)).flatten() else {
+        let Some(rhs) = (!members.is_empty()).then(|| classes.rhs(&members, forcing, hf)).flatten() else {
             continue;
         };
         let (x, dx, lu, pivots) = solve_refined(classes.matrix(&members), rhs, refine).ok_or(SolverError::Singular)?;
         let weight = if r != 0 && 2 * r != classes.count() { 2.0 } else { 1.0 };
         if want_tail {
-            let d = classes.tail(&members, &x, &lu, &pivots, &forcing, hf, weight, &mut sums, &mut corr);
+            let d = classes.tail(&members, &x, &lu, &pivots, forcing, hf, weight, &mut sums, &mut corr);
             delta = delta.max(d);
         }
         classes.store(r, &members, &x, &mut coeffs);
@@ -612,7 +725,7 @@ fn solve_order_extended(
     // the continuation holds only where the outside is diagonally dominant
     let beyond = extension
         .filter(|e| delta < 0.5 && e.h_cap > h_trunc && (tail > e.unless_met || tail.is_nan()))
-        .and_then(|e| continuation(&classes, &solution, &forcing, hf, e));
+        .and_then(|e| continuation(classes, &solution, forcing, hf, e));
     Ok((solution, rounding, Some(Tail { size: tail, factor, corrected, beyond })))
 }
 
@@ -837,13 +950,17 @@ pub fn solve_compared(
     let target = 0.5 * tolerance;
     let extension = |h: usize| Extension {
         h_cap: (4 * h).max(h + 8 * hc).min(max_harmonics.max(h)),
-        negligible: 1e-3 * target,
+        negligible: 1e-2 * target,
         unless_met: tolerance,
     };
     let mut predicted = None;
     let mut prev: Option<HillSolution> = None;
-    if let Some(h0) = predictor_truncation(form, start) {
-        let (sol, _, tail) = solve_order_extended(form, h0, false, true, Some(extension(h0)))?;
+    // the operator and forcing are set up once for every truncation
+    let mut classes = Classes::new(form, start);
+    let (forcing, hf) = complex_forcing(&form.forcing);
+    if let Some(h0) = predictor_truncation(&classes, start) {
+        classes.set_truncation(h0);
+        let (sol, _, tail) = solve_classes(&classes, &forcing, hf, false, true, Some(extension(h0)))?;
         predicted = tail.and_then(|t| t.predict(&sol, target)).map(|p| p.max(start));
         prev = Some(sol);
     }
@@ -862,7 +979,8 @@ pub fn solve_compared(
     let mut next_h = predicted.unwrap_or(start);
     loop {
         let refine = rounding.is_none();
-        let (next, r, tail) = solve_order_extended(form, next_h, refine, true, Some(extension(next_h)))?;
+        classes.set_truncation(next_h);
+        let (next, r, tail) = solve_classes(&classes, &forcing, hf, refine, true, Some(extension(next_h)))?;
         let rounding = *rounding.get_or_insert(r);
         let tail_size = tail.as_ref().map(|t| t.size).filter(|v| v.is_finite());
         predicted = tail.as_ref().and_then(|t| t.predict(&next, target));
@@ -912,11 +1030,10 @@ pub fn solve_compared(
     }
 }
 
-/// The truncation whose continuation predicts the first one solved ([`solve_compared`]): where every
+/// The truncation whose continuation predicts the first one solved ([`solve_compared`]) on `classes`: where every
 /// harmonic up to `start` beyond it has a dominant diagonal block, and at least the coupling stride (every
 /// class has members) and 8; `None` when that is not below `start` (then `start` is solved first).
-fn predictor_truncation(form: &FourierForm, start: usize) -> Option<usize> {
-    let classes = Classes::new(form, start);
+fn predictor_truncation(classes: &Classes, start: usize) -> Option<usize> {
     let n0 = classes.dominant_from(start as isize)? as usize;
     let h0 = n0.max(classes.stride).max(8);
     (h0 < start).then_some(h0)
