@@ -357,3 +357,58 @@ impl<'a> Romberg<'a> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// x' = P(t) x, n x n, smooth entries of period 1 (a [0 I; A B] form when `second_order`).
+    struct Smooth {
+        n: usize,
+        second_order: bool,
+    }
+
+    impl PeriodicSystem for Smooth {
+        fn dim(&self) -> usize {
+            self.n
+        }
+        fn period_s(&self) -> f64 {
+            1.0
+        }
+        fn max_harmonic(&self) -> usize {
+            2
+        }
+        fn eval(&self, t: f64, _side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
+            let (n, half) = (self.n, self.n / 2);
+            let w = 2.0 * std::f64::consts::PI;
+            for j in 0..n {
+                for i in 0..n {
+                    p[(i, j)] = if self.second_order && i < half {
+                        f64::from(u8::from(j == half + i))
+                    } else {
+                        0.3 * ((i * n + j) as f64 + w * t).sin() - if i == j { 0.5 } else { 0.0 }
+                    };
+                }
+            }
+            f.fill(0.0);
+        }
+    }
+
+    #[test]
+    fn homogeneous_product_works() {
+        // against the forced product of rk4.rs (its Stepper, P evaluated per step): the same RK4 steps
+        for (n, second_order) in [(2, true), (3, false), (4, true), (4, false), (6, true)] {
+            let sys = Smooth { n, second_order };
+            let steps = 40;
+            let mut table = Romberg::new(&sys, 1.0, &vec![1.0; n]).unwrap();
+            let mine = table.run(steps).unwrap();
+            // and after a doubling, from the reused samples
+            let doubled = table.run(2 * steps).unwrap();
+            for (m, got) in [(steps, mine), (2 * steps, doubled)] {
+                let want = rk4::monodromy(&sys, &rk4::Grid::new(1.0, &[], m)).monodromy;
+                // the same operations in another order: rounding only
+                assert!((&got - &want).amax() < 1e-13, "n {n} ({second_order}), {m} steps: {got} against {want}");
+            }
+        }
+    }
+}
