@@ -342,6 +342,24 @@ impl PeriodicSystem for GearPair {
         p[(1, 0)] = -self.stiffness(t, side) / m;
         p[(1, 1)] = -self.c_z / m;
     }
+    fn eval_matrix_uniform(&self, t0: f64, dt: f64, count: usize, out: &mut Vec<f64>) {
+        // a Fourier mesh without a crack: the stiffness series sampled by turning phasors (the multiplier
+        // companion of harmonic balance samples P at every node and midpoint of its Romberg table)
+        let (MeshStiffness::Fourier(mesh), None) = (&self.params.mesh, &self.params.crack) else {
+            let mut p = DMatrix::zeros(2, 2);
+            for j in 0..count {
+                self.eval_matrix(t0 + j as f64 * dt, Side::Right, &mut p);
+                out.extend_from_slice(p.as_slice());
+            }
+            return;
+        };
+        let mut k = vec![0.0; count];
+        mesh.sample_uniform(t0, dt, &mut k);
+        let m = self.m_red;
+        for kz in k {
+            out.extend_from_slice(&[0.0, -kz / m, 1.0, -self.c_z / m]);
+        }
+    }
     fn piecewise_constant(&self) -> bool {
         matches!(self.params.mesh, MeshStiffness::Piecewise(_))
             && self.params.pinion_errors.is_constant()

@@ -5,8 +5,11 @@
 //! piece of piecewise-constant coefficients, else classical RK4 with tiny steps aligned on every jump;
 //! composite Simpson per piece for the integrals; every node of the tiny-step grid (millions per second of
 //! simulated time, far above 400 kHz) for the extremes, refined by a parabola through the best node and its
-//! neighbours. The reference runs at two resolutions; their difference (times 4) is its own accuracy
-//! (`floor`), below which a true error cannot be told.
+//! neighbours. The periodic state is compared over the whole period, at about [`DENSE_POINTS`] times
+//! spread over the pieces (the reference there by one exact exponential, or one RK4 step, from its node
+//! before; the solver's by its own dense output, `SteadyState::states_at`). The reference runs at two
+//! resolutions; their difference (times 4) is its own accuracy (`floor`), below which a true error cannot
+//! be told.
 //!
 //! For each printed quantity: true error <= estimate and estimate <= 30 x true error (both above the floor),
 //! or the result is not trusted (then only the first: the estimate stays an upper bound).
@@ -73,6 +76,10 @@ pub struct Reference {
     pub multipliers: Vec<C64>,
     /// Periodic initial state.
     pub x0: Vec<f64>,
+    /// The times (s) where the state is compared over the period ([`dense_times`]).
+    pub dense_times: Vec<f64>,
+    /// The periodic state at `dense_times`, n per time.
+    pub dense_states: Vec<f64>,
     /// Largest balanced state over the period (the scale of state errors).
     pub state_scale: f64,
     /// The reference's own accuracy per quantity (relative, same measures as the estimates).
@@ -117,6 +124,25 @@ fn grid(sys: &dyn PeriodicSystem, steps: usize) -> Grid {
         })
         .collect();
     Grid { pieces }
+}
+
+/// About this many times per period where the periodic state is compared (each piece gets its share by
+/// length, and at least its two ends).
+pub const DENSE_POINTS: usize = 4096;
+
+/// The comparison times of each piece of `sys`'s period: equally spaced, both ends included.
+fn dense_times(sys: &dyn PeriodicSystem) -> Vec<Vec<f64>> {
+    let t_end = sys.period_s();
+    let mut edges = vec![0.0];
+    edges.extend(sys.breakpoints());
+    edges.push(t_end);
+    edges
+        .windows(2)
+        .map(|w| {
+            let m = ((w[1] - w[0]) / t_end * DENSE_POINTS as f64).ceil().max(1.0) as usize;
+            (0..=m).map(|i| if i == m { w[1] } else { w[0] + (w[1] - w[0]) * i as f64 / m as f64 }).collect()
+        })
+        .collect()
 }
 
 /// One classical RK4 step of W' = A(t) W from ta to tb (W is (n+1) x cols), A at the step ends taken inside
@@ -230,6 +256,28 @@ fn reference_at(case: &Case, steps: usize) -> Reference {
         samples.push((nodes.clone(), zs));
         node_states.push(states);
     }
+    // the state at the comparison times: from the node at or before each, one exact exponential from the
+    // piece's start (constant coefficients) or one RK4 step shorter than the grid's
+    let pieces_times = dense_times(sys);
+    let mut dense_states = Vec::new();
+    for (p, times) in pieces_times.iter().enumerate() {
+        let nodes = &g.pieces[p];
+        let m = nodes.len() - 1;
+        let h = (nodes[m] - nodes[0]) / m as f64;
+        for &t in times {
+            let j = (((t - nodes[0]) / h).floor().max(0.0) as usize).min(m);
+            let start = &node_states[p][j];
+            let x = if t <= nodes[j] {
+                start.clone()
+            } else {
+                match &exact[p] {
+                    Some(a) => exp_at(a, t - nodes[0]) * &node_states[p][0],
+                    None => step(sys, nodes[j], t, start),
+                }
+            };
+            dense_states.extend((0..n).map(|i| x[(i, 0)]));
+        }
+    }
     let period = sys.period_s();
     let omega = 2.0 * std::f64::consts::PI / period;
     // composite Simpson per piece
@@ -317,6 +365,8 @@ fn reference_at(case: &Case, steps: usize) -> Reference {
         min: extreme(-1.0),
         multipliers,
         x0: x0.iter().copied().collect(),
+        dense_times: pieces_times.into_iter().flatten().collect(),
+        dense_states,
         state_scale,
         floor: Estimates { state: 0.0, monodromy: 0.0, multipliers: 0.0, orders: 0.0, rms: 0.0, peak_to_peak: 0.0 },
     }
@@ -327,20 +377,28 @@ fn multiplier_distance(a: &[C64], b: &[C64]) -> f64 {
     a.iter().map(|r| b.iter().map(|s| (r - s).norm()).fold(f64::INFINITY, f64::min)).fold(0.0, f64::max)
 }
 
-/// True errors of printed values against a reference, in the measures of [`Estimates`].
+/// True errors of printed values against a reference, in the measures of [`Estimates`]; `states` is the
+/// periodic state at the reference's `dense_times` (n per time).
 fn errors(
     amplitudes: &[f64],
     rms: f64,
     p2p: f64,
     multipliers: &[C64],
-    x0: &[f64],
+    states: &[f64],
     d: &[f64],
     r: &Reference,
 ) -> Estimates {
     let top = r.amplitudes.iter().fold(0.0f64, |a, v| a.max(*v)).max(f64::MIN_POSITIVE);
     let lines = amplitudes.iter().zip(&r.amplitudes).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / top;
     let rho_scale = r.multipliers.iter().map(|m| m.norm()).fold(1.0, f64::max);
-    let state = x0.iter().zip(&r.x0).zip(d).map(|((a, b), s)| ((a - b) / s).abs()).fold(0.0, f64::max)
+    // the balanced state z = x / d over the period, relative to the largest |z|
+    let n = d.len();
+    let state = states
+        .iter()
+        .zip(&r.dense_states)
+        .enumerate()
+        .map(|(i, (a, b))| ((a - b) / d[i % n]).abs())
+        .fold(0.0, f64::max)
         / r.state_scale.max(f64::MIN_POSITIVE);
     let r_p2p = r.max - r.min;
     let p2p_scale = r_p2p.max(r.max.abs()).max(r.min.abs());
@@ -360,8 +418,15 @@ pub fn reference(case: &Case) -> Reference {
     let coarse = reference_at(case, case.reference_steps / 2);
     let mut fine = reference_at(case, case.reference_steps);
     let d = state_scales(case.system());
-    let diff =
-        errors(&coarse.amplitudes, coarse.rms, coarse.max - coarse.min, &coarse.multipliers, &coarse.x0, &d, &fine);
+    let diff = errors(
+        &coarse.amplitudes,
+        coarse.rms,
+        coarse.max - coarse.min,
+        &coarse.multipliers,
+        &coarse.dense_states,
+        &d,
+        &fine,
+    );
     let f = |v: f64| 4.0 * v + 1e-14;
     fine.floor = Estimates {
         state: f(diff.state),
@@ -427,8 +492,10 @@ pub fn check_periodic_solver(case: &Case, reference: &Reference, method: Method,
     };
     let d = state_scales(sys);
     let amps: Vec<f64> = resp.amplitudes().into_iter().take(case.lines + 1).collect();
-    let truth =
-        errors(&amps, resp.rms, resp.max - resp.min, &steady.floquet.multipliers, steady.x0.as_slice(), &d, reference);
+    // the solver's own dense output over the period (t = 0 is the printed x0)
+    let mut states = Vec::new();
+    steady.states_at(sys, &reference.dense_times, &mut states);
+    let truth = errors(&amps, resp.rms, resp.max - resp.min, &steady.floquet.multipliers, &states, &d, reference);
     let mut floor = reference.floor;
     if case.lines == 0 {
         floor.orders = f64::NAN;
@@ -447,8 +514,7 @@ pub fn check_periodic_solver(case: &Case, reference: &Reference, method: Method,
     }
     for (name, t, e, floor) in quantities {
         assert!(t <= e.max(floor), "{what}\n{name}: true error {t:e} above its estimate {e:e}");
-        // the state is measured here at t = 0 only, its estimate over the whole period: no upper check
-        if steady.trusted && name != "state" {
+        if steady.trusted {
             assert!(e <= 30.0 * t.max(floor), "{what}\n{name}: estimate {e:e} over 30x the true error {t:e}");
             assert!(e <= tolerance, "{what}\n{name}: trusted with an estimate {e:e} above the tolerance");
         }
