@@ -7,8 +7,9 @@
 //! shaft j: angle_j = |w_j / w_t| angle_t (exact ratio chain), its TSA on that angle; a shaft carrying
 //!     several gears (an intermediate shaft) has every one of their mesh families removed from its
 //!     residual and difference signals
-//! stage k: mesh harmonics h m_k (m_k = mesh order over w_t), sideband families +-n w_j of every shaft j
-//!     on the stage (and +-n planet-pass for a planetary stage), read on the deciding channel's spectrum
+//! stage k: mesh harmonics h m_k (m_k = mesh order over w_t; h = 1.. up to 0.45 fs, at most 16), sideband
+//!     families +-n w_j of every shaft j on the stage (and +-n planet-pass for a planetary stage), read on
+//!     the deciding channel's spectrum
 //! planetary stage: planet pass, sun / planet / ring fault orders (model::kinematics), the planets'
 //!     averages by vibration separation on the carrier's angle (signal::planetary)
 //! verdict: the pair's judgement over the shafts' averages, then named: the stage and gear on the deciding
@@ -334,12 +335,38 @@ fn stage(
     }
 }
 
-/// Mesh harmonics 1..=3 of stage `k` and their sideband families (+-1..3 of each shaft on the stage and of
-/// the planet pass) on the deciding channel's spectrum.
+/// Most mesh harmonics listed per stage: the first 16 (as many as the mesh comb searches,
+/// [`crate::signal::mesh_comb::MAX_HARMONICS`]); a slow stage recorded fast would otherwise list fifty, each
+/// with its families, in every table.
+pub const MAX_STAGE_HARMONICS: u32 = 16;
+
+/// Highest frequency of a listed line, as a fraction of the sample rate: 0.45, below the roll-off of a
+/// recorder's anti-alias filter (the order map stops there too).
+pub const LISTED_BAND: f64 = 0.45;
+
+/// Mesh harmonics listed for a stage meshing at `mesh_hz` in a recording sampled at `sample_rate_hz`:
+/// every harmonic up to [`LISTED_BAND`] times the sample rate, at most [`MAX_STAGE_HARMONICS`]; 3 when the
+/// frequency is not known (no speed, or no sample rate: orders only).
+pub fn listed_harmonics(mesh_hz: Option<f64>, sample_rate_hz: Option<f64>) -> u32 {
+    match (mesh_hz, sample_rate_hz) {
+        (Some(f), Some(fs)) if f > 0.0 && fs > 0.0 => {
+            (LISTED_BAND * fs / f).floor().min(f64::from(MAX_STAGE_HARMONICS)) as u32
+        }
+        _ => 3,
+    }
+}
+
+/// Mesh harmonics of stage `k` ([`listed_harmonics`]) and their sideband families (+-1..3 of each shaft on
+/// the stage and of the planet pass) on the deciding channel's spectrum.
 fn harmonics(d: &Diagnosis, m: &Machine, t: usize, k: usize) -> Vec<StageHarmonic> {
     use crate::model::kinematics::LineKind;
-    let lines = m.labelled_lines(3, 3);
     let f_t = d.shaft_hz.reference();
+    let listed = |stage: usize| {
+        let mesh_hz = f_t.zip(m.mesh_order(stage)).map(|(f, r)| f * tracked_order(m, t, r));
+        listed_harmonics(mesh_hz, d.sample_rate_hz)
+    };
+    let most = (0..m.stages.len()).map(listed).max().unwrap_or(0);
+    let lines = m.labelled_lines(most, 3);
     let spectrum = d.spectra.iter().find(|s| Some(&s.0) == d.channels.first()).map(|s| &s.1);
     let df = spectrum.and_then(|s| s.freqs_hz.get(1).copied()).unwrap_or(1.0);
     let read = |order: f64| -> (Option<f64>, Option<f64>) {
@@ -363,7 +390,7 @@ fn harmonics(d: &Diagnosis, m: &Machine, t: usize, k: usize) -> Vec<StageHarmoni
     let all: Vec<(f64, (usize, String))> = lines.iter().map(|l| (tracked_order(m, t, l.order), family(l))).collect();
     let resolution = f_t.map_or(0.0, |f| 3.0 * df / f);
     let mut out = Vec::new();
-    for h in 1..=3u32 {
+    for h in 1..=listed(k) {
         let Some(centre) = lines.iter().find(|l| l.stage == k && l.kind == LineKind::Mesh { harmonic: h }) else {
             continue;
         };
