@@ -489,10 +489,17 @@ pub fn solve_order(
     rtol: f64,
 ) -> Result<(TwoToneSolution, TwoToneReport), SolverError> {
     let op = Operator::new(form);
-    solve_with(&op, h, rtol)
+    solve_with(&op, h, rtol, None)
 }
 
-fn solve_with(op: &Operator, h: [usize; 2], rtol: f64) -> Result<(TwoToneSolution, TwoToneReport), SolverError> {
+/// [`solve_order`] with the operator built, GMRES started from `guess` (a coarser truncation's solution:
+/// its lines, zero on the new ones) when given.
+fn solve_with(
+    op: &Operator,
+    h: [usize; 2],
+    rtol: f64,
+    guess: Option<&TwoToneSolution>,
+) -> Result<(TwoToneSolution, TwoToneReport), SolverError> {
     let n = op.n;
     let (kk, ll) = (h[0] as isize, h[1] as isize);
     let mut sol = TwoToneSolution::empty(op.w, h, n);
@@ -531,7 +538,18 @@ fn solve_with(op: &Operator, h: [usize; 2], rtol: f64) -> Result<(TwoToneSolutio
             || SolverError::ToleranceNotReached { cond: f64::NAN, tolerance: rtol, steps: 2000, estimate: f64::NAN };
         // to rtol, then on to rtol / 100: the change measures the first one's solve error (so bounds the
         // second's generously)
-        let (x1, it1, ok) = gmres(&class, &b, None, rtol, 2000);
+        let x0 = guess.map(|g| {
+            let mut x0 = vec![C64::new(0.0, 0.0); class.len()];
+            for (il, &l) in class.ls.iter().enumerate() {
+                for (ik, &k) in class.ks.iter().enumerate() {
+                    if let Some(&j) = g.index.get(&(k, l)) {
+                        x0[(il * na + ik) * n..(il * na + ik + 1) * n].copy_from_slice(&g.coeffs[j * n..(j + 1) * n]);
+                    }
+                }
+            }
+            x0
+        });
+        let (x1, it1, ok) = gmres(&class, &b, x0, rtol, 2000);
         if !ok {
             return Err(failed());
         }
@@ -617,13 +635,13 @@ pub fn solve(
     // GMRES's error spreads over every line of a class while the solution sits on a few: far below the
     // tolerance, or the sum over lines of the difference measure counts it many times
     let rtol = (tolerance * 1e-4).clamp(1e-12, 1e-10);
-    let (mut prev, mut report) = solve_with(&op, h, rtol)?;
+    let (mut prev, mut report) = solve_with(&op, h, rtol, None)?;
     // (truncation of tone a before the step, change over the step)
     let mut last: Option<(usize, f64)> = None;
     let mut growth = 1.5;
     loop {
         let next_h = h.map(|x| ((x as f64 * growth).ceil() as usize).max(x + 1));
-        let (next, r) = solve_with(&op, next_h, rtol)?;
+        let (next, r) = solve_with(&op, next_h, rtol, Some(&prev))?;
         report.iterations += r.iterations;
         report.classes = r.classes;
         let change = difference(&prev, &next);

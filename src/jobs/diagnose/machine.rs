@@ -7,8 +7,9 @@
 //! shaft j: angle_j = |w_j / w_t| angle_t (exact ratio chain), its TSA on that angle; a shaft carrying
 //!     several gears (an intermediate shaft) has every one of their mesh families removed from its
 //!     residual and difference signals
-//! stage k: mesh harmonics h m_k (m_k = mesh order over w_t), sideband families +-n w_j of every shaft j
-//!     on the stage (and +-n planet-pass for a planetary stage), read on the deciding channel's spectrum
+//! stage k: mesh harmonics h m_k (m_k = mesh order over w_t; h = 1.. up to 0.45 fs, at most 16), sideband
+//!     families +-n w_j of every shaft j on the stage (and +-n planet-pass for a planetary stage), read on
+//!     the deciding channel's spectrum
 //! planetary stage: planet pass, sun / planet / ring fault orders (model::kinematics), the planets'
 //!     averages by vibration separation on the carrier's angle (signal::planetary)
 //! verdict: the pair's judgement over the shafts' averages, then named: the stage and gear on the deciding
@@ -334,12 +335,38 @@ fn stage(
     }
 }
 
-/// Mesh harmonics 1..=3 of stage `k` and their sideband families (+-1..3 of each shaft on the stage and of
-/// the planet pass) on the deciding channel's spectrum.
+/// Most mesh harmonics listed per stage: the first 16 (as many as the mesh comb searches,
+/// [`crate::signal::mesh_comb::MAX_HARMONICS`]); a slow stage recorded fast would otherwise list fifty, each
+/// with its families, in every table.
+pub const MAX_STAGE_HARMONICS: u32 = 16;
+
+/// Highest frequency of a listed line, as a fraction of the sample rate: 0.45, below the roll-off of a
+/// recorder's anti-alias filter (the order map stops there too).
+pub const LISTED_BAND: f64 = 0.45;
+
+/// Mesh harmonics listed for a stage meshing at `mesh_hz` in a recording sampled at `sample_rate_hz`:
+/// every harmonic up to [`LISTED_BAND`] times the sample rate, at most [`MAX_STAGE_HARMONICS`]; 3 when the
+/// frequency is not known (no speed, or no sample rate: orders only).
+pub fn listed_harmonics(mesh_hz: Option<f64>, sample_rate_hz: Option<f64>) -> u32 {
+    match (mesh_hz, sample_rate_hz) {
+        (Some(f), Some(fs)) if f > 0.0 && fs > 0.0 => {
+            (LISTED_BAND * fs / f).floor().min(f64::from(MAX_STAGE_HARMONICS)) as u32
+        }
+        _ => 3,
+    }
+}
+
+/// Mesh harmonics of stage `k` ([`listed_harmonics`]) and their sideband families (+-1..3 of each shaft on
+/// the stage and of the planet pass) on the deciding channel's spectrum.
 fn harmonics(d: &Diagnosis, m: &Machine, t: usize, k: usize) -> Vec<StageHarmonic> {
     use crate::model::kinematics::LineKind;
-    let lines = m.labelled_lines(3, 3);
     let f_t = d.shaft_hz.reference();
+    let listed = |stage: usize| {
+        let mesh_hz = f_t.zip(m.mesh_order(stage)).map(|(f, r)| f * tracked_order(m, t, r));
+        listed_harmonics(mesh_hz, d.sample_rate_hz)
+    };
+    let most = (0..m.stages.len()).map(listed).max().unwrap_or(0);
+    let lines = m.labelled_lines(most, 3);
     let spectrum = d.spectra.iter().find(|s| Some(&s.0) == d.channels.first()).map(|s| &s.1);
     let df = spectrum.and_then(|s| s.freqs_hz.get(1).copied()).unwrap_or(1.0);
     let read = |order: f64| -> (Option<f64>, Option<f64>) {
@@ -363,7 +390,7 @@ fn harmonics(d: &Diagnosis, m: &Machine, t: usize, k: usize) -> Vec<StageHarmoni
     let all: Vec<(f64, (usize, String))> = lines.iter().map(|l| (tracked_order(m, t, l.order), family(l))).collect();
     let resolution = f_t.map_or(0.0, |f| 3.0 * df / f);
     let mut out = Vec::new();
-    for h in 1..=3u32 {
+    for h in 1..=listed(k) {
         let Some(centre) = lines.iter().find(|l| l.stage == k && l.kind == LineKind::Mesh { harmonic: h }) else {
             continue;
         };
@@ -495,7 +522,7 @@ fn separate(
         window_teeth: PLANET_WINDOW_TEETH.max(2 * gcd),
         window: SeparationWindow::Hann,
     };
-    let energy = gated_fault_energy(&y, lc, zr as f64 / zp as f64, &st.planet_angles_deg);
+    let energy = gated_fault_energy(&y, lc, per_tooth, zr as f64 / zp as f64, &st.planet_angles_deg);
     let averages = planet_averages(&y, &opts).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     for (i, a) in averages.into_iter().enumerate() {
@@ -516,24 +543,42 @@ fn separate(
 const PLANET_GATE_DEG: f64 = 20.0;
 
 /// [`PlanetaryDiagnosis::planet_fault_energy`](crate::report::summary::PlanetaryDiagnosis) of each planet:
-/// `y` the signal on the carrier angle (`lc` samples per revolution, sample 0 at angle 0), `q` the
-/// planet-fault order of the carrier (z_r / z_p with the ring fixed).
-fn gated_fault_energy(y: &[f64], lc: usize, q: f64, angles_deg: &[f64]) -> Vec<f64> {
+/// `y` the signal on the carrier angle (`lc` samples per revolution, sample 0 at angle 0, `p` samples per
+/// ring tooth), `q` the planet-fault order of the carrier (z_r / z_p with the ring fixed).
+///
+/// ```text
+/// r(i)   = y(i) - y(i - p)                       tooth-to-tooth difference (r = 0 for i < p)
+/// s(i)   = (r(i)^2 - mean r^2) g_k(i)            g_k a Hann gate of +-PLANET_GATE_DEG around planet k's passage
+/// c_km   = sum_i s(i) exp(-j m q theta_i)        theta_i = 2 pi i / lc, cumulative; m = 1..3
+/// E_k    = sum_m |c_km|^2 / n^2                  n = samples of y
+/// ```
+/// Why the difference: the meshing vibration repeats from one tooth to the next (every planet's ring
+/// mesh and every sun mesh advance one tooth per ring-tooth period of carrier angle), so the difference
+/// removes it locally, whatever the speed fluctuation (it spans one tooth, not a revolution), and keeps a
+/// faulty tooth's burst. Squaring the raw signal instead mixes the burst with the meshing vibration it
+/// falls on: a planet's fault reaches the sensor through its sun mesh at every carrier angle too, and
+/// that copy, multiplied by the other planets' meshing while they pass the sensor, lifted another
+/// planet's gate more than the faulty planet's own (whose burst and cross term partly cancel: a crack
+/// lowers its tooth's vibration). Regression: a crack on planet 2's tooth 7 was named planet 3 on the
+/// independent generator's stage in 4 of 4 seeds (tests/machine_diagnose.rs).
+fn gated_fault_energy(y: &[f64], lc: usize, p: usize, q: f64, angles_deg: &[f64]) -> Vec<f64> {
+    let diff = |i: usize| if i >= p { y[i] - y[i - p] } else { 0.0 };
     let n = y.len().max(1) as f64;
-    let mean = y.iter().map(|v| v * v).sum::<f64>() / n;
+    let mean = (0..y.len()).map(|i| diff(i) * diff(i)).sum::<f64>() / n;
     let half = (PLANET_GATE_DEG / 360.0 * lc as f64).max(1.0);
     angles_deg
         .iter()
         .map(|psi| {
             let centre = psi / 360.0 * lc as f64;
             let mut sums = [(0.0f64, 0.0f64); 3];
-            for (i, v) in y.iter().enumerate() {
+            for i in 0..y.len() {
                 // distance from the passage, samples, within one revolution
                 let d = ((i % lc) as f64 - centre + lc as f64 / 2.0).rem_euclid(lc as f64) - lc as f64 / 2.0;
                 if d.abs() >= half {
                     continue;
                 }
                 let g = 0.5 + 0.5 * (std::f64::consts::PI * d / half).cos();
+                let v = diff(i);
                 let s = (v * v - mean) * g;
                 let theta = 2.0 * std::f64::consts::PI * i as f64 / lc as f64;
                 for (m, acc) in sums.iter_mut().enumerate() {
@@ -550,8 +595,9 @@ fn gated_fault_energy(y: &[f64], lc: usize, q: f64, angles_deg: &[f64]) -> Vec<f
 /// Growth of a planet's gated planet-fault energy over the healthy baseline's at which the planet is named
 /// (and the verdict made suspect), when it is also [`PLANET_LEAD`] times every other planet's growth; at
 /// [`PLANET_FAULTY_GROWTH`] faulty. Engineering choices checked on the independent generator's planetary
-/// stage (tests/machine_diagnose.rs): healthy recordings against a healthy baseline grow by at most 3.1 on
-/// any planet, 50 % cracks on a planet by 4-25 on that planet.
+/// stage (tests/machine_diagnose.rs): healthy recordings of 5 seeds against a healthy baseline grow by at
+/// most 1.5 on any planet; 50 % cracks on teeth 3, 7, 13 and 20 of each planet (several seeds) by 8-80 on
+/// that planet and 4-55 times more than on any other.
 pub const PLANET_SUSPECT_GROWTH: f64 = 4.0;
 /// See [`PLANET_SUSPECT_GROWTH`].
 pub const PLANET_FAULTY_GROWTH: f64 = 8.0;
@@ -716,7 +762,7 @@ fn name_planet(d: &mut Diagnosis, baseline: Option<&[crate::report::summary::Pla
     };
     let state = if growth >= PLANET_FAULTY_GROWTH { VerdictState::Faulty } else { VerdictState::Suspect };
     let reason = format!(
-        "stage {stage} planet {planet}: the planet-fault order family of the squared signal while it passes the sensor grew {} times over the healthy baseline's ({} times any other planet's growth; suspect from {PLANET_SUSPECT_GROWTH}, faulty from {PLANET_FAULTY_GROWTH}): a local fault on that planet",
+        "stage {stage} planet {planet}: the planet-fault order family of the squared tooth-to-tooth difference while it passes the sensor grew {} times over the healthy baseline's ({} times any other planet's growth; suspect from {PLANET_SUSPECT_GROWTH}, faulty from {PLANET_FAULTY_GROWTH}): a local fault on that planet",
         crate::report::format::num(growth),
         crate::report::format::num(lead)
     );
