@@ -5,7 +5,7 @@
 //! ```text
 //! scene JSON --scene--> model (GearPair, press, SecondOrderSystem) --implements--> system::PeriodicSystem
 //!     --solver::solve--> solver::SteadyState (periodic x(t), Floquet multipliers, error estimate)
-//!     --jobs::simulate--> report::summary::Simulation (orders, RMS) --io--> WAV/CSV + sidecar
+//!     --jobs::simulate--> jobs::simulate::Simulation (orders, RMS) --io--> WAV/CSV + sidecar
 //! WAV/CSV --io--> io::Recording --jobs::diagnose (signal: spectra, TSA, indicators)--> report::summary::Diagnosis
 //! ```
 //! Layers, with dependencies pointing one way: `cli` -> `jobs` -> {`report`, `scene`, `io`, `signal`,

@@ -6,9 +6,9 @@ use super::plot::{
     BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
 };
 use super::summary::{
-    BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Sideband, Simulation, SpectrumScale, SweepPoint,
+    BenchResult, Diagnosis, OrderLine, PressCoordinate, Shaft, ShaftHz, Sideband, SimulateSummary, SimulationSeries,
+    SpectrumScale, StabilitySummary, SweepPoint,
 };
-use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 
 mod diagnose;
@@ -54,13 +54,6 @@ pub fn classify(order: f64, z1: usize, z2: usize) -> LineKind {
     }
 }
 
-pub(super) fn gear_teeth(scene: &Scene) -> Option<(usize, usize)> {
-    match &scene.model {
-        Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
-        _ => None,
-    }
-}
-
 /// Spectral lines as coloured stems (mesh, pinion and wheel sidebands apart) in Hz, log amplitude.
 pub(super) fn order_stems(lines: &[OrderLine], teeth: Option<(usize, usize)>, floor: f64) -> Vec<Series> {
     let mut groups: Vec<(LineKind, &str, usize)> = vec![(LineKind::Other, "other lines", 4)];
@@ -83,17 +76,6 @@ pub(super) fn order_stems(lines: &[OrderLine], teeth: Option<(usize, usize)>, fl
                 .collect();
             (!pts.is_empty()).then(|| Series { name: name.into(), points: pts, style: Style::Stems, color })
         })
-        .collect()
-}
-
-pub(super) fn mesh_markers(scene: &Scene, max_hz: f64) -> Vec<Marker> {
-    let Some((z1, _)) = gear_teeth(scene) else { return Vec::new() };
-    let fz = z1 as f64 * scene.output.base_hz;
-    (1..)
-        .map(|k| k as f64 * fz)
-        .take_while(|f| *f <= max_hz)
-        .enumerate()
-        .map(|(i, f)| Marker { x: f, label: format!("{}x mesh", i + 1), color: 0 })
         .collect()
 }
 
