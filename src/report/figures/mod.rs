@@ -11,18 +11,21 @@ use super::summary::{
 };
 use std::path::{Path, PathBuf};
 
+mod beyond;
 mod diagnose;
 mod machine;
 mod simulate;
+mod spectra;
 mod sweep;
+mod trend;
+mod tsa;
 
-pub use diagnose::{
-    Figure, TREND_PANEL_PX, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names,
-    sideband_words, trend, trend_charts,
-};
+pub use diagnose::{Figure, deciding_channel, diagnosis, diagnosis_figures};
 pub use machine::{family_words, stage_words, stands as machine_sideband_stands_out};
 pub use simulate::{multipliers, simulation};
+pub use spectra::sideband_words;
 pub use sweep::{bench, parameter_label, stability_map};
+pub use trend::{TREND_PANEL_PX, indicator_label, short_names, trend, trend_charts};
 
 /// Kind of a spectral line of a gear pair, by its order of the pinion rotation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
