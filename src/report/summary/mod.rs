@@ -2,12 +2,18 @@
 //! the figures.
 
 mod diagnosis;
+mod evidence;
 mod identify;
 mod machine;
+mod speed;
+mod verdict;
 
 pub use diagnosis::*;
+pub use evidence::*;
 pub use identify::*;
 pub use machine::*;
+pub use speed::*;
+pub use verdict::*;
 
 use serde::Serialize;
 
