@@ -81,7 +81,7 @@ pub fn simulation(
     render_png(&p, PAGE_WIDTH_PX, 620, &[spectrum])?;
     out.push(p);
     // zooms around the first three mesh harmonics (like the paper's Fig 13)
-    if let Some((z1, _)) = teeth {
+    if let Some((z1, z2)) = teeth {
         let fz = z1 as f64 * base_hz;
         let mut charts = Vec::new();
         for k in 1..=3 {
@@ -92,20 +92,12 @@ pub fn simulation(
             if lines.iter().all(|l| l.amplitude <= floor) {
                 continue;
             }
-            let markers = lines
-                .iter()
-                .filter(|l| l.amplitude > floor && (l.order - l.order.round()).abs() < 1e-9)
-                .map(|l| {
-                    let d = l.order.round() as i64 - (k * z1) as i64;
-                    Marker {
-                        x: l.frequency_hz,
-                        label: if d == 0 { format!("{k}fz") } else { format!("{d:+}") },
-                        color: if d == 0 { 0 } else { 1 },
-                    }
-                })
-                .collect();
+            let markers =
+                lines.iter().filter(|l| l.amplitude > floor).filter_map(|l| zoom_marker(l, k, z1, z2)).collect();
             charts.push(Chart {
-                title: format!("zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders"),
+                title: format!(
+                    "zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders (w: wheel orders)"
+                ),
                 x_label: "frequency [Hz]".into(),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
@@ -128,6 +120,20 @@ pub fn simulation(
         out.push(press_figures(name, &series.press, dir)?);
     }
     Ok(out)
+}
+
+/// The label of a line of the zoom around the `k`-th mesh harmonic of a pair with `z1`, `z2` teeth: "kfz"
+/// for the mesh line, its distance in pinion orders ("-2") for a pinion sideband, in wheel orders ("+1w")
+/// for a wheel sideband, each in its stem's colour; none for other lines.
+fn zoom_marker(l: &OrderLine, k: usize, z1: usize, z2: usize) -> Option<Marker> {
+    let d = l.order - (k * z1) as f64;
+    let (label, color) = match classify(l.order, z1, z2) {
+        LineKind::Mesh => (format!("{k}fz"), 0),
+        LineKind::Pinion => (format!("{:+}", d.round() as i64), 1),
+        LineKind::Wheel => (format!("{:+}w", (d * z2 as f64 / z1 as f64).round() as i64), 2),
+        LineKind::Other => return None,
+    };
+    Some(Marker { x: l.frequency_hz, label, color })
 }
 
 /// Dashed lines at the mesh harmonics up to `max_hz` of a pair with `teeth` whose pinion turns at
