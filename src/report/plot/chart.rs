@@ -157,8 +157,14 @@ where
     let y_fmt = |v: &f64| if chart.y_whole && (v - v.round()).abs() > 1e-9 { String::new() } else { fmt_tick(*v) };
     // at most one x tick label per 90 px of plot: wider ones ("-0.0015") would run into each other
     let x_ticks = (c.plotting_area().dim_in_pixel().0 / 90).max(2) as usize;
+    let y_ticks = (c.plotting_area().dim_in_pixel().1 / 40).max(2) as usize;
     let mut mesh = c.configure_mesh();
     mesh.x_labels(x_ticks);
+    if chart.y_log {
+        // at most one y tick label per 40 px: on a log axis spanning a decade or two the library otherwise
+        // labels every 1..9 multiple, and 7e-4, 8e-4, 9e-4 and 0.001 run into each other
+        mesh.y_labels(y_ticks);
+    }
     mesh.x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .axis_desc_style(("sans-serif", AXIS_PX))
