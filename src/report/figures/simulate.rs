@@ -165,6 +165,7 @@ pub fn multipliers(summary: &StabilitySummary, dir: &Path) -> Result<PathBuf, Re
         x_range: Some((-r, r)),
         y_range: Some((-r, r)),
         unit_circle: true,
+        equal_axes: true,
         series: vec![Series { name: "multipliers".into(), points: pts.clone(), style: Style::Points, color: 1 }],
         ..Default::default()
     };
@@ -178,6 +179,7 @@ pub fn multipliers(summary: &StabilitySummary, dir: &Path) -> Result<PathBuf, Re
             y_label: "Im rho [-]".into(),
             x_range: Some((-z, z)),
             y_range: Some((-z, z)),
+            equal_axes: true,
             series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
             ..Default::default()
         };

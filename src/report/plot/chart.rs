@@ -108,6 +108,13 @@ pub(super) fn draw(chart: &Chart, area: &Area<'_>) -> DrawResult {
     let used_rows = label_rows.iter().flatten().map(|r| r + 1).max().unwrap_or(0) as i32;
     let top = MARGIN + title.len() as i32 * TITLE_ROW + used_rows * MARKER_ROW + 8;
     let (plot_area, legend_area) = area.split_vertically(h - legend_h);
+    let ((x0, x1), (y0, y1)) = if chart.equal_axes {
+        // the plot's pixels as the chart builder below lays them out
+        let (pw, ph) = (px1 - px0, h - legend_h - top - MARGIN - X_LABEL_AREA);
+        equal_scales((x0, x1), (y0, y1), (pw, ph))
+    } else {
+        ((x0, x1), (y0, y1))
+    };
     let frame = Frame { title, top, legend, rows, legend_area, visible, label_rows, right };
     match (chart.x_log, chart.y_log, chart.y_symlog) {
         (false, false, false) => draw_in(chart, &plot_area, frame, x0..x1, y0..y1),
@@ -117,6 +124,18 @@ pub(super) fn draw(chart: &Chart, area: &Area<'_>) -> DrawResult {
         (false, false, true) => draw_in(chart, &plot_area, frame, x0..x1, SymLog(y0, y1)),
         (true, false, true) => draw_in(chart, &plot_area, frame, (x0..x1).log_scale(), SymLog(y0, y1)),
     }
+}
+
+/// The x and y ranges widened about their centres (the shorter one in units per pixel) so that one unit
+/// spans as many pixels on both axes of a `pixels` = (width, height) plot.
+pub(super) fn equal_scales(x: (f64, f64), y: (f64, f64), pixels: (i32, i32)) -> ((f64, f64), (f64, f64)) {
+    let (pw, ph) = (f64::from(pixels.0.max(1)), f64::from(pixels.1.max(1)));
+    let per_px = ((x.1 - x.0) / pw).max((y.1 - y.0) / ph);
+    let about = |(a, b): (f64, f64), px: f64| {
+        let (c, half) = (0.5 * (a + b), 0.5 * per_px * px);
+        (c - half, c + half)
+    };
+    (about(x, pw), about(y, ph))
 }
 
 /// What was laid out before the chart is built.
@@ -322,6 +341,16 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn equal_scales_give_both_axes_the_same_units_per_pixel() {
+        // a 400 x 200 px plot of (-1, 1) x (-1, 1): x has 0.005 per px, y 0.01; x widens to (-2, 2)
+        let ((x0, x1), (y0, y1)) = equal_scales((-1.0, 1.0), (-1.0, 1.0), (400, 200));
+        assert_eq!(((x0, x1), (y0, y1)), ((-2.0, 2.0), (-1.0, 1.0)));
+        // the other way round, off-centre: y widens about its centre 1
+        let ((x0, x1), (y0, y1)) = equal_scales((0.0, 4.0), (0.5, 1.5), (200, 200));
+        assert_eq!(((x0, x1), (y0, y1)), ((0.0, 4.0), (-1.0, 3.0)));
+    }
 
     #[test]
     fn symlog_is_monotonic_and_odd() {

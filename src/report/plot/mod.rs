@@ -94,8 +94,11 @@ pub struct Chart {
     pub x_range: Option<(f64, f64)>,
     /// Fixed y range.
     pub y_range: Option<(f64, f64)>,
-    /// A unit circle (for Floquet multipliers; equal axes expected).
+    /// A unit circle (for Floquet multipliers; with `equal_axes`).
     pub unit_circle: bool,
+    /// Equal scales on x and y (a complex plane): the shorter range is widened about its centre so that
+    /// one unit spans as many pixels on both axes (a circle is drawn round). Linear axes only.
+    pub equal_axes: bool,
     /// Cells coloured by value, drawn under the series.
     pub heatmap: Option<Heatmap>,
     /// Symmetric-logarithmic y axis (linear within +-1, logarithmic beyond): for values in spreads that
