@@ -8,14 +8,14 @@ use std::path::PathBuf;
 pub fn simulation_section(s: &SimulateSummary, images: &[PathBuf]) -> Section {
     let mut sec = stability_section(&s.stability, images);
     sec.facts.push(format!(
-        "{} RMS {} {}, peak to peak {} {}; orders of the {} ({:.4} Hz).",
+        "{} RMS {} {}, peak to peak {} {}; orders of the {} ({} Hz).",
         s.quantity,
         cell(s.rms),
         s.unit,
         cell(s.peak_to_peak),
         s.unit,
         s.base,
-        s.base_hz
+        cell(s.base_hz)
     ));
     let mut lines = s.orders.clone();
     lines.sort_by(|a, b| b.amplitude.total_cmp(&a.amplitude));
@@ -25,7 +25,7 @@ pub fn simulation_section(s: &SimulateSummary, images: &[PathBuf]) -> Section {
         rows: lines
             .iter()
             .take(12)
-            .map(|o| (vec![format!("{}", o.order), format!("{:.2}", o.frequency_hz), cell(o.amplitude)], false))
+            .map(|o| (vec![cell(o.order), cell(o.frequency_hz), cell(o.amplitude)], false))
             .collect(),
     });
     sec
@@ -39,17 +39,18 @@ pub fn stability_section(s: &StabilitySummary, images: &[PathBuf]) -> Section {
         verdict: Some(Badge {
             state,
             word: if s.stable { "STABLE" } else { "UNSTABLE" }.into(),
-            line: format!("largest |multiplier| {:.6}", s.rho_max),
+            // six digits: a multiplier of 0.999995 must not read as 1
+            line: format!("largest |multiplier| {}", crate::report::format::sig(s.rho_max, 6)),
         }),
         reasons: Vec::new(),
         facts: vec![
             format!(
-                "Period {} s; solver {} ({}), {} {}.",
+                "Period {} s; solver {}, {} {}. Why: {}.",
                 cell(s.period_s),
                 s.method,
-                s.method_reason,
                 s.steps,
-                s.resolution_unit
+                s.resolution_unit,
+                s.method_reason.trim_end_matches('.')
             ),
             format!("Estimated error {} against the tolerance {}.", cell(s.error_estimate), cell(s.tolerance)),
         ],
