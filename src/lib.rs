@@ -5,7 +5,7 @@
 //! ```text
 //! scene JSON --scene--> model (GearPair, press, SecondOrderSystem) --implements--> system::PeriodicSystem
 //!     --solver::solve--> solver::SteadyState (periodic x(t), Floquet multipliers, error estimate)
-//!     --jobs::simulate--> report::summary::Simulation (orders, RMS) --io--> WAV/CSV + sidecar
+//!     --jobs::simulate--> jobs::simulate::Simulation (orders, RMS) --io--> WAV/CSV + sidecar
 //! WAV/CSV --io--> io::Recording --jobs::diagnose (signal: spectra, TSA, indicators)--> report::summary::Diagnosis
 //! ```
 //! Layers, with dependencies pointing one way: `cli` -> `jobs` -> {`report`, `scene`, `io`, `signal`,
@@ -38,28 +38,35 @@ pub mod signal;
 pub mod solver;
 pub mod system;
 
-/// Top-level error: one variant per layer, each wrapping that layer's enum.
+/// Top-level error: one variant per layer, each wrapping that layer's enum. Its message is the layer's with
+/// huge and tiny values written compactly ([`report::format::compact_numerals`]: 1e308, not a 1 and 308
+/// zeros).
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Scene reading or validation.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Scene(#[from] scene::SceneError),
     /// Solver failure.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Solver(#[from] solver::SolverError),
     /// Reading or writing data files.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Data(#[from] io::DataError),
     /// Signal analysis.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Signal(#[from] signal::SignalError),
     /// Drawing or writing reports.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Report(#[from] report::ReportError),
     /// A job (simulate, sweep, bench, diagnose) refused its input or could not finish.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Job(#[from] jobs::JobError),
     /// A command-line flag that is wrong in itself or does not fit the input.
-    #[error(transparent)]
+    #[error("{}", compact(&.0))]
     Cli(#[from] cli::CliError),
+}
+
+/// A layer error's message with long numerals compacted.
+fn compact(e: &dyn std::fmt::Display) -> String {
+    report::format::compact_numerals(&e.to_string())
 }

@@ -12,7 +12,7 @@ use std::process::Command;
 fn limited(args: &[&str]) -> Run {
     let mut cmd = String::from("ulimit -v 2000000; exec \"$0\"");
     for i in 1..=args.len() {
-        cmd.push_str(&format!(" \"${i}\""));
+        cmd.push_str(&format!(" \"${{{i}}}\""));
     }
     let out = Command::new("sh")
         .arg("-c")
@@ -90,13 +90,44 @@ fn absurd_speeds_and_rates_are_refused() {
         (&["--rpm", "1800", "--tacho-channel", "2"], &["--tacho-channel", "conflicts"]),
         (&["--channel", "2", "--tacho-channel", "2"], &["--channel 2", "tacho"]),
         (&["--channel", "9"], &["--channel 9", "3 channel(s)"]),
+        // huge and tiny values are written compactly, whichever layer words the message
+        (&["--speed-tolerance", "1e308"], &["--speed-tolerance", "got 1e308"]),
+        (&["--sensitivity=-1e308"], &["--sensitivity", "got -1e308"]),
+        (&["--shaft-hz", "1e-300"], &["--rpm/--shaft-hz", "1e-300 Hz gives only"]),
     ] {
         let mut a = vec!["diagnose", HEALTHY];
         a.extend_from_slice(args);
         let run = limited(&a);
         assert_one_line_error(&run, needles);
         assert!(!run.stderr.contains("panicked") && !run.stderr.contains("internal error"), "{args:?}");
+        // Rust writes 1e308 as a 1 and 308 zeros: no message holds such a numeral
+        assert!(!run.stderr.contains(&"0".repeat(21)), "{}", run.stderr);
     }
+}
+
+#[test]
+fn huge_values_in_scene_and_sweep_messages_are_compact() {
+    let run = limited(&[
+        "sweep",
+        "data/scenes/paper-gear-fig8a.json",
+        "--param",
+        "speed",
+        "--from",
+        "1e308",
+        "--to",
+        "2e308",
+        "--steps",
+        "3",
+    ]);
+    assert_one_line_error(&run, &["got from 1e308 to inf"]);
+    let dir = temp_dir("compact-scene");
+    let text = std::fs::read_to_string("data/scenes/paper-gear-fig8a.json").unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["gear_pair"]["speed_rpm"] = serde_json::json!(-1e300);
+    let scene = dir.join("speed-minus-1e300.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    let run = limited(&["simulate", scene.to_str().unwrap()]);
+    assert_one_line_error(&run, &["gear_pair.speed_rpm", "got -1e300"]);
 }
 
 fn md5ish(path: &std::path::Path) -> Vec<u8> {

@@ -301,7 +301,8 @@ where
 
 /// clap's error text in one line with every hint it gives kept: the error, the names it lists on the
 /// next lines, its tips ("a similar argument exists: '--tacho-channel'"), the possible values, and the
-/// pointer to `--help`; only the usage block, which repeats the help, is left out.
+/// pointer to `--help`; only the usage block, which repeats the help, is left out. Long numerals are
+/// compacted as in every error line ([`crate::report::format::compact_numerals`]).
 pub fn one_line(rendered: &str) -> String {
     let mut parts: Vec<String> = Vec::new();
     let mut in_usage = false;
@@ -327,7 +328,11 @@ pub fn one_line(rendered: &str) -> String {
             _ => parts.push(line.to_string()),
         }
     }
-    if parts.is_empty() { "invalid arguments; try 'gearvib --help'".into() } else { parts.join("; ") }
+    if parts.is_empty() {
+        "invalid arguments; try 'gearvib --help'".into()
+    } else {
+        crate::report::format::compact_numerals(&parts.join("; "))
+    }
 }
 
 /// A finite number above zero (for factors such as `--sensitivity`).

@@ -165,6 +165,7 @@ fn restate_for_flags(e: Error) -> Error {
             CliError::flag("--pinion-orders/--wheel-orders", message)
         }
         Error::Job(JobError::Value { what, message }) if what == "pit width" => CliError::flag("--pit-width", message),
+        Error::Job(JobError::Value { what, message }) if what == "sweep steps" => CliError::flag("--steps", message),
         Error::Job(JobError::Parameter { scene, name, message }) => {
             CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
         }

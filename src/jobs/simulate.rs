@@ -5,14 +5,34 @@ use super::JobError;
 use super::synth::{self, SignalInfo};
 use crate::Error;
 use crate::model::OutputQuantity;
-use crate::report::summary::{OrderLine, SimulateSummary, Simulation, StabilitySummary, to_json_line};
-use crate::scene::Scene;
+use crate::report::summary::{
+    Multiplier, OrderLine, PressCoordinate, QuantityErrors, SimulateSummary, SimulationSeries, StabilitySummary,
+    to_json_line,
+};
+use crate::scene::{Model, Scene};
 use crate::signal::spectrum::Fft;
 use crate::solver::hill::HillSolution;
 use crate::solver::response::{self, Probe};
 use crate::solver::{self, SteadyState, Trajectory};
 use nalgebra::Complex;
 use std::path::PathBuf;
+
+/// Result of simulating a scene.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    /// Steady state and Floquet analysis.
+    pub steady: SteadyState,
+    /// Output quantity over one period at `period_samples.len()` equally spaced times from 0.
+    pub period_samples: Vec<f64>,
+    /// Lines up to the scene's `max_order`, every harmonic of 1/T.
+    pub orders: Vec<OrderLine>,
+    /// RMS over one period (includes the mean), output unit.
+    pub rms: f64,
+    /// Peak-to-peak over one period, output unit.
+    pub peak_to_peak: f64,
+    /// Estimated error of each printed quantity.
+    pub errors: response::Estimates,
+}
 
 /// One `simulate` call.
 #[derive(Clone, Debug)]
@@ -92,7 +112,7 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
     if let Some(dir) = &job.report {
         crate::io::create_dir(dir)?;
         crate::io::check_output(&dir.join("simulate.json"))?;
-        report_files = crate::report::figures::simulation(&scene, &sim, dir)?;
+        report_files = crate::report::figures::simulation(&summary, &series(&scene, &sim), dir)?;
         crate::io::write_atomic(&dir.join("simulate.json"), to_json_line(&summary).as_bytes())?;
         let section = crate::report::html::simulation_section(&summary, &report_files);
         report_files.push(crate::report::html::write(dir, &format!("gearvib simulation: {}", scene.name), &[section])?);
@@ -107,7 +127,7 @@ pub fn run(job: &SimulateJob) -> Result<SimulateOutcome, Error> {
 /// A solver failure or an untrusted result.
 pub fn summarize(scene: &Scene) -> Result<(Simulation, SimulateSummary), Error> {
     let sim = simulate(scene).map_err(|e| scene_error(scene, e))?;
-    let summary = SimulateSummary::new(scene, &sim);
+    let summary = simulate_summary(scene, &sim);
     if !sim.steady.trusted {
         return Err(JobError::Untrusted {
             file: scene.file.clone(),
@@ -131,7 +151,7 @@ pub fn summarize(scene: &Scene) -> Result<(Simulation, SimulateSummary), Error> 
 /// A solver failure or untrusted multipliers.
 pub fn stability_of(scene: &Scene) -> Result<(SteadyState, StabilitySummary), Error> {
     let steady = solver::solve(scene.system(), &scene.solver).map_err(|e| scene_error(scene, e))?;
-    let summary = StabilitySummary::new(scene, &steady);
+    let summary = stability_summary(scene, &steady);
     if steady.error_estimate > scene.solver.tolerance {
         return Err(JobError::Untrusted {
             file: scene.file.clone(),
@@ -155,17 +175,105 @@ pub fn stability_of(scene: &Scene) -> Result<(SteadyState, StabilitySummary), Er
 pub fn stability(job: &StabilityJob) -> Result<StabilityOutcome, Error> {
     crate::io::begin_run();
     let scene = Scene::load(&job.scene.display().to_string())?;
-    let (steady, summary) = stability_of(&scene)?;
+    let (_, summary) = stability_of(&scene)?;
     let mut report_files = Vec::new();
     if let Some(dir) = &job.report {
         crate::io::create_dir(dir)?;
         crate::io::check_output(&dir.join("stability.json"))?;
-        report_files.push(crate::report::figures::multipliers(&scene, &steady, dir)?);
+        report_files.push(crate::report::figures::multipliers(&summary, dir)?);
         crate::io::write_atomic(&dir.join("stability.json"), to_json_line(&summary).as_bytes())?;
         let section = crate::report::html::stability_section(&summary, &report_files);
         report_files.push(crate::report::html::write(dir, &format!("gearvib stability: {}", scene.name), &[section])?);
     }
     Ok(StabilityOutcome { summary, report_files })
+}
+
+/// The `stability --json` summary of a solved scene.
+pub fn stability_summary(scene: &Scene, s: &SteadyState) -> StabilitySummary {
+    StabilitySummary {
+        scene: scene.name.clone(),
+        period_s: s.period_s,
+        multipliers: s.floquet.multipliers.iter().map(|r| Multiplier { re: r.re, im: r.im, abs: r.norm() }).collect(),
+        exponents: s.floquet.exponents.iter().map(|e| e.map(|c| [c.re, c.im])).collect(),
+        rho_max: s.floquet.rho_max,
+        stable: s.floquet.stable,
+        method: s.method.name().to_string(),
+        method_reason: s.reason.clone(),
+        steps: s.resolution,
+        resolution_unit: if s.method == solver::Method::Hill { "harmonics" } else { "steps" }.into(),
+        error_estimate: s.error_estimate,
+        state_error: s.state_error,
+        multiplier_error: s.multiplier_error,
+        tolerance: scene.solver.tolerance,
+        cond_i_minus_phi: s.cond_i_minus_phi,
+        stability_limit_steps: s.stability_limit_steps,
+        trusted: s.trusted,
+        warnings: s.warnings.clone(),
+        notes: scene.notes.clone(),
+    }
+}
+
+/// The `simulate --json` summary of a simulated scene (no signal file yet).
+pub fn simulate_summary(scene: &Scene, sim: &Simulation) -> SimulateSummary {
+    let e = &sim.errors;
+    SimulateSummary {
+        stability: stability_summary(scene, &sim.steady),
+        quantity: scene.output.quantity.name().to_string(),
+        unit: scene.output.quantity.unit().to_string(),
+        base_hz: scene.output.base_hz,
+        base: scene.output.base_name.clone(),
+        orders: sim.orders.clone(),
+        rms: sim.rms,
+        peak_to_peak: sim.peak_to_peak,
+        errors: QuantityErrors {
+            state: e.state,
+            monodromy: e.monodromy,
+            multipliers: e.multipliers,
+            orders: e.orders,
+            rms: e.rms,
+            peak_to_peak: e.peak_to_peak,
+        },
+        signal_file: None,
+    }
+}
+
+/// The curves the simulate images draw besides the summary: the output over one period, the teeth of a
+/// gear pair, the press's coordinates.
+pub fn series(scene: &Scene, sim: &Simulation) -> SimulationSeries {
+    let teeth = match &scene.model {
+        Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
+        _ => None,
+    };
+    let press = match &scene.model {
+        Model::Press(..) => press_coordinates(scene, &sim.steady),
+        _ => Vec::new(),
+    };
+    SimulationSeries { period_samples: sim.period_samples.clone(), teeth, press }
+}
+
+/// The cam press's q1 (rad) and q2 (mm) over one input revolution (721 points) and their first 24 orders
+/// (one-sided amplitudes from 1024 samples over the period; floored at 1e-12 for the log axis).
+fn press_coordinates(scene: &Scene, steady: &SteadyState) -> Vec<PressCoordinate> {
+    let sys = scene.system();
+    let period = steady.period_s;
+    let m = 720;
+    let times: Vec<f64> = (0..=m).map(|i| period * i as f64 / m as f64).collect();
+    let mut states = Vec::new();
+    steady.states_at(sys, &times, &mut states);
+    let samples: Vec<f64> = (0..1024).map(|i| i as f64 * period / 1024.0).collect();
+    let mut sampled = Vec::new();
+    steady.states_at(sys, &samples, &mut sampled);
+    let n = sys.dim();
+    [(0usize, "q1", "rad", 1.0), (1, "q2", "mm", 1e3)]
+        .into_iter()
+        .map(|(idx, name, unit, scale)| {
+            let points = times.iter().enumerate().map(|(i, t)| (*t, states[i * n + idx] * scale)).collect();
+            let x: Vec<f64> = (0..1024).map(|i| sampled[i * n + idx] * scale).collect();
+            let amps = crate::signal::spectrum::periodic_amplitudes(&x);
+            let lines = amps.iter().enumerate().skip(1).take(24).map(|(k, a)| (k as f64, a.max(1e-12))).collect();
+            PressCoordinate { name: name.into(), unit: unit.into(), points, lines }
+        })
+        .collect()
 }
 
 /// Number of samples per period used for the orders: a power of two with at least 8 samples per period of

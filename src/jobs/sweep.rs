@@ -2,6 +2,7 @@
 
 use super::JobError;
 use crate::Error;
+use crate::report::format::num;
 use crate::report::summary::{SweepPoint, SweepSummary};
 use crate::scene::{Model, Scene};
 use rayon::prelude::*;
@@ -168,8 +169,42 @@ pub fn sweep(
         }
         .into());
     }
-    let values: Vec<f64> = (0..steps).map(|i| from + (to - from) * i as f64 / (steps - 1) as f64).collect();
+    let values = if takes_whole_numbers(scene, path) {
+        whole_values(path, from, to, steps)?
+    } else {
+        (0..steps).map(|i| from + (to - from) * i as f64 / (steps - 1) as f64).collect()
+    };
     sweep_values(scene, path, &values, partial, progress)
+}
+
+/// Whether the scene holds a whole number at `path` (a tooth count, a harmonic count): a sweep then takes
+/// whole values only.
+fn takes_whole_numbers(scene: &Scene, path: &str) -> bool {
+    pointer(&scene.json, path).is_some_and(|v| v.is_i64() || v.is_u64())
+}
+
+/// `steps` whole numbers spread evenly from `from` to `to` (the bounds rounded inwards), each rounded:
+/// distinct, since there are at least `steps` whole numbers between the bounds (their spacing is then at
+/// least 1).
+///
+/// # Errors
+/// Fewer whole numbers in the range than `steps`.
+fn whole_values(path: &str, from: f64, to: f64, steps: usize) -> Result<Vec<f64>, Error> {
+    let (lo, hi) = if from <= to { (from.ceil(), to.floor()) } else { (from.floor(), to.ceil()) };
+    let count = ((hi - lo).abs() + 1.0) * if (hi - lo) * (to - from) >= 0.0 { 1.0 } else { 0.0 };
+    if count < steps as f64 {
+        return Err(JobError::Value {
+            what: "sweep steps".into(),
+            message: format!(
+                "`{path}` takes whole numbers and {} to {} holds {}, fewer than the {steps} values asked",
+                num(from),
+                num(to),
+                num(count)
+            ),
+        }
+        .into());
+    }
+    Ok((0..steps).map(|i| (lo + (hi - lo) * i as f64 / (steps - 1) as f64).round()).collect())
 }
 
 /// Most values one sweep takes.
@@ -242,12 +277,24 @@ fn point(scene: &Scene, path: &str, value: f64, z1: Option<usize>) -> SweepPoint
     };
     let mut json = scene.json.clone();
     match json.pointer_mut(&json_pointer(path)) {
+        // a whole-number field keeps its type (serde refuses 10.0 for a tooth count)
+        Some(slot) if slot.is_i64() || slot.is_u64() => {
+            if value.fract() != 0.0 || value.abs() > 9.0e15 {
+                return failed(format!("field `{path}` takes whole numbers, got {}", num(value)));
+            }
+            *slot = (value as i64).into();
+        }
         Some(slot) => *slot = value.into(),
         None => return failed(format!("no field {path}")),
     }
     let s = match Scene::from_value(json, &scene.file) {
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),
+    };
+    // the point's own teeth: a sweep of the tooth count moves the mesh orders
+    let z1 = match &s.model {
+        Model::GearPair(g) => Some(g.params().pinion_teeth),
+        _ => z1,
     };
     match super::simulate::solve_with_orders(&s) {
         Ok((steady, _, orders)) => {

@@ -12,11 +12,11 @@
 //! cubic Hermite interpolation; otherwise every sample is one partial RK4 step from the nearest grid node.
 
 use super::JobError;
+use super::simulate::Simulation;
 use crate::Error;
 use crate::io::sidecar::{ChannelInfo, Sidecar};
 use crate::io::{SignalOut, wav::WavSampleFormat};
 use crate::model::OutputQuantity;
-use crate::report::summary::Simulation;
 use crate::scene::{Model, Scene, WavFormat};
 use crate::solver::Trajectory;
 use crate::system::Side;

@@ -16,8 +16,9 @@ pub fn sig(v: f64, digits: usize) -> String {
     if v == 0.0 {
         return "0".into();
     }
-    // rounded first: 999999.9 to four digits is 1e6, and takes the form of 1e6
-    let v: f64 = format!("{v:.*e}", digits - 1).parse().unwrap_or(v);
+    // rounded first: 999999.9 to four digits is 1e6, and takes the form of 1e6 (f64::MAX rounds beyond
+    // the largest f64: kept, to be written 1.798e308)
+    let v: f64 = format!("{v:.*e}", digits - 1).parse().ok().filter(|r: &f64| r.is_finite()).unwrap_or(v);
     let a = v.abs();
     if !(1e-3..1e6).contains(&a) {
         let s = format!("{v:.*e}", digits - 1);
@@ -39,9 +40,67 @@ pub fn percent(fraction: f64) -> String {
     format!("{} %", sig(100.0 * fraction, 3))
 }
 
+/// `text` with every long plain numeral (more than 20 digits: how Rust writes a huge or tiny `f64` such as
+/// 1e308, a 1 and 308 zeros; a 64-bit integer, at most 20 digits, is kept as typed) in four significant digits as [`num`] writes it ("1e308", "1.798e308",
+/// "1e-300"). A numeral counts when it stands alone: after the start, a space or one of `([="'` and
+/// before the end, a space or one of `,;:)]"'.`; digits inside words and paths are left alone. Every
+/// error line passes through this (see `crate::Error`), so no message prints a value 300 digits long.
+pub fn compact_numerals(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < chars.len() {
+        let starts =
+            chars[i].is_ascii_digit() || (chars[i] == '-' && chars.get(i + 1).is_some_and(char::is_ascii_digit));
+        let after_break = i == 0 || matches!(chars[i - 1], ' ' | '(' | '[' | '=' | '"' | '\'');
+        if !(starts && after_break) {
+            out.push(chars[i]);
+            i += 1;
+            continue;
+        }
+        let mut j = i + 1;
+        while j < chars.len() && (chars[j].is_ascii_digit() || chars[j] == '.') {
+            j += 1;
+        }
+        // a full stop after the numeral ends the sentence
+        while j > i + 1 && chars[j - 1] == '.' {
+            j -= 1;
+        }
+        let token: String = chars[i..j].iter().collect();
+        let digits = token.chars().filter(char::is_ascii_digit).count();
+        let ends = j == chars.len() || matches!(chars[j], ' ' | ',' | ';' | ':' | ')' | ']' | '"' | '\'' | '.');
+        match token.parse::<f64>() {
+            Ok(v) if ends && digits > 20 && v.is_finite() => out.push_str(&num(v)),
+            _ => out.push_str(&token),
+        }
+        i = j;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_numerals_are_compacted_and_nothing_else() {
+        // how Rust's Display writes these values, built independently of the code under test
+        let huge = format!("1{}", "0".repeat(308));
+        let tiny = format!("0.{}1", "0".repeat(299));
+        let line = format!("--x: must be in (0, 1), got {huge}; and -{tiny}.");
+        assert_eq!(compact_numerals(&line), "--x: must be in (0, 1), got 1e308; and -1e-300.");
+        assert_eq!(compact_numerals(&format!("(got {})", f64::MAX)), "(got 1.798e308)");
+        assert_eq!(compact_numerals("got 0.000000000000000000001"), "got 1e-21");
+        // ordinary numbers, numerals in file names and words, and 64-bit integers are left as they are
+        for keep in [
+            "got 0.0234 at 420 Hz, 1800.5 rpm",
+            "data/1234567890123456789.wav: not found",
+            "rec-12345678901234567890-a.wav",
+            "teeth 18446744073709551615 (u64::MAX)",
+        ] {
+            assert_eq!(compact_numerals(keep), keep);
+        }
+    }
 
     #[test]
     fn num_works() {

@@ -4,8 +4,9 @@
 
 use crate::Error;
 use crate::jobs::JobError;
+use crate::jobs::simulate::Simulation;
 use crate::model::Quantity;
-use crate::report::summary::{ComparedLine, Comparison, Diagnosis, Shaft, Simulation};
+use crate::report::summary::{ComparedLine, Comparison, Diagnosis, Shaft};
 use crate::scene::Scene;
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -155,7 +155,8 @@ pub(super) fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_rev
         return Err(JobError::Value {
             what: "shaft speed".into(),
             message: format!(
-                "{hz:.6} Hz gives only {revs:.2} revolutions in the {n} samples of {}; the time-synchronous average needs at least {min_revs}: is the speed too low, or the recording too short?",
+                "{} Hz gives only {revs:.2} revolutions in the {n} samples of {}; the time-synchronous average needs at least {min_revs}: is the speed too low, or the recording too short?",
+                crate::report::format::sig(hz, 6),
                 path.display()
             ),
         }

@@ -6,38 +6,43 @@ use super::plot::{
     BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
 };
 use super::summary::{
-    BenchResult, Diagnosis, OrderLine, Shaft, ShaftHz, Sideband, Simulation, SpectrumScale, SweepPoint,
+    BenchResult, Diagnosis, OrderLine, PressCoordinate, Shaft, ShaftHz, Sideband, SimulateSummary, SimulationSeries,
+    SpectrumScale, StabilitySummary, SweepPoint,
 };
-use crate::scene::{Model, Scene};
 use std::path::{Path, PathBuf};
 
+mod beyond;
 mod diagnose;
 mod machine;
 mod simulate;
+mod spectra;
 mod sweep;
+mod trend;
+mod tsa;
 
-pub use diagnose::{
-    Figure, TREND_PANEL_PX, deciding_channel, diagnosis, diagnosis_figures, indicator_label, short_names,
-    sideband_words, trend, trend_charts,
-};
+pub use diagnose::{Figure, deciding_channel, diagnosis, diagnosis_figures};
 pub use machine::{family_words, stage_words, stands as machine_sideband_stands_out};
 pub use simulate::{multipliers, simulation};
+pub use spectra::sideband_words;
 pub use sweep::{bench, parameter_label, stability_map};
+pub use trend::{TREND_PANEL_PX, indicator_label, short_names, trend, trend_charts};
 
 /// Kind of a spectral line of a gear pair, by its order of the pinion rotation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LineKind {
     /// A mesh harmonic k z1.
     Mesh,
-    /// k z1 +- j, j = 1..6 (pinion rotation).
+    /// k z1 +- j for a whole j (pinion rotation), k the nearest mesh harmonic.
     Pinion,
-    /// k z1 +- j z1/z2, j = 1..6 (wheel rotation).
+    /// k z1 +- j z1/z2 for a whole j (wheel rotation) that is not a pinion order.
     Wheel,
     /// Anything else.
     Other,
 }
 
-/// Classifies `order` (pinion orders) for a pair with `z1`, `z2` teeth.
+/// Classifies `order` (pinion orders) for a pair with `z1`, `z2` teeth: every whole pinion order that is
+/// not a mesh harmonic is a pinion sideband of its nearest mesh harmonic (order 7 of a 14-tooth pinion
+/// too: it is the 7th pinion order below 1x mesh), every other whole wheel order a wheel sideband.
 pub fn classify(order: f64, z1: usize, z2: usize) -> LineKind {
     let z = z1 as f64;
     let k = (order / z).round();
@@ -45,19 +50,12 @@ pub fn classify(order: f64, z1: usize, z2: usize) -> LineKind {
     let near = |x: f64| (x - x.round()).abs() < 1e-6;
     if d.abs() < 1e-6 && k >= 1.0 {
         LineKind::Mesh
-    } else if near(d) && d.abs() <= 6.5 {
+    } else if near(d) {
         LineKind::Pinion
-    } else if near(d * z2 as f64 / z) && (d * z2 as f64 / z).abs() <= 6.5 {
+    } else if near(d * z2 as f64 / z) {
         LineKind::Wheel
     } else {
         LineKind::Other
-    }
-}
-
-pub(super) fn gear_teeth(scene: &Scene) -> Option<(usize, usize)> {
-    match &scene.model {
-        Model::GearPair(g) => Some((g.params().pinion_teeth, g.params().wheel_teeth)),
-        _ => None,
     }
 }
 
@@ -83,17 +81,6 @@ pub(super) fn order_stems(lines: &[OrderLine], teeth: Option<(usize, usize)>, fl
                 .collect();
             (!pts.is_empty()).then(|| Series { name: name.into(), points: pts, style: Style::Stems, color })
         })
-        .collect()
-}
-
-pub(super) fn mesh_markers(scene: &Scene, max_hz: f64) -> Vec<Marker> {
-    let Some((z1, _)) = gear_teeth(scene) else { return Vec::new() };
-    let fz = z1 as f64 * scene.output.base_hz;
-    (1..)
-        .map(|k| k as f64 * fz)
-        .take_while(|f| *f <= max_hz)
-        .enumerate()
-        .map(|(i, f)| Marker { x: f, label: format!("{}x mesh", i + 1), color: 0 })
         .collect()
 }
 
@@ -141,4 +128,21 @@ pub fn drawn_peak(spectrum: &crate::signal::Spectrum, f_hz: f64) -> f64 {
 /// The unit of a recording for axis labels: "as recorded" when the file names none.
 pub fn unit_or(unit: &str) -> &str {
     if unit.is_empty() { "as recorded, unit not given" } else { unit }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_of_a_pair_are_classed_by_the_shaft_whose_order_they_are() {
+        // a 14/39 pair: order 28 is 2x mesh, 7 and 21 are the pinion's 7th orders around 1x mesh (once
+        // "other lines"), 14 + 14/39 is the wheel's 40th order, 0.5 belongs to neither shaft
+        assert_eq!(classify(28.0, 14, 39), LineKind::Mesh);
+        assert_eq!(classify(7.0, 14, 39), LineKind::Pinion);
+        assert_eq!(classify(21.0, 14, 39), LineKind::Pinion);
+        assert_eq!(classify(13.0, 14, 39), LineKind::Pinion);
+        assert_eq!(classify(14.0 + 14.0 / 39.0, 14, 39), LineKind::Wheel);
+        assert_eq!(classify(0.5, 14, 39), LineKind::Other);
+    }
 }

@@ -2,71 +2,72 @@
 
 use super::*;
 
-/// Writes the simulation images into `dir`; returns their paths.
+/// Writes the simulation images of `summary` (names, units, lines, multipliers) and `series` (the curves)
+/// into `dir`; returns their paths.
 ///
 /// # Errors
 /// Non-finite data or write failures.
-pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
+pub fn simulation(
+    summary: &SimulateSummary,
+    series: &SimulationSeries,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, ReportError> {
     let mut out = Vec::new();
-    let q = &scene.output.quantity;
-    let unit = if q.unit().is_empty() { " [units of the model]".to_string() } else { format!(" [{}]", q.unit()) };
-    let period = sim.steady.period_s;
+    let (name, quantity) = (&summary.stability.scene, &summary.quantity);
+    let (base_hz, base_name) = (summary.base_hz, &summary.base);
+    let unit =
+        if summary.unit.is_empty() { " [units of the model]".to_string() } else { format!(" [{}]", summary.unit) };
+    let period = summary.stability.period_s;
+    let period_samples = &series.period_samples;
     // waveform over (up to) three base revolutions, or three periods when the period is shorter
-    let revs = (period * scene.output.base_hz).max(1e-12);
+    let revs = (period * base_hz).max(1e-12);
     let copies = (3.0 / revs).ceil().clamp(1.0, 64.0) as usize;
-    let m = sim.period_samples.len();
+    let m = period_samples.len();
     let shown = (copies * m).min(20_000);
     // seconds for slow machines (the press turns at 0.83 Hz), milliseconds for a gear mesh
     let span = period * shown as f64 / m as f64;
     let (to_unit, time_unit) = if span >= 1.0 { (1.0, "s") } else { (1e3, "ms") };
     let pts: Vec<(f64, f64)> =
-        (0..shown).map(|i| (to_unit * period * i as f64 / m as f64, sim.period_samples[i % m])).collect();
+        (0..shown).map(|i| (to_unit * period * i as f64 / m as f64, period_samples[i % m])).collect();
     let wave = Chart {
-        title: format!("{}: {} over {span:.3} s of steady state", scene.name, q.name()),
+        title: format!("{name}: {quantity} over {span:.3} s of steady state"),
         x_label: format!("time [{time_unit}]"),
-        y_label: format!("{}{unit}", q.name()),
-        series: vec![Series { name: q.name().into(), points: pts, style: Style::Line, color: 0 }],
+        y_label: format!("{quantity}{unit}"),
+        series: vec![Series { name: quantity.clone(), points: pts, style: Style::Line, color: 0 }],
         ..Default::default()
     };
     let p = dir.join("waveform.png");
     render_png(&p, PAGE_WIDTH_PX, 520, &[wave])?;
     out.push(p);
     // spectrum with mesh harmonics and sidebands
-    let peak = sim.orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
+    let orders = &summary.orders;
+    let peak = orders.iter().skip(1).map(|l| l.amplitude).fold(0.0, f64::max);
     let floor = peak * 1e-5;
-    let teeth = gear_teeth(scene);
-    let max_hz = sim.orders.last().map_or(1.0, |l| l.frequency_hz);
+    let teeth = series.teeth;
+    let max_hz = orders.last().map_or(1.0, |l| l.frequency_hz);
     // a gear pair reads in Hz (the mesh frequency is what an analyser shows); any other machine in orders
     // of its base rotation, where its harmonics fall on integers
     let spectrum = match teeth {
         Some(_) => Chart {
-            title: format!("{}: amplitude spectrum of {} (steady state, one period)", scene.name, q.name()),
-            x_label: format!(
-                "frequency [Hz]   (orders of the {} = {:.2} Hz)",
-                scene.output.base_name, scene.output.base_hz
-            ),
+            title: format!("{name}: amplitude spectrum of {quantity} (steady state, one period)"),
+            x_label: format!("frequency [Hz]   (orders of the {base_name} = {base_hz:.2} Hz)"),
             y_label: format!("amplitude{unit}"),
             y_log: true,
             // room on the right for the legend, above the data for the labels
             x_range: Some((0.0, max_hz * 1.02)),
             y_range: Some((floor, peak * 10.0)),
-            series: order_stems(&sim.orders, teeth, floor),
-            markers: mesh_markers(scene, max_hz),
+            series: order_stems(orders, teeth, floor),
+            markers: mesh_markers(teeth, base_hz, max_hz),
             ..Default::default()
         },
         None => {
-            let by_order: Vec<OrderLine> =
-                sim.orders.iter().map(|l| OrderLine { frequency_hz: l.order, ..*l }).collect();
-            let max_order = sim.orders.last().map_or(1.0, |l| l.order);
+            let by_order: Vec<OrderLine> = orders.iter().map(|l| OrderLine { frequency_hz: l.order, ..*l }).collect();
+            let max_order = orders.last().map_or(1.0, |l| l.order);
             Chart {
                 title: format!(
-                    "{}: amplitude spectrum of {} (steady state, one period; {} = {:.3} Hz)",
-                    scene.name,
-                    q.name(),
-                    scene.output.base_name,
-                    scene.output.base_hz
+                    "{name}: amplitude spectrum of {quantity} (steady state, one period; {base_name} = {base_hz:.3} Hz)"
                 ),
-                x_label: format!("order of the {} [-]", scene.output.base_name),
+                x_label: format!("order of the {base_name} [-]"),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
                 x_range: Some((0.0, max_order + 1.0)),
@@ -80,31 +81,23 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
     render_png(&p, PAGE_WIDTH_PX, 620, &[spectrum])?;
     out.push(p);
     // zooms around the first three mesh harmonics (like the paper's Fig 13)
-    if let Some((z1, _)) = teeth {
-        let fz = z1 as f64 * scene.output.base_hz;
+    if let Some((z1, z2)) = teeth {
+        let fz = z1 as f64 * base_hz;
         let mut charts = Vec::new();
         for k in 1..=3 {
             let centre = k as f64 * fz;
-            let (lo, hi) = (centre - 7.5 * scene.output.base_hz, centre + 7.5 * scene.output.base_hz);
+            let (lo, hi) = (centre - 7.5 * base_hz, centre + 7.5 * base_hz);
             let lines: Vec<OrderLine> =
-                sim.orders.iter().filter(|l| l.frequency_hz >= lo && l.frequency_hz <= hi).copied().collect();
+                orders.iter().filter(|l| l.frequency_hz >= lo && l.frequency_hz <= hi).copied().collect();
             if lines.iter().all(|l| l.amplitude <= floor) {
                 continue;
             }
-            let markers = lines
-                .iter()
-                .filter(|l| l.amplitude > floor && (l.order - l.order.round()).abs() < 1e-9)
-                .map(|l| {
-                    let d = l.order.round() as i64 - (k * z1) as i64;
-                    Marker {
-                        x: l.frequency_hz,
-                        label: if d == 0 { format!("{k}fz") } else { format!("{d:+}") },
-                        color: if d == 0 { 0 } else { 1 },
-                    }
-                })
-                .collect();
+            let markers =
+                lines.iter().filter(|l| l.amplitude > floor).filter_map(|l| zoom_marker(l, k, z1, z2)).collect();
             charts.push(Chart {
-                title: format!("zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders"),
+                title: format!(
+                    "zoom around {k} x mesh = {centre:.0} Hz: sidebands labelled in pinion orders (w: wheel orders)"
+                ),
                 x_label: "frequency [Hz]".into(),
                 y_label: format!("amplitude{unit}"),
                 y_log: true,
@@ -122,34 +115,62 @@ pub fn simulation(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<Vec<Pat
             out.push(p);
         }
     }
-    out.push(multipliers(scene, &sim.steady, dir)?);
-    if let Model::Press(..) = &scene.model {
-        out.push(press_figures(scene, sim, dir)?);
+    out.push(multipliers(&summary.stability, dir)?);
+    if !series.press.is_empty() {
+        out.push(press_figures(name, &series.press, dir)?);
     }
     Ok(out)
 }
 
-/// Floquet multipliers in the complex plane with the unit circle.
+/// The label of a line of the zoom around the `k`-th mesh harmonic of a pair with `z1`, `z2` teeth: "kfz"
+/// for the mesh line, its distance in pinion orders ("-2") for a pinion sideband, in wheel orders ("+1w")
+/// for a wheel sideband, each in its stem's colour; none for other lines.
+fn zoom_marker(l: &OrderLine, k: usize, z1: usize, z2: usize) -> Option<Marker> {
+    let d = l.order - (k * z1) as f64;
+    let (label, color) = match classify(l.order, z1, z2) {
+        LineKind::Mesh => (format!("{k}fz"), 0),
+        LineKind::Pinion => (format!("{:+}", d.round() as i64), 1),
+        LineKind::Wheel => (format!("{:+}w", (d * z2 as f64 / z1 as f64).round() as i64), 2),
+        LineKind::Other => return None,
+    };
+    Some(Marker { x: l.frequency_hz, label, color })
+}
+
+/// Dashed lines at the mesh harmonics up to `max_hz` of a pair with `teeth` whose pinion turns at
+/// `base_hz`.
+fn mesh_markers(teeth: Option<(usize, usize)>, base_hz: f64, max_hz: f64) -> Vec<Marker> {
+    let Some((z1, _)) = teeth else { return Vec::new() };
+    let fz = z1 as f64 * base_hz;
+    (1..)
+        .map(|k| k as f64 * fz)
+        .take_while(|f| *f <= max_hz)
+        .enumerate()
+        .map(|(i, f)| Marker { x: f, label: format!("{}x mesh", i + 1), color: 0 })
+        .collect()
+}
+
+/// Floquet multipliers of `summary` in the complex plane with the unit circle.
 ///
 /// # Errors
 /// Write failures.
-pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Path) -> Result<PathBuf, ReportError> {
-    let pts: Vec<(f64, f64)> = steady.floquet.multipliers.iter().map(|r| (r.re, r.im)).collect();
-    let r = steady.floquet.rho_max.max(1.0) * 1.15;
-    let verdict = if steady.floquet.stable { "stable" } else { "NOT asymptotically stable" };
+pub fn multipliers(summary: &StabilitySummary, dir: &Path) -> Result<PathBuf, ReportError> {
+    let pts: Vec<(f64, f64)> = summary.multipliers.iter().map(|r| (r.re, r.im)).collect();
+    let rho = summary.rho_max;
+    let r = rho.max(1.0) * 1.15;
+    let verdict = if summary.stable { "stable" } else { "NOT asymptotically stable" };
     let chart = Chart {
-        title: format!("{}: multipliers, |rho|max = {} ({verdict})", scene.name, num(steady.floquet.rho_max)),
+        title: format!("{}: multipliers, |rho|max = {} ({verdict})", summary.scene, num(rho)),
         x_label: "Re rho [-]".into(),
         y_label: "Im rho [-]".into(),
         x_range: Some((-r, r)),
         y_range: Some((-r, r)),
         unit_circle: true,
+        equal_axes: true,
         series: vec![Series { name: "multipliers".into(), points: pts.clone(), style: Style::Points, color: 1 }],
         ..Default::default()
     };
     let p = dir.join("multipliers.png");
     // multipliers far inside the circle sit on a dot at this scale: a second panel zoomed onto them
-    let rho = steady.floquet.rho_max;
     if rho > 0.0 && rho < 0.3 {
         let z = rho * 1.3;
         let zoom = Chart {
@@ -158,6 +179,7 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
             y_label: "Im rho [-]".into(),
             x_range: Some((-z, z)),
             y_range: Some((-z, z)),
+            equal_axes: true,
             series: vec![Series { name: "multipliers".into(), points: pts, style: Style::Points, color: 1 }],
             ..Default::default()
         };
@@ -169,47 +191,26 @@ pub fn multipliers(scene: &Scene, steady: &crate::solver::SteadyState, dir: &Pat
 }
 
 /// The press: q1 and q2 over one period with their spectra (the paper's Figs 3 and 4).
-pub(super) fn press_figures(scene: &Scene, sim: &Simulation, dir: &Path) -> Result<PathBuf, ReportError> {
-    let sys = scene.system();
-    let period = sim.steady.period_s;
-    let m = 720;
-    let times: Vec<f64> = (0..=m).map(|i| period * i as f64 / m as f64).collect();
-    let mut states = Vec::new();
-    sim.steady.states_at(sys, &times, &mut states);
-    let n = sys.dim();
+fn press_figures(name: &str, press: &[PressCoordinate], dir: &Path) -> Result<PathBuf, ReportError> {
     let mut charts = Vec::new();
-    for (idx, name, unit, scale) in [(0usize, "q1", "rad", 1.0), (1, "q2", "mm", 1e3)] {
-        let pts: Vec<(f64, f64)> = times.iter().enumerate().map(|(i, t)| (*t, states[i * n + idx] * scale)).collect();
-        let samples: Vec<f64> = (0..1024).map(|i| i as f64 * period / 1024.0).collect();
-        let mut st = Vec::new();
-        sim.steady.states_at(sys, &samples, &mut st);
-        let x: Vec<f64> = (0..1024).map(|i| st[i * n + idx] * scale).collect();
-        let amps = crate::signal::spectrum::periodic_amplitudes(&x);
-        let lines: Vec<(f64, f64)> =
-            amps.iter().enumerate().skip(1).take(24).map(|(k, a)| (k as f64, a.max(1e-12))).collect();
-        let peak = lines.iter().map(|l| l.1).fold(0.0, f64::max);
+    for (idx, c) in press.iter().enumerate() {
+        let peak = c.lines.iter().map(|l| l.1).fold(0.0, f64::max);
+        let fig = if idx == 0 { "3" } else { "4" };
         charts.push(Chart {
-            title: format!(
-                "{}: {name} over one input revolution (Fig {})",
-                scene.name,
-                if idx == 0 { "3a" } else { "4a" }
-            ),
+            title: format!("{name}: {} over one input revolution (Fig {fig}a)", c.name),
             x_label: "time [s]".into(),
-            y_label: format!("{name} [{unit}]"),
-            series: vec![Series { name: name.into(), points: pts, style: Style::Line, color: idx }],
+            y_label: format!("{} [{}]", c.name, c.unit),
+            series: vec![Series { name: c.name.clone(), points: c.points.clone(), style: Style::Line, color: idx }],
             ..Default::default()
         });
         charts.push(Chart {
-            title: format!(
-                "spectrum of {name} by order of the input speed W (Fig {})",
-                if idx == 0 { "3b" } else { "4b" }
-            ),
+            title: format!("spectrum of {} by order of the input speed W (Fig {fig}b)", c.name),
             x_label: "order of W [-]".into(),
-            y_label: format!("amplitude [{unit}]"),
+            y_label: format!("amplitude [{}]", c.unit),
             y_log: true,
             x_range: Some((0.0, 25.0)),
             y_range: Some((peak * 1e-6, peak * 3.0)),
-            series: vec![Series { name: name.into(), points: lines, style: Style::Stems, color: idx }],
+            series: vec![Series { name: c.name.clone(), points: c.lines.clone(), style: Style::Stems, color: idx }],
             ..Default::default()
         });
     }

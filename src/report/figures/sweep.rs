@@ -47,7 +47,7 @@ pub(super) fn unstable_bands(points: &[SweepPoint]) -> Vec<Band> {
     bands
 }
 
-/// Stability map of a sweep: the margin |1 - |rho|max| on a log axis (stable and unstable points in their
+/// Stability map of a sweep: the margin |1 - |rho|max| (on a log axis when it spans a decade or more; stable and unstable points in their
 /// own colours, untrusted points marked), unstable ranges shaded, and the steady-state line amplitudes.
 ///
 /// # Errors
@@ -79,11 +79,17 @@ pub fn stability_map(
             color: 3,
         });
     }
+    // a log axis only when the margin spans a decade or more: within one it would carry a single labelled
+    // tick (0.97 to 0.99 showed only "1")
+    let (m_lo, m_hi) = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .fold((f64::INFINITY, 0.0f64), |(a, b), m| (a.min(m), b.max(m)));
     let top = Chart {
         title: format!("{scene}: Floquet stability margin over {x_label} (shaded: unstable)"),
         x_label: x_label.clone(),
         y_label: "|1 - |rho|max| [-]".into(),
-        y_log: true,
+        y_log: m_hi >= 10.0 * m_lo,
         x_range: Some((lo, hi)),
         series,
         bands: bands.clone(),

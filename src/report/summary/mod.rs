@@ -2,15 +2,19 @@
 //! the figures.
 
 mod diagnosis;
+mod evidence;
 mod identify;
 mod machine;
+mod speed;
+mod verdict;
 
 pub use diagnosis::*;
+pub use evidence::*;
 pub use identify::*;
 pub use machine::*;
+pub use speed::*;
+pub use verdict::*;
 
-use crate::scene::Scene;
-use crate::solver::SteadyState;
 use serde::Serialize;
 
 /// One spectral line of the output quantity.
@@ -24,25 +28,50 @@ pub struct OrderLine {
     pub amplitude: f64,
 }
 
-/// Result of simulating a scene.
-#[derive(Clone, Debug)]
-pub struct Simulation {
-    /// Steady state and Floquet analysis.
-    pub steady: SteadyState,
-    /// Output quantity over one period at `period_samples.len()` equally spaced times from 0.
-    pub period_samples: Vec<f64>,
-    /// Lines up to the scene's `max_order`, every harmonic of 1/T.
-    pub orders: Vec<OrderLine>,
-    /// RMS over one period (includes the mean), output unit.
+/// Estimated relative error of each printed quantity of `simulate` (the solver's estimates, copied by
+/// the simulate job).
+#[derive(Serialize, Debug, Clone, Copy, PartialEq)]
+pub struct QuantityErrors {
+    /// Periodic state, relative to the largest balanced state over the period (rounding included).
+    pub state: f64,
+    /// Balanced monodromy, relative to max(|Phi|, 1).
+    pub monodromy: f64,
+    /// Multipliers, relative to max(|rho|max, 1).
+    pub multipliers: f64,
+    /// Line amplitudes (`orders`), relative to the largest line.
+    pub orders: f64,
+    /// RMS, relative to itself.
     pub rms: f64,
-    /// Peak-to-peak over one period, output unit.
+    /// Peak-to-peak, relative to itself or to the largest |value| when that is larger (a nearly constant
+    /// output); it includes what the extreme search left unrefined.
     pub peak_to_peak: f64,
-    /// Estimated error of each printed quantity.
-    pub errors: QuantityErrors,
 }
 
-/// Estimated relative error of each printed quantity of `simulate`.
-pub use crate::solver::response::Estimates as QuantityErrors;
+/// The curves of a simulation that the images draw and the JSON summary leaves out; the simulate job
+/// builds it from the solved scene.
+#[derive(Clone, Debug, Default)]
+pub struct SimulationSeries {
+    /// Output quantity over one period at `period_samples.len()` equally spaced times from 0, output unit.
+    pub period_samples: Vec<f64>,
+    /// Pinion and wheel teeth when the scene is a gear pair (mesh harmonics and sidebands are then
+    /// marked and the spectrum drawn in Hz).
+    pub teeth: Option<(usize, usize)>,
+    /// The cam press's coordinates over one input revolution (empty for other models).
+    pub press: Vec<PressCoordinate>,
+}
+
+/// One coordinate of the cam press over one input revolution, with its spectrum by order.
+#[derive(Clone, Debug)]
+pub struct PressCoordinate {
+    /// Name ("q1", "q2").
+    pub name: String,
+    /// Unit of the values ("rad", "mm").
+    pub unit: String,
+    /// (time s, value) over one period.
+    pub points: Vec<(f64, f64)>,
+    /// (order of the input speed, one-sided amplitude) of orders 1, 2, ...
+    pub lines: Vec<(f64, f64)>,
+}
 
 /// One point of a parameter sweep, for the stability map.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -202,38 +231,6 @@ pub struct StabilitySummary {
     pub notes: Vec<String>,
 }
 
-impl StabilitySummary {
-    /// Summary of a solved scene.
-    pub fn new(scene: &Scene, s: &SteadyState) -> Self {
-        Self {
-            scene: scene.name.clone(),
-            period_s: s.period_s,
-            multipliers: s
-                .floquet
-                .multipliers
-                .iter()
-                .map(|r| Multiplier { re: r.re, im: r.im, abs: r.norm() })
-                .collect(),
-            exponents: s.floquet.exponents.iter().map(|e| e.map(|c| [c.re, c.im])).collect(),
-            rho_max: s.floquet.rho_max,
-            stable: s.floquet.stable,
-            method: s.method.name().to_string(),
-            method_reason: s.reason.clone(),
-            steps: s.resolution,
-            resolution_unit: if s.method == crate::solver::Method::Hill { "harmonics" } else { "steps" }.into(),
-            error_estimate: s.error_estimate,
-            state_error: s.state_error,
-            multiplier_error: s.multiplier_error,
-            tolerance: scene.solver.tolerance,
-            cond_i_minus_phi: s.cond_i_minus_phi,
-            stability_limit_steps: s.stability_limit_steps,
-            trusted: s.trusted,
-            warnings: s.warnings.clone(),
-            notes: scene.notes.clone(),
-        }
-    }
-}
-
 /// `gearvib simulate --json`: the stability keys plus the output quantity.
 #[derive(Serialize, Debug, Clone)]
 pub struct SimulateSummary {
@@ -259,24 +256,6 @@ pub struct SimulateSummary {
     /// Written signal file, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub signal_file: Option<String>,
-}
-
-impl SimulateSummary {
-    /// Summary of a simulation.
-    pub fn new(scene: &Scene, sim: &Simulation) -> Self {
-        Self {
-            stability: StabilitySummary::new(scene, &sim.steady),
-            quantity: scene.output.quantity.name().to_string(),
-            unit: scene.output.quantity.unit().to_string(),
-            base_hz: scene.output.base_hz,
-            base: scene.output.base_name.clone(),
-            orders: sim.orders.clone(),
-            rms: sim.rms,
-            peak_to_peak: sim.peak_to_peak,
-            errors: sim.errors,
-            signal_file: None,
-        }
-    }
 }
 
 /// Serialises any summary as one line of JSON.

@@ -1,0 +1,241 @@
+//! The verdict: condition, gear, tooth, and the scores against the baseline that decide it.
+
+use super::Shaft;
+use super::*;
+use serde::Serialize;
+
+/// Condition of a recording.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VerdictState {
+    /// The recording could not be scored (no comparable block, an indicator that is not a number, a gear
+    /// the baseline does not hold): never taken for healthy. Lowest in the order, so that any gear that
+    /// could be judged and shows a fault decides.
+    NotJudged,
+    /// No indicator beyond its limit.
+    Healthy,
+    /// One indicator beyond its first limit.
+    Suspect,
+    /// An indicator beyond its second limit, or several beyond their first.
+    Faulty,
+}
+
+impl VerdictState {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::NotJudged => "not judged",
+            Self::Healthy => "healthy",
+            Self::Suspect => "suspect",
+            Self::Faulty => "faulty",
+        }
+    }
+}
+
+/// The gear a verdict concerns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum VerdictGear {
+    /// The pinion.
+    #[serde(rename = "pinion")]
+    Pinion,
+    /// The wheel.
+    #[serde(rename = "wheel")]
+    Wheel,
+    /// The teeth were not given, so the gear cannot be named.
+    #[serde(rename = "unknown (teeth not given)")]
+    Unknown,
+    /// No gear (healthy).
+    #[serde(rename = "none")]
+    None,
+    /// The sun of a planetary stage (`diagnose --machine`).
+    #[serde(rename = "sun")]
+    Sun,
+    /// A planet of a planetary stage (which one: `Verdict::planet`).
+    #[serde(rename = "planet")]
+    Planet,
+    /// The ring of a planetary stage.
+    #[serde(rename = "ring")]
+    Ring,
+}
+
+impl VerdictGear {
+    /// Name shown to people and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pinion => "pinion",
+            Self::Wheel => "wheel",
+            Self::Unknown => "unknown (teeth not given)",
+            Self::None => "none",
+            Self::Sun => "sun",
+            Self::Planet => "planet",
+            Self::Ring => "ring",
+        }
+    }
+}
+
+impl From<Shaft> for VerdictGear {
+    fn from(s: Shaft) -> Self {
+        match s {
+            Shaft::Pinion => Self::Pinion,
+            Shaft::Wheel => Self::Wheel,
+            Shaft::Estimated | Shaft::Named(_) => Self::Unknown,
+        }
+    }
+}
+
+/// One indicator of one gear and channel scored against the statistical baseline.
+#[derive(Clone, Debug, Serialize)]
+pub struct Score {
+    /// Gear (shaft).
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// Indicator name (lower case).
+    pub indicator: String,
+    /// Median over this recording's blocks.
+    pub value: f64,
+    /// Blocks of this recording.
+    pub blocks: usize,
+    /// Median over the baseline's blocks.
+    pub baseline_centre: f64,
+    /// Spread of the baseline's blocks (1.4826 x median absolute deviation, at least 5 % of the centre), on
+    /// `scale`.
+    pub baseline_spread: f64,
+    /// `log` when the indicator is scored on its natural logarithm (the spread is then of ln value).
+    pub scale: Scale,
+    /// Smallest and largest baseline block value.
+    pub baseline_range: [f64; 2],
+    /// Baseline blocks.
+    pub baseline_blocks: usize,
+    /// (value - centre) / spread: how many spreads above the baseline's centre.
+    pub spreads: f64,
+    /// Suspect limit in spreads (false-alarm probability 1e-3 per indicator and block, Student-t prediction
+    /// limit for the number of baseline blocks).
+    pub suspect_at: f64,
+    /// Faulty limit in spreads (false-alarm probability 1e-6).
+    pub faulty_at: f64,
+    /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
+    pub decides: bool,
+}
+
+/// Where one gear's average changed against the baseline's: the phase-aligned difference of its residual
+/// signal from the baseline's mean residual, how much of that difference's energy one tooth pitch holds, and
+/// how much its first-order mesh sidebands grew.
+#[derive(Clone, Debug, Serialize)]
+pub struct LocalChange {
+    /// Gear (shaft).
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// Energy of the difference over the tooth pitch where it is largest, over the median pitch's.
+    pub value: f64,
+    /// The largest of the same measure between the baseline's own files (each against the others).
+    pub healthy: f64,
+    /// From here the change counts as evidence of a local fault: 2.5 times `healthy`, at least 3.
+    pub limit: f64,
+    /// Normalised correlation of the recording's residual with the baseline's at the best shift (1: the same
+    /// pattern).
+    pub alignment: f64,
+    /// The tooth (1-based, from the recording's angle origin) where the change is largest.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<usize>,
+    /// Sideband growth: the difference's energy at the first-order sidebands (k z +- 1) over the baseline's
+    /// own there; a change once per revolution (an eccentric gear, uneven wear) raises it.
+    pub sidebands: f64,
+    /// The largest of the same between the baseline's own files.
+    pub sidebands_healthy: f64,
+    /// From here the growth counts as evidence: 3 times `sidebands_healthy`, at least 8.
+    pub sidebands_limit: f64,
+}
+
+/// The verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Condition.
+    pub state: VerdictState,
+    /// Gear concerned.
+    pub gear: VerdictGear,
+    /// Reasons in plain words.
+    pub reasons: Vec<String>,
+    /// The tooth of a local fault (1-based), when the gear's difference signal holds one impulse per
+    /// revolution that places it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth: Option<usize>,
+    /// Where tooth 1 is counted from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tooth_origin: Option<ToothOrigin>,
+    /// The other gears whose indicators moved with the fault's, said to be its cross-talk (their averages
+    /// hold the faulty gear's impulses, smeared), not second faults.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cross_talk: Vec<String>,
+    /// With a machine: the name of the shaft that carries the faulty gear (`gear` is then `pinion` for the
+    /// stage's driving gear, `wheel` for its driven gear, or `sun`, `planet`, `ring`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shaft: Option<String>,
+    /// With a machine: the stage of the faulty gear, 1-based (machine file order).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<usize>,
+    /// With a machine and a faulty planet: the planet, 1-based (the order they pass the sensor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub planet: Option<usize>,
+    /// The average (gear or shaft) whose indicators decided a suspect or faulty verdict.
+    #[serde(skip)]
+    pub deciding: Option<Shaft>,
+}
+
+impl Verdict {
+    /// The gear and, when placed, the tooth, in words: "pinion, tooth 3 (counted from the tachometer
+    /// pulse)".
+    pub fn place(&self) -> String {
+        let gear = match (&self.shaft, self.stage, self.planet) {
+            (_, Some(k), Some(p)) => format!("stage {k} planet {p}"),
+            (Some(s), Some(k), None) => format!("stage {k} {} on shaft `{s}`", self.gear.name()),
+            _ => self.gear.name().to_string(),
+        };
+        match (self.tooth, self.tooth_origin) {
+            (Some(t), Some(ToothOrigin::Tachometer)) => {
+                format!("{gear}, tooth {t} (counted from the tachometer pulse)")
+            }
+            (Some(t), Some(ToothOrigin::Relative)) => format!(
+                "{gear}, tooth {t} (counted from a relative origin: no tachometer on this shaft, so only the distance between teeth is meaningful)"
+            ),
+            (Some(t), _) => format!(
+                "{gear}, tooth {t} (counted from an arbitrary origin: no tachometer, so only the distance between teeth is meaningful)"
+            ),
+            _ => gear,
+        }
+    }
+
+    /// A verdict without a tooth or cross-talk.
+    pub fn new(state: VerdictState, gear: VerdictGear, reasons: Vec<String>) -> Self {
+        Self {
+            state,
+            gear,
+            reasons,
+            tooth: None,
+            tooth_origin: None,
+            cross_talk: Vec::new(),
+            shaft: None,
+            stage: None,
+            planet: None,
+            deciding: None,
+        }
+    }
+}
+
+/// Where a placed tooth is counted from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ToothOrigin {
+    /// Tooth 1 is the one meshing at the tachometer's pulse.
+    #[serde(rename = "tachometer pulse")]
+    Tachometer,
+    /// No tachometer: tooth 1 is where the tracked angle happened to start; only the distance between teeth
+    /// is meaningful (another recording of the same machine may number them from elsewhere).
+    #[serde(rename = "arbitrary (no tachometer)")]
+    Arbitrary,
+    /// With a machine: a shaft that the tachometer does not watch; tooth 1 is where its angle stood at the
+    /// tracked shaft's first pulse (the tracked angle times the exact ratio), which depends on how many
+    /// revolutions the machine had turned: only the distance between teeth is meaningful.
+    #[serde(rename = "relative (no tachometer on this shaft)")]
+    Relative,
+}
