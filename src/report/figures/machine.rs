@@ -2,6 +2,7 @@
 //! colour, each sideband family (a shaft's, or the planet pass) in its own colour, the legend naming the
 //! stage's shafts and the family's shaft.
 
+use super::spectra::zoom_traces;
 use super::*;
 use crate::report::summary::{MachineDiagnosis, MachineSideband, StageDiagnosis};
 
@@ -142,9 +143,6 @@ pub fn machine_marks(
 /// +-4.5 planet-pass orders), every stage's and family's lines marked.
 pub fn machine_zooms(d: &Diagnosis, md: &MachineDiagnosis, ch: usize) -> Vec<Chart> {
     let Some((_, amp)) = d.spectra().iter().find(|s| s.0 == ch) else { return Vec::new() };
-    let cut = |s: &crate::signal::Spectrum, lo: f64, hi: f64| -> Vec<(f64, f64)> {
-        s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f >= lo && **f <= hi).map(|(f, v)| (*f, *v)).collect()
-    };
     let mut out = Vec::new();
     for s in &md.stages {
         // the widest family spacing of the stage, in Hz: its +-1 sideband's distance from the mesh line
@@ -166,18 +164,7 @@ pub fn machine_zooms(d: &Diagnosis, md: &MachineDiagnosis, ch: usize) -> Vec<Cha
                 continue;
             }
             let (lo, hi) = (fk - 3.5 * spacing, fk + 3.5 * spacing);
-            let pts = cut(amp, lo, hi);
-            let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
-            let mut series = Vec::new();
-            if let Some((_, b)) = d.baseline_spectra.iter().find(|b| b.0 == ch) {
-                series.push(Series {
-                    name: "healthy baseline".into(),
-                    points: cut(b, lo, hi),
-                    style: Style::Line,
-                    color: BASELINE_GREY,
-                });
-            }
-            series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+            let (mut series, peak) = zoom_traces(d, ch, amp, lo, hi);
             let (marks, markers) = machine_marks(md, amp, lo, hi, Some((s.stage, h.k)));
             series.extend(marks);
             // lines of two families (or stages) within three bins: their amplitude belongs to neither

@@ -229,26 +229,12 @@ pub(super) fn mesh_zooms(d: &Diagnosis, ch: usize) -> Vec<Chart> {
     let (Some((_, amp)), Some(f1)) = (d.spectra().iter().find(|s| s.0 == ch), d.shaft_hz.reference()) else {
         return Vec::new();
     };
-    let cut = |s: &crate::signal::Spectrum, lo: f64, hi: f64| -> Vec<(f64, f64)> {
-        s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f >= lo && **f <= hi).map(|(f, v)| (*f, *v)).collect()
-    };
     d.mesh_harmonics
         .iter()
         .filter_map(|h| {
             let fk = h.frequency_hz?;
             let (lo, hi) = (fk - 4.5 * f1, fk + 4.5 * f1);
-            let pts = cut(amp, lo, hi);
-            let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
-            let mut series = Vec::new();
-            if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
-                series.push(Series {
-                    name: "healthy baseline".into(),
-                    points: cut(b, lo, hi),
-                    style: Style::Line,
-                    color: BASELINE_GREY,
-                });
-            }
-            series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+            let (mut series, peak) = zoom_traces(d, ch, amp, lo, hi);
             for (i, shaft) in shafts(d).into_iter().enumerate() {
                 let detected = standing_out(d, amp, shaft, Some(h.k));
                 if !detected.is_empty() {
@@ -290,6 +276,35 @@ pub(super) fn mesh_zooms(d: &Diagnosis, ch: usize) -> Vec<Chart> {
 }
 
 /// The (frequency in Hz, value) points of `s` above 0 Hz and up to `max_f` Hz.
+/// The points of `s` from `lo` to `hi` Hz.
+fn cut(s: &crate::signal::Spectrum, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f >= lo && **f <= hi).map(|(f, v)| (*f, *v)).collect()
+}
+
+/// The traces of a zoom on `lo..hi` Hz of channel `ch`: the healthy baseline's spectrum in light grey behind
+/// (when there is one), this recording's over it; and this recording's peak there.
+pub(super) fn zoom_traces(
+    d: &Diagnosis,
+    ch: usize,
+    amp: &crate::signal::Spectrum,
+    lo: f64,
+    hi: f64,
+) -> (Vec<Series>, f64) {
+    let pts = cut(amp, lo, hi);
+    let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
+    let mut series = Vec::new();
+    if let Some((_, b)) = d.baseline_spectra.iter().find(|s| s.0 == ch) {
+        series.push(Series {
+            name: "healthy baseline".into(),
+            points: cut(b, lo, hi),
+            style: Style::Line,
+            color: BASELINE_GREY,
+        });
+    }
+    series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
+    (series, peak)
+}
+
 pub(super) fn in_band(s: &crate::signal::Spectrum, max_f: f64) -> Vec<(f64, f64)> {
     s.freqs_hz.iter().zip(&s.values).filter(|(f, _)| **f > 0.0 && **f <= max_f).map(|(f, v)| (*f, *v)).collect()
 }
