@@ -208,22 +208,20 @@ impl Operator {
         (j.unsigned_abs() <= *h).then(|| mats[(j + *h as isize) as usize].as_slice())
     }
 
-    /// The diagonal block at line (k, l): -w^2 M + i w C + Ka_0 + Kb_0.
-    fn diagonal(&self, k: isize, l: isize) -> Vec<C64> {
+    /// The diagonal block at line (k, l), -w^2 M + i w C + Ka_0 + Kb_0, appended to `out` (row-major).
+    fn diagonal(&self, k: isize, l: isize, out: &mut Vec<C64>) {
         let w = k as f64 * self.w[0] + l as f64 * self.w[1];
         let (ka, kb) = (self.k(0, 0), self.k(1, 0));
-        (0..self.n * self.n)
-            .map(|e| {
-                let mut v = C64::new(-w * w * self.mass[e], w * self.damping[e]);
-                if let Some(m) = ka {
-                    v += m[e];
-                }
-                if let Some(m) = kb {
-                    v += m[e];
-                }
-                v
-            })
-            .collect()
+        out.extend((0..self.n * self.n).map(|e| {
+            let mut v = C64::new(-w * w * self.mass[e], w * self.damping[e]);
+            if let Some(m) = ka {
+                v += m[e];
+            }
+            if let Some(m) = kb {
+                v += m[e];
+            }
+            v
+        }));
     }
 
     /// Forcing vector of line (k, l), or `None` when zero.
@@ -283,7 +281,7 @@ enum Precond {
         /// The coupled DOFs P.
         support: Vec<usize>,
         /// D_k^-1 (N x N, row-major) per line, in the class's order (l-major).
-        dinv: Vec<Vec<C64>>,
+        dinv: Vec<C64>,
         /// The coupling blocks F_s (p x p, row-major) with their offsets s.
         coupling: Vec<(isize, Vec<C64>)>,
         /// Per l: the factored band of the reduced system.
@@ -297,7 +295,7 @@ struct Class<'a> {
     ks: Vec<isize>,
     ls: Vec<isize>,
     /// Diagonal blocks per (il, ik).
-    diag: Vec<Vec<C64>>,
+    diag: Vec<C64>,
     /// The exact inverse of the tone-a operator per l.
     precond: Precond,
     /// The coupling matrices' non-zero entries (row, column, value) per class offset, tone a and tone b
@@ -319,8 +317,12 @@ impl<'a> Class<'a> {
             (-smax..=smax).filter(|&s| s != 0).map(|s| (s, s * g as isize)).collect()
         };
         let (couple_a, couple_b) = (coupling(0), coupling(1));
-        let diag: Vec<Vec<C64>> =
-            ls.iter().flat_map(|&l| ks.iter().map(move |&k| (k, l))).map(|(k, l)| op.diagonal(k, l)).collect();
+        let mut diag = Vec::with_capacity(ks.len() * ls.len() * n * n);
+        for &l in &ls {
+            for &k in &ks {
+                op.diagonal(k, l, &mut diag);
+            }
+        }
         let na = ks.len();
         let support: Vec<usize> = (0..n)
             .filter(|&d| {
@@ -358,7 +360,7 @@ impl<'a> Class<'a> {
 fn full(
     op: &Operator,
     couple_a: &[(isize, isize)],
-    diag: &[Vec<C64>],
+    diag: &[C64],
     na: usize,
     nl: usize,
 ) -> Option<Vec<(Band, Vec<usize>)>> {
@@ -369,7 +371,7 @@ fn full(
     for il in 0..nl {
         let mut a = Band::new(na * n, bw, bw);
         for ik in 0..na {
-            let d = &diag[il * na + ik];
+            let d = &diag[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
             for r in 0..n {
                 for c in 0..n {
                     a.add(ik * n + r, ik * n + c, d[r * n + c]);
@@ -400,18 +402,21 @@ fn reduced(
     op: &Operator,
     couple_a: &[(isize, isize)],
     support: &[usize],
-    diag: &[Vec<C64>],
+    diag: &[C64],
     na: usize,
     nl: usize,
 ) -> Option<Precond> {
     let (n, p) = (op.n, support.len());
-    let dinv: Vec<Vec<C64>> = diag
-        .iter()
-        .map(|d| {
+    let mut dinv = Vec::with_capacity(diag.len());
+    for d in diag.chunks_exact(n * n) {
+        if n == 4 {
+            let inv = nalgebra::Matrix4::from_row_slice(d).try_inverse()?;
+            dinv.extend((0..16).map(|e| inv[(e / 4, e % 4)]));
+        } else {
             let inv = nalgebra::DMatrix::from_row_slice(n, n, d).try_inverse()?;
-            Some((0..n * n).map(|e| inv[(e / n, e % n)]).collect())
-        })
-        .collect::<Option<_>>()?;
+            dinv.extend((0..n * n).map(|e| inv[(e / n, e % n)]));
+        }
+    }
     let coupling: Vec<(isize, Vec<C64>)> = couple_a
         .iter()
         .filter_map(|&(s, j)| {
@@ -425,7 +430,7 @@ fn reduced(
     for il in 0..nl {
         let mut b = Band::new(na * p, bw, bw);
         for ik in 0..na {
-            let d = &dinv[il * na + ik];
+            let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
             for a in 0..p {
                 b.add(ik * p + a, ik * p + a, C64::new(1.0, 0.0));
             }
@@ -470,7 +475,7 @@ impl Class<'_> {
         for il in 0..nb {
             for ik in 0..na {
                 let at = (il * na + ik) * n;
-                block(y, at, &self.diag[il * na + ik], at);
+                block(y, at, &self.diag[(il * na + ik) * n * n..(il * na + ik + 1) * n * n], at);
                 for (s, entries) in &self.sparse_a {
                     let src = ik as isize - s;
                     if src >= 0 && src < na as isize {
@@ -508,7 +513,7 @@ impl Class<'_> {
                     let xl = &mut x[il * m..(il + 1) * m];
                     // t_k = D_k^-1 x_k (kept in x), its coupled DOFs the reduced right-hand side
                     for ik in 0..na {
-                        let d = &dinv[il * na + ik];
+                        let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
                         let xk = &mut xl[ik * n..(ik + 1) * n];
                         for (r, tr) in t.iter_mut().enumerate() {
                             *tr = (0..n).map(|c| d[r * n + c] * xk[c]).sum();
@@ -532,7 +537,7 @@ impl Class<'_> {
                                 *ca += (0..p).map(|e| f[a * p + e] * zs[e]).sum::<C64>();
                             }
                         }
-                        let d = &dinv[il * na + ik];
+                        let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
                         let xk = &mut xl[ik * n..(ik + 1) * n];
                         for (r, xr) in xk.iter_mut().enumerate() {
                             *xr -= (0..p).map(|a| d[r * n + support[a]] * c[a]).sum::<C64>();
