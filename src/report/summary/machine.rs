@@ -110,9 +110,10 @@ pub struct PlanetaryDiagnosis {
     /// exactly enough or the recording too short).
     pub planet_averages: Vec<PlanetIndicators>,
     /// Per planet, the energy of the planet-fault order family (orders m z_r / z_p of the carrier, m = 1..3)
-    /// in the squared signal gated to that planet's passage at the sensor (+-20 degrees of carrier angle,
-    /// Hann), per sample squared: a planet's local fault repeats once per planet revolution relative to the
-    /// carrier and is seen strongest while that planet passes the sensor.
+    /// in the squared tooth-to-tooth difference (y(theta) - y(theta - one ring tooth), which removes the
+    /// meshing locally and keeps a fault's burst) gated to that planet's passage at the sensor (+-20 degrees
+    /// of carrier angle, Hann), per sample squared: a planet's local fault repeats once per planet revolution
+    /// relative to the carrier and is seen strongest while that planet passes the sensor.
     pub planet_fault_energy: Vec<f64>,
     /// Why there are no planet averages, when there are none.
     #[serde(skip_serializing_if = "Option::is_none")]
