@@ -501,4 +501,13 @@ fn planetary_profile_names_the_planet() {
     let j = json_of(&gearvib(&["diagnose", rec.to_str().unwrap(), "--profile", profile.to_str().unwrap(), "--json"]));
     assert_eq!(j["verdict"]["gear"], "planet", "{}", j["verdict"]);
     assert_eq!(j["verdict"]["planet"], 1, "{}", j["verdict"]);
+    // a profile learned before the planets' energy was measured on the tooth-to-tooth difference (no
+    // `planet_measure`) is refused with the field named, not applied with energies that no longer compare
+    let mut old = stored.clone();
+    old.as_object_mut().unwrap().remove("planet_measure");
+    let old_path = dir.join("old-profile.json");
+    std::fs::write(&old_path, old.to_string()).unwrap();
+    let r = gearvib(&["diagnose", rec.to_str().unwrap(), "--profile", old_path.to_str().unwrap()]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("planet_measure") && r.stderr.lines().count() == 1, "{}", r.stderr);
 }

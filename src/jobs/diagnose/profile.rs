@@ -40,7 +40,15 @@ pub struct Profile {
     /// from profiles without one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub planets: Option<Vec<crate::report::summary::PlanetBaseline>>,
+    /// How `planets` was measured: [`PLANET_MEASURE`] (absent from older profiles, whose planet energies were
+    /// taken on the squared signal and do not compare with a recording's now).
+    #[serde(default)]
+    pub planet_measure: u32,
 }
+
+/// The planets' fault energy on the squared tooth-to-tooth difference (see
+/// `report::summary::MachineDiagnosis::planet_fault_energy`); 0, the squared signal, before.
+pub const PLANET_MEASURE: u32 = 1;
 
 /// A `learn` call: healthy recordings (files or directories), the options they are analysed with, and
 /// the profile to write.
@@ -73,6 +81,7 @@ pub fn learn(job: &LearnJob) -> Result<Profile, Error> {
     let profile = Profile {
         format: FORMAT.into(),
         version: VERSION,
+        planet_measure: PLANET_MEASURE,
         learned_from: super::expand_dirs(&job.healthy)?.iter().map(|f| f.display().to_string()).collect(),
         processing: p.opts,
         geometry,
@@ -139,6 +148,12 @@ fn check(p: &Profile) -> Result<(), String> {
     }
     if p.geometry.tsa_points.is_some_and(|n| !(64..=1 << 16).contains(&n)) {
         return Err("field `geometry.tsa_points`: must be within 64..=65536".into());
+    }
+    if p.planets.is_some() && p.planet_measure != PLANET_MEASURE {
+        return Err(format!(
+            "field `planet_measure`: {} is not {PLANET_MEASURE}: its planets' healthy energies were measured on the squared signal, which no longer compares with a recording's; learn the profile again",
+            p.planet_measure
+        ));
     }
     if p.baseline.channels.is_empty() {
         return Err("field `baseline.channels`: empty".into());
