@@ -11,7 +11,9 @@
 //! class is then tiny. Spectrally accurate for smooth coefficients; H grows until the estimated truncation
 //! error is below the tolerance: the first-order error of the dropped harmonics (the residual beyond H
 //! solved on a ring of 2 h_c harmonics, fed back inside through the class's own factors), else the change
-//! of the solution between successive H.
+//! of the solution between successive H. Where the diagonal blocks dominate beyond a truncation, the H to
+//! solve is predicted from a smaller solution continued outward by forward substitution, so a gear pair
+//! needs one small and one final solve instead of a ladder.
 
 use super::SolverError;
 use super::band::{Band, solve_refined};
@@ -904,11 +906,13 @@ fn relative_size(delta: &HillSolution, of: &HillSolution) -> f64 {
     worst
 }
 
-/// Harmonic balance to a tolerance: H from h_max (at least 8), growing by 1.25 (by 1.6 while the change is
-/// above 1000 times the tolerance) until the estimated error of the larger H is below `tolerance`, at most
-/// `max_harmonics`. The change between successive H bounds the error of the smaller one; with two changes
-/// the geometric rate gives the larger one's (times a safety factor 10). Returns the solution, its
-/// truncation error estimate and its rounding error (see [`solve_order`]).
+/// Harmonic balance to a tolerance: H from h_max (at least 8) until the estimated error is below
+/// `tolerance`, at most `max_harmonics`. Where the outside of a truncation is diagonally dominant, the next
+/// H is predicted from the solution continued beyond a smaller one (see [`solve_compared`]); elsewhere H
+/// grows by 1.25 (by 1.6 while the estimate is above 1000 times the tolerance). The estimate is the first-
+/// order truncation error; where that is not at hand, the change between successive H (it bounds the error
+/// of the smaller one; with two changes the geometric rate gives the larger one's, times a safety factor
+/// 10). Returns the solution, its truncation error estimate and its rounding error (see [`solve_order`]).
 ///
 /// # Errors
 /// Singular classes, or the tolerance not reached.
