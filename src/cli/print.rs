@@ -143,7 +143,7 @@ pub fn diagnosis(
             .collect();
         writeln!(
             w,
-            "envelope         band {:.0}..{:.0} Hz (spectral kurtosis {:.2}{}): {}",
+            "envelope         band {:.0}-{:.0} Hz (spectral kurtosis {:.2}{}): {}",
             e.band_hz[0],
             e.band_hz[1],
             e.spectral_kurtosis,

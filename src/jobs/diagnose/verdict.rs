@@ -462,13 +462,13 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
     let same_band =
         (e.band_hz[0] - baseline.band_hz[0]).abs() < 1.0 && (e.band_hz[1] - baseline.band_hz[1]).abs() < 1.0;
     let reason = format!(
-        "envelope spectrum ({:.0}..{:.0} Hz band{}): {} order 1 stands {:.1} dB above its neighbourhood against {:.1} dB in the baseline (+{:.1} dB): impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
+        "envelope spectrum ({:.0}-{:.0} Hz band{}): {} order 1 stands {:.1} dB above its neighbourhood against {:.1} dB in the baseline (+{:.1} dB): impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
         e.band_hz[0],
         e.band_hz[1],
         if same_band {
             String::new()
         } else {
-            format!("; the baseline's band was {:.0}..{:.0} Hz", baseline.band_hz[0], baseline.band_hz[1])
+            format!("; the baseline's band was {:.0}-{:.0} Hz", baseline.band_hz[0], baseline.band_hz[1])
         },
         line.shaft,
         line.over_floor_db,
@@ -584,7 +584,7 @@ pub fn envelope_absolute(d: &mut Diagnosis) {
     else {
         return;
     };
-    let band = format!("{:.0}..{:.0} Hz band", e.band_hz[0], e.band_hz[1]);
+    let band = format!("{:.0}-{:.0} Hz band", e.band_hz[0], e.band_hz[1]);
     if line.over_floor_db > ENVELOPE_ABSOLUTE_DB {
         let reason = format!(
             "envelope spectrum ({band}): {} order 1 stands {:.1} dB above its neighbourhood, over the {ENVELOPE_ABSOLUTE_DB:.0} dB absolute limit without a baseline: impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
