@@ -132,17 +132,20 @@ pub struct Concentration {
     pub tooth: usize,
 }
 
+/// The least-squares scale s of `reference` to `x` (Re sum x_k conj(r_k) / sum |r_k|^2, over their common
+/// orders); `None` when the reference is all zero or not finite.
+fn scale(x: &[(f64, f64)], reference: &[(f64, f64)]) -> Option<f64> {
+    let rr: f64 = reference.iter().map(|c| c.0 * c.0 + c.1 * c.1).sum();
+    let xr: f64 = x.iter().zip(reference).map(|(a, b)| a.0 * b.0 + a.1 * b.1).sum();
+    (rr > 0.0 && rr.is_finite()).then(|| xr / rr)
+}
+
 /// The difference `x - s reference` over one revolution at `n` points (`n` a power of two of at least twice
 /// the orders held), s the least-squares scale (so a change of load alone leaves little). `None` when the
 /// reference is empty or all zero.
 pub fn difference(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], n: usize) -> Option<Vec<f64>> {
     let len = x.len().min(reference.len()).min(n / 2);
-    let rr: f64 = reference[..len].iter().map(|c| c.0 * c.0 + c.1 * c.1).sum();
-    if len < 2 || rr <= 0.0 || !rr.is_finite() {
-        return None;
-    }
-    let xr: f64 = (0..len).map(|k| x[k].0 * reference[k].0 + x[k].1 * reference[k].1).sum();
-    let s = xr / rr;
+    let s = scale(&x[..len], &reference[..len]).filter(|_| len >= 2)?;
     let mut spec = vec![(0.0, 0.0); n / 2 + 1];
     for k in 1..len {
         spec[k] = (x[k].0 - s * reference[k].0, x[k].1 - s * reference[k].1);
@@ -181,11 +184,10 @@ pub fn concentration(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], 
 /// modulates every mesh harmonic and lands on those orders. `None` when there is nothing to compare.
 pub fn sideband_growth(x: &[(f64, f64)], reference: &[(f64, f64)], z: usize) -> Option<f64> {
     let len = x.len().min(reference.len());
-    let rr: f64 = reference[..len].iter().map(|c| c.0 * c.0 + c.1 * c.1).sum();
-    if z < 3 || len <= z + 1 || rr <= 0.0 || !rr.is_finite() {
+    if z < 3 || len <= z + 1 {
         return None;
     }
-    let s = (0..len).map(|k| x[k].0 * reference[k].0 + x[k].1 * reference[k].1).sum::<f64>() / rr;
+    let s = scale(&x[..len], &reference[..len])?;
     let (mut change, mut own) = (0.0, 0.0);
     for k in (1..len).filter(|k| k % z == 1 || k % z == z - 1) {
         change += (x[k].0 - s * reference[k].0).powi(2) + (x[k].1 - s * reference[k].1).powi(2);

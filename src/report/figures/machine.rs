@@ -2,7 +2,7 @@
 //! colour, each sideband family (a shaft's, or the planet pass) in its own colour, the legend naming the
 //! stage's shafts and the family's shaft.
 
-use super::spectra::zoom_traces;
+use super::spectra::{zoom_chart, zoom_traces};
 use super::*;
 use crate::report::summary::{MachineDiagnosis, MachineSideband, StageDiagnosis};
 
@@ -184,15 +184,14 @@ pub fn machine_zooms(d: &Diagnosis, md: &MachineDiagnosis, ch: usize) -> Vec<Cha
                 });
             }
             out.push(Chart {
-                title: format!("zoom around stage {} {}x mesh = {} Hz, channel {ch}", s.stage, h.k, num(fk)),
-                x_label: "frequency [Hz]".into(),
-                y_label: format!("amplitude [{}]", unit_or(&d.unit)),
-                y_log: true,
-                x_range: Some((lo, hi)),
-                y_range: Some((peak * 1e-4, peak * 3.0)),
-                series,
                 markers,
-                ..Default::default()
+                ..zoom_chart(
+                    d,
+                    format!("zoom around stage {} {}x mesh = {} Hz, channel {ch}", s.stage, h.k, num(fk)),
+                    (lo, hi),
+                    peak,
+                    series,
+                )
             });
         }
     }

@@ -261,15 +261,14 @@ pub(super) fn mesh_zooms(d: &Diagnosis, ch: usize) -> Vec<Chart> {
                 });
             }
             Some(Chart {
-                title: format!("zoom around {}x mesh = {} Hz, channel {ch}", h.k, num(fk)),
-                x_label: "frequency [Hz]".into(),
-                y_label: format!("amplitude [{}]", unit_or(&d.unit)),
-                y_log: true,
-                x_range: Some((lo, hi)),
-                y_range: Some((peak * 1e-4, peak * 3.0)),
-                series,
                 markers: vec![Marker { x: fk, label: format!("{}x mesh", h.k), color: 0 }],
-                ..Default::default()
+                ..zoom_chart(
+                    d,
+                    format!("zoom around {}x mesh = {} Hz, channel {ch}", h.k, num(fk)),
+                    (lo, hi),
+                    peak,
+                    series,
+                )
             })
         })
         .collect()
@@ -303,6 +302,20 @@ pub(super) fn zoom_traces(
     }
     series.push(Series { name: "this recording".into(), points: pts, style: Style::Line, color: 4 });
     (series, peak)
+}
+
+/// A zoom's chart on `range` Hz: log amplitude from 1e-4 of this recording's `peak` there to 3 times it.
+pub(super) fn zoom_chart(d: &Diagnosis, title: String, range: (f64, f64), peak: f64, series: Vec<Series>) -> Chart {
+    Chart {
+        title,
+        x_label: "frequency [Hz]".into(),
+        y_label: format!("amplitude [{}]", unit_or(&d.unit)),
+        y_log: true,
+        x_range: Some(range),
+        y_range: Some((peak * 1e-4, peak * 3.0)),
+        series,
+        ..Default::default()
+    }
 }
 
 pub(super) fn in_band(s: &crate::signal::Spectrum, max_f: f64) -> Vec<(f64, f64)> {
