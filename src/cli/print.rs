@@ -5,7 +5,8 @@ use crate::report::figures::stands_out;
 use crate::report::format::num;
 use crate::report::identify::fault_size;
 use crate::report::summary::{
-    BenchReport, Diagnosis, ErrorHarmonic, Identification, PhaseOrigin, SimulateSummary, StabilitySummary, SweepSummary,
+    BenchReport, Diagnosis, ErrorHarmonic, Identification, Indicator, PhaseOrigin, SimulateSummary, StabilitySummary,
+    SweepSummary,
 };
 use std::io::{self, Write};
 
@@ -116,17 +117,14 @@ pub fn diagnosis(
         writeln!(w, "  cross-talk: {c}")?;
     }
     writeln!(w, "indicators (TSA of each gear's shaft; FM4/M6A/M8A on the difference signal, NA4 on the residual):")?;
-    let keys = ["fm0", "fm4", "m6a", "m8a", "na4", "er", "si", "slf", "ser", "rms", "kurtosis", "crest"];
+    let keys = Indicator::TABLE;
     let name_width = d.gears.iter().map(|g| g.gear.name().len()).max().unwrap_or(4).max(4);
-    let head: String = keys.iter().map(|k| format!(" {k:>10}")).collect();
+    let head: String = keys.iter().map(|k| format!(" {:>10}", k.column())).collect();
     writeln!(w, "  {:<name_width$} {:>3}{head}", "gear", "ch")?;
     for g in &d.gears {
         let vals: String = keys
             .iter()
-            .map(|k| {
-                let key = if *k == "crest" { "crest_factor" } else { k };
-                format!(" {:>10}", table_number(g.indicators.get(key).copied().unwrap_or(f64::NAN)))
-            })
+            .map(|k| format!(" {:>10}", table_number(g.indicators.get(k).copied().unwrap_or(f64::NAN))))
             .collect();
         writeln!(w, "  {:<name_width$} {:>3}{vals}", g.gear.name(), g.channel)?;
     }
@@ -246,16 +244,16 @@ fn machine_lines(w: &mut dyn Write, d: &Diagnosis, md: &crate::report::summary::
                 .collect();
             writeln!(w, "    orders: {}", orders.join(", "))?;
             for a in &p.planet_averages {
-                let get = |k: &str| a.indicators.get(k).copied().map_or("-".into(), table_number);
+                let get = |k: Indicator| a.indicators.get(&k).copied().map_or("-".into(), table_number);
                 writeln!(
                     w,
                     "    planet {} average ({} passes): FM4 {}, M6A {}, kurtosis {}, RMS {}",
                     a.planet,
                     a.passes,
-                    get("fm4"),
-                    get("m6a"),
-                    get("kurtosis"),
-                    get("rms")
+                    get(Indicator::Fm4),
+                    get(Indicator::M6a),
+                    get(Indicator::Kurtosis),
+                    get(Indicator::Rms)
                 )?;
             }
             if let Some(why) = &p.no_averages {

@@ -253,7 +253,7 @@ pub(super) fn analyse_parts<'a>(
     };
     let raw = moments
         .iter()
-        .map(|m| BTreeMap::from([("rms".to_string(), m.rms), ("kurtosis".to_string(), m.kurtosis)]))
+        .map(|m| Indicators::from([(Indicator::Rms, m.rms), (Indicator::Kurtosis, m.kurtosis)]))
         .collect();
     // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map)
     free_other_channels(&mut rec, &channels, first);
@@ -437,7 +437,7 @@ pub(super) fn tsa_indicators(
     z: usize,
     others: &OtherLines,
     shaft_orders: usize,
-) -> (BTreeMap<String, f64>, Decomposition) {
+) -> (Indicators, Decomposition) {
     let d = if others.mesh.is_empty() && others.foreign.is_empty() {
         tsa::decompose(fft, x, z, shaft_orders)
     } else {
@@ -456,18 +456,21 @@ pub(super) fn tsa_indicators(
     let rms = ind::rms(&centred);
     let [fm4, m6a, m8a] = ind::normalized_moments_4_6_8(difference);
     let mut m = BTreeMap::new();
-    m.insert("rms".into(), rms);
-    m.insert("kurtosis".into(), ind::kurtosis(x));
-    m.insert("crest_factor".into(), ind::crest_factor(&centred));
-    m.insert("fm0".into(), ind::fm0(x, &mesh_amps));
-    m.insert("fm4".into(), fm4);
-    m.insert("m6a".into(), m6a);
-    m.insert("m8a".into(), m8a);
-    m.insert("na4".into(), ind::kurtosis(residual));
-    m.insert("er".into(), ind::energy_ratio(difference, regular));
-    m.insert("si".into(), side / 2.0);
-    m.insert("slf".into(), side / rms);
-    m.insert("ser".into(), if z < amplitudes.len() { ind::sideband_energy_ratio(amplitudes, z, 1) } else { f64::NAN });
+    m.insert(Indicator::Rms, rms);
+    m.insert(Indicator::Kurtosis, ind::kurtosis(x));
+    m.insert(Indicator::CrestFactor, ind::crest_factor(&centred));
+    m.insert(Indicator::Fm0, ind::fm0(x, &mesh_amps));
+    m.insert(Indicator::Fm4, fm4);
+    m.insert(Indicator::M6a, m6a);
+    m.insert(Indicator::M8a, m8a);
+    m.insert(Indicator::Na4, ind::kurtosis(residual));
+    m.insert(Indicator::Er, ind::energy_ratio(difference, regular));
+    m.insert(Indicator::Si, side / 2.0);
+    m.insert(Indicator::Slf, side / rms);
+    m.insert(
+        Indicator::Ser,
+        if z < amplitudes.len() { ind::sideband_energy_ratio(amplitudes, z, 1) } else { f64::NAN },
+    );
     (m, d)
 }
 
@@ -499,8 +502,8 @@ pub(super) fn block_indicators(
     let (mut indicators, d) = tsa_indicators(fft, block, z, others, shaft_orders);
     let n = d.residual.len() as f64;
     let mean = d.residual.iter().sum::<f64>() / n;
-    indicators.insert("residual_m2".into(), d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
-    indicators.insert("residual_m4".into(), d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
+    indicators.insert(Indicator::ResidualM2, d.residual.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n);
+    indicators.insert(Indicator::ResidualM4, d.residual.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n);
     let residual_spectrum = if spectrum {
         crate::signal::tsa_change::order_spectrum(fft, &d.residual, SPECTRUM_ORDERS)
     } else {

@@ -13,7 +13,7 @@
 
 use super::JobError;
 use crate::Error;
-use crate::report::summary::{Block, Diagnosis, GearIndicators, LocalChange, Scale, Score, Shaft};
+use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft};
 use crate::signal::spectrum::Fft;
 use crate::signal::tsa_change::{self, OrderSpectrum};
 use serde::{Deserialize, Serialize};
@@ -51,18 +51,6 @@ const NEAR_ZERO_OF_RMS: f64 = 1e-3;
 /// Dynamic range of the log spectra of the spectral-change indicator, dB (weaker orders are clipped there).
 const SPECTRUM_RANGE_DB: f64 = 60.0;
 
-/// Indicators that take part in the verdict, with what a rise means.
-pub const DECIDING: [(&str, &str, &str); 8] = [
-    ("fm4", "FM4", "the difference signal is more impulsive"),
-    ("m6a", "M6A", "the difference signal has sharper peaks"),
-    ("na4_star", "NA4*", "the residual signal has grown and become impulsive"),
-    ("er", "ER", "more energy outside the regular mesh lines"),
-    ("fm0", "FM0", "the peak-to-peak of the average grew against the mesh lines"),
-    ("ser", "SER", "the sidebands around the mesh line have grown"),
-    ("si", "SI", "the first sidebands of the mesh line have grown"),
-    ("spectral_change", "spectral change", "the order spectrum of the average has changed"),
-];
-
 /// How far a recording's local change must rise over the largest of the baseline files' (each against the
 /// others) to count as evidence. Healthy generated recordings of four machines of another physics (three
 /// per machine, each against its two siblings) stand at most 2.2x over their siblings' largest (1.9x on the
@@ -86,10 +74,6 @@ pub const LOCAL_MIN: f64 = 3.0;
 /// change to be scored: below it the two averages do not line up (another gear, or a residual of noise
 /// alone), and their difference would read as a change everywhere.
 pub const MIN_ALIGNMENT: f64 = 0.2;
-
-/// Deciding indicators that scale with the absolute level of the signal (the others are ratios of the
-/// signal to itself): they cannot decide when the two sides' units differ or one is unknown.
-pub const LEVEL_DEPENDENT: [&str; 3] = ["na4_star", "si", "spectral_change"];
 
 /// A distribution over blocks.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
@@ -169,7 +153,7 @@ impl Transform for Scale {
 /// The reference of one gear on one channel.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct GearReference {
-    stats: BTreeMap<String, Stat>,
+    stats: BTreeMap<Indicator, Stat>,
     /// Median residual variance of the blocks (NA4*'s denominator).
     residual_var: f64,
     /// Mean log amplitude spectrum of the blocks, dB, and its floor.
@@ -271,14 +255,14 @@ fn rms_db(a: &[f64], b: &[f64]) -> f64 {
 
 /// Per-block values of the deciding indicators that need the reference (NA4*, spectral change).
 fn derived(block: &Block, residual_var: f64, log_ref: &[f64], floor: f64) -> (f64, f64) {
-    let m4 = block.indicators.get("residual_m4").copied().unwrap_or(f64::NAN);
+    let m4 = block.indicators.get(&Indicator::ResidualM4).copied().unwrap_or(f64::NAN);
     let len = log_ref.len() + 1;
     let a = &block.amplitudes[..len.min(block.amplitudes.len())];
     (m4 / (residual_var * residual_var), rms_db(&log_spectrum(a, floor), log_ref))
 }
 
-fn value(block: &Block, key: &str) -> f64 {
-    block.indicators.get(key).copied().unwrap_or(f64::NAN)
+fn value(block: &Block, key: Indicator) -> f64 {
+    block.indicators.get(&key).copied().unwrap_or(f64::NAN)
 }
 
 /// Builds the reference from healthy recordings (their blocks pooled per gear and channel).
@@ -323,7 +307,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
         let logs: Vec<Vec<f64>> = blocks.iter().map(|b| log_spectrum(&b.amplitudes[..len], floor)).collect();
         let log_ref: Vec<f64> =
             (0..len.saturating_sub(1)).map(|k| logs.iter().map(|l| l[k]).sum::<f64>() / logs.len() as f64).collect();
-        let residual_var = median(&mut blocks.iter().map(|b| value(b, "residual_m2")).collect::<Vec<_>>());
+        let residual_var = median(&mut blocks.iter().map(|b| value(b, Indicator::ResidualM2)).collect::<Vec<_>>());
         // each baseline block against the mean of the others (leave one out): against a mean that holds the
         // block itself its distance would read low by about sqrt((m - 1) / (m + 1)) against a new block's
         let m = logs.len() as f64;
@@ -336,16 +320,15 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
             .collect();
         let (residual_mean, local_healthy, sidebands_healthy) = local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
-        for (k, _, _) in DECIDING {
+        for k in Indicator::DECIDING {
             let values: Vec<f64> = match k {
-                "na4_star" => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).0).collect(),
-                "spectral_change" => leave_one_out.clone(),
+                Indicator::Na4Star => blocks.iter().map(|b| derived(b, residual_var, &log_ref, floor).0).collect(),
+                Indicator::SpectralChange => leave_one_out.clone(),
                 _ => blocks.iter().map(|b| value(b, k)).collect(),
             };
-            let scale = if k == "spectral_change" { Scale::Linear } else { Scale::Log };
-            stats.insert(k.to_string(), Stat::of(&values, scale));
+            stats.insert(k, Stat::of(&values, k.scale()));
         }
-        let rms = median(&mut blocks.iter().map(|b| value(b, "rms")).collect::<Vec<_>>());
+        let rms = median(&mut blocks.iter().map(|b| value(b, Indicator::Rms)).collect::<Vec<_>>());
         gears.insert(
             key,
             GearReference {
@@ -479,15 +462,15 @@ pub fn score_one(g: &GearIndicators, r: &Reference) -> Vec<Score> {
 fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
     let len = r.log_spectrum.len() + 1;
     let blocks: Vec<&Block> = g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect();
-    DECIDING
-        .iter()
-        .filter_map(|(k, _, _)| {
-            let stat = r.stats.get(*k)?;
+    Indicator::DECIDING
+        .into_iter()
+        .filter_map(|k| {
+            let stat = r.stats.get(&k)?;
             let mut values: Vec<f64> = blocks
                 .iter()
-                .map(|b| match *k {
-                    "na4_star" => derived(b, r.residual_var, &r.log_spectrum, r.floor).0,
-                    "spectral_change" => rms_db(&log_spectrum(&b.amplitudes[..len], r.floor), &r.log_spectrum),
+                .map(|b| match k {
+                    Indicator::Na4Star => derived(b, r.residual_var, &r.log_spectrum, r.floor).0,
+                    Indicator::SpectralChange => rms_db(&log_spectrum(&b.amplitudes[..len], r.floor), &r.log_spectrum),
                     _ => value(b, k),
                 })
                 .filter(|v| v.is_finite())
@@ -496,14 +479,14 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
                 return None;
             }
             let v = median(&mut values);
-            let near_zero = *k == "si" && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
+            let near_zero = k == Indicator::Si && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
             let (suspect_at, faulty_at) = limits(stat.count);
             Some(Score {
                 suspect_at,
                 faulty_at,
                 gear: g.gear,
                 channel: g.channel,
-                indicator: k.to_string(),
+                indicator: k,
                 value: v,
                 blocks: values.len(),
                 baseline_centre: stat.scale.from(stat.centre),

@@ -51,7 +51,7 @@ impl BaselineFacts {
             shaft_period_samples: b.shaft_period_samples,
             fluctuation_percent: b.speed_profile.fluctuation_percent,
             sample_rate_hz: b.sample_rate_hz,
-            raw_rms: b.raw.iter().map(|m| m.get("rms").copied().unwrap_or(f64::NAN)).collect(),
+            raw_rms: b.raw.iter().map(|m| m.get(&Indicator::Rms).copied().unwrap_or(f64::NAN)).collect(),
             envelope: b.envelope.clone(),
         }
     }
@@ -66,7 +66,7 @@ pub struct Compatibility {
     pub operating_point: Option<String>,
     /// Whether absolute levels compare: false when one side's unit is unknown (samples in the file's own
     /// scale, e.g. an integer WAV without its sidecar), so the indicators that scale with the level
-    /// ([`super::baseline::LEVEL_DEPENDENT`]) do not decide.
+    /// ([`Indicator::level_dependent`]) do not decide.
     pub levels_comparable: bool,
 }
 
@@ -141,7 +141,7 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
     for (i, c) in d.channels.iter().enumerate() {
         let j = b.channels.iter().position(|x| x == c);
         if let Some(j) = j {
-            let now = d.raw.get(i).and_then(|m| m.get("rms")).copied().unwrap_or(f64::NAN);
+            let now = d.raw.get(i).and_then(|m| m.get(&Indicator::Rms)).copied().unwrap_or(f64::NAN);
             let r = now / b.raw_rms.get(j).copied().unwrap_or(f64::NAN);
             if levels_comparable && !(0.5..=2.0).contains(&r) {
                 warnings.push(format!(

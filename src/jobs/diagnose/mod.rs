@@ -42,8 +42,8 @@ use crate::Error;
 use crate::io::{self, Recording};
 use crate::model::Quantity;
 use crate::report::summary::{
-    Diagnosis, GearIndicators, MeshHarmonic, OtherGear, Shaft, ShaftHz, Sideband, SpeedProfile, SpeedSource,
-    TeethSource, Tracking, Verdict, VerdictGear, VerdictState,
+    Diagnosis, GearIndicators, Indicator, Indicators, MeshHarmonic, OtherGear, Shaft, ShaftHz, Sideband, SpeedProfile,
+    SpeedSource, TeethSource, Tracking, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use crate::signal::order_map::OrderMap;

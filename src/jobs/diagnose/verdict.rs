@@ -4,7 +4,8 @@
 
 use super::baseline::{self, Reference};
 use crate::report::summary::{
-    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Score, Shaft, ToothOrigin, Verdict, VerdictGear, VerdictState,
+    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Indicator, Indicators, Score, Shaft, ToothOrigin, Verdict,
+    VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
@@ -82,7 +83,7 @@ impl Na4History {
         for g in &mut d.gears {
             let h = self.seen.entry((g.gear.baseline_key(), g.channel)).or_default();
             h.push(ind::sum_sq_dev(&g.residual));
-            g.indicators.insert("na4".into(), ind::na4(&g.residual, h));
+            g.indicators.insert(Indicator::Na4, ind::na4(&g.residual, h));
         }
         if let Some(g) = d.gears.first() {
             d.indicators = g.indicators.clone();
@@ -100,9 +101,6 @@ struct Trigger {
     local: bool,
 }
 
-/// Indicators that measure an impulse within the gear's own average (see [`Trigger::local`]).
-const LOCAL_INDICATORS: [&str; 2] = ["fm4", "m6a"];
-
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
     if !value.is_finite() || value < limits.suspect {
         None
@@ -113,21 +111,18 @@ fn level(value: f64, limits: Limits) -> Option<VerdictState> {
     }
 }
 
-fn get(m: &BTreeMap<String, f64>, k: &str) -> f64 {
-    m.get(k).copied().unwrap_or(f64::NAN)
+fn get(m: &Indicators, k: Indicator) -> f64 {
+    m.get(&k).copied().unwrap_or(f64::NAN)
 }
 
 fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels: bool) -> Vec<Trigger> {
     let mut scores: Vec<Score> = baseline::score_one(g, r);
     if !levels {
-        scores
-            .iter_mut()
-            .filter(|s| baseline::LEVEL_DEPENDENT.contains(&s.indicator.as_str()))
-            .for_each(|s| s.decides = false);
+        scores.iter_mut().filter(|s| s.indicator.level_dependent()).for_each(|s| s.decides = false);
     }
     let mut out = Vec::new();
     for sc in &scores {
-        let Some((_, name, why)) = baseline::DECIDING.iter().find(|x| x.0 == sc.indicator) else { continue };
+        let (name, why) = (sc.indicator.label(), sc.indicator.meaning());
         let state = if !sc.decides || sc.spreads < sc.suspect_at {
             continue;
         } else if sc.spreads >= sc.faulty_at {
@@ -137,7 +132,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
         };
         out.push(Trigger {
             state,
-            local: LOCAL_INDICATORS.contains(&sc.indicator.as_str()),
+            local: sc.indicator.local(),
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}",
@@ -164,28 +159,18 @@ fn num(v: f64) -> String {
 
 fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
     let checks = [
-        (
-            "FM4",
-            get(&g.indicators, "fm4"),
-            t.fm4_absolute,
-            NOMINAL_FM4,
-            "difference signal impulsive (3 for a healthy mesh)",
-        ),
-        (
-            "M6A",
-            get(&g.indicators, "m6a"),
-            t.m6a_absolute,
-            NOMINAL_M6A,
-            "difference signal has sharp peaks (15 for a healthy mesh)",
-        ),
-        ("NA4", get(&g.indicators, "na4"), t.na4_absolute, NOMINAL_NA4, "residual signal impulsive (3 nominal)"),
+        (Indicator::Fm4, t.fm4_absolute, NOMINAL_FM4, "difference signal impulsive (3 for a healthy mesh)"),
+        (Indicator::M6a, t.m6a_absolute, NOMINAL_M6A, "difference signal has sharp peaks (15 for a healthy mesh)"),
+        (Indicator::Na4, t.na4_absolute, NOMINAL_NA4, "residual signal impulsive (3 nominal)"),
     ];
     let mut out = Vec::new();
-    for (name, now, limits, nominal, why) in checks {
+    for (key, limits, nominal, why) in checks {
+        let now = get(&g.indicators, key);
+        let name = key.label();
         if let Some(state) = level(now, limits) {
             out.push(Trigger {
                 state,
-                local: name != "NA4",
+                local: key.local(),
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
@@ -219,10 +204,10 @@ fn unscored(d: &Diagnosis, g: &GearIndicators, reference: Option<&Reference>) ->
             })
         }
         None => {
-            let bad: Vec<&str> = [("fm4", "FM4"), ("m6a", "M6A"), ("na4", "NA4")]
-                .iter()
-                .filter(|(k, _)| !get(&g.indicators, k).is_finite())
-                .map(|(_, n)| *n)
+            let bad: Vec<&str> = [Indicator::Fm4, Indicator::M6a, Indicator::Na4]
+                .into_iter()
+                .filter(|&k| !get(&g.indicators, k).is_finite())
+                .map(Indicator::label)
                 .collect();
             (!bad.is_empty()).then(|| {
                 format!(

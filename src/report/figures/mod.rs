@@ -6,8 +6,8 @@ use super::plot::{
     BASELINE_GREY, Band, Chart, Heatmap, Marker, PAGE_WIDTH_PX, Series, Style, render_png, render_png_grid,
 };
 use super::summary::{
-    BenchResult, Diagnosis, OrderLine, PressCoordinate, Shaft, ShaftHz, Sideband, SimulateSummary, SimulationSeries,
-    SpectrumScale, StabilitySummary, SweepPoint,
+    BenchResult, Diagnosis, Indicator, OrderLine, PressCoordinate, Shaft, ShaftHz, Sideband, SimulateSummary,
+    SimulationSeries, SpectrumScale, StabilitySummary, SweepPoint,
 };
 use std::path::{Path, PathBuf};
 
@@ -25,7 +25,7 @@ pub use machine::{family_words, stage_words, stands as machine_sideband_stands_o
 pub use simulate::{multipliers, simulation};
 pub use spectra::sideband_words;
 pub use sweep::{bench, parameter_label, stability_map};
-pub use trend::{TREND_PANEL_PX, indicator_label, short_names, trend, trend_charts};
+pub use trend::{TREND_PANEL_PX, short_names, trend, trend_charts};
 
 /// Kind of a spectral line of a gear pair, by its order of the pinion rotation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

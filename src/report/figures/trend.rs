@@ -4,26 +4,23 @@
 use super::*;
 
 /// The indicator families of a trend: one panel each (their spreads differ by orders of magnitude).
-pub(super) const TREND_FAMILIES: [(&str, &[&str]); 3] = [
+pub(super) const TREND_FAMILIES: [(&str, &[Indicator]); 3] = [
     (
         "peakiness of the averaged signal (FM4, M6A, M8A, NA4*, FM0, kurtosis)",
-        &["fm4", "m6a", "m8a", "na4_star", "na4", "fm0", "kurtosis", "crest_factor"],
+        &[
+            Indicator::Fm4,
+            Indicator::M6a,
+            Indicator::M8a,
+            Indicator::Na4Star,
+            Indicator::Na4,
+            Indicator::Fm0,
+            Indicator::Kurtosis,
+            Indicator::CrestFactor,
+        ],
     ),
-    ("energy around the mesh (ER, SER, SI, SLF)", &["er", "ser", "si", "slf"]),
-    ("spectral change from the baseline", &["spectral_change"]),
+    ("energy around the mesh (ER, SER, SI, SLF)", &[Indicator::Er, Indicator::Ser, Indicator::Si, Indicator::Slf]),
+    ("spectral change from the baseline", &[Indicator::SpectralChange]),
 ];
-
-/// The name shown for an indicator key (`na4_star` is NA4*).
-pub fn indicator_label(key: &str) -> String {
-    match key {
-        "na4_star" => "NA4*".into(),
-        "spectral_change" => "spectral change".into(),
-        "crest_factor" => "crest factor".into(),
-        "kurtosis" => "kurtosis".into(),
-        "rms" => "RMS".into(),
-        k => k.to_uppercase(),
-    }
-}
 
 /// Short names of recordings for an axis: the file stems without what they all share at the start and
 /// the end, "#i" in front (the page's table lists the whole names).
@@ -86,20 +83,19 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
     let mut charts = Vec::new();
     for gear in gears {
         let scores = |i: usize| done[i].scores.iter().filter(move |s| s.gear == gear && s.channel == ch);
-        let mut names: Vec<String> = Vec::new();
+        let mut names: Vec<Indicator> = Vec::new();
         for i in 0..done.len() {
             for s in scores(i) {
                 if !names.contains(&s.indicator) {
-                    names.push(s.indicator.clone());
+                    names.push(s.indicator);
                 }
             }
         }
         for (family, keys) in TREND_FAMILIES {
-            let members: Vec<&String> = names
+            let members: Vec<&Indicator> = names
                 .iter()
                 .filter(|n| {
-                    keys.contains(&n.as_str())
-                        || (family.starts_with("peak") && !TREND_FAMILIES.iter().any(|f| f.1.contains(&n.as_str())))
+                    keys.contains(n) || (family.starts_with("peak") && !TREND_FAMILIES.iter().any(|f| f.1.contains(n)))
                 })
                 .collect();
             if members.is_empty() {
@@ -109,7 +105,7 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
                 .iter()
                 .enumerate()
                 .map(|(k, name)| Series {
-                    name: indicator_label(name),
+                    name: name.label().to_string(),
                     points: (0..done.len())
                         .filter_map(|i| scores(i).find(|s| &s.indicator == *name).map(|s| ((i + 1) as f64, s.spreads)))
                         .collect(),

@@ -1,7 +1,7 @@
 //! The sections of `diagnose`: one recording's verdict, facts, indicator table and images; the trend page.
 
 use super::{Badge, Section, Table, cell};
-use crate::report::summary::{Diagnosis, VerdictState};
+use crate::report::summary::{Diagnosis, Indicator, VerdictState};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -71,18 +71,28 @@ pub fn diagnosis_section(
     facts.extend(d.warnings.iter().map(|w| format!("Warning: {w}")));
     let mut tables = Vec::new();
     if d.scores.is_empty() {
-        let keys = ["fm0", "fm4", "m6a", "na4", "er", "si", "ser", "kurtosis", "crest_factor"];
+        let keys = [
+            Indicator::Fm0,
+            Indicator::Fm4,
+            Indicator::M6a,
+            Indicator::Na4,
+            Indicator::Er,
+            Indicator::Si,
+            Indicator::Ser,
+            Indicator::Kurtosis,
+            Indicator::CrestFactor,
+        ];
         let mut t = Table {
             caption: "Condition indicators (no baseline: absolute limits FM4 4.5/6, M6A 40/80, NA4 4.5/6)".into(),
             header: ["gear".to_string(), "channel".to_string()]
                 .into_iter()
-                .chain(keys.iter().map(|k| crate::report::figures::indicator_label(k)))
+                .chain(keys.iter().map(|k| k.label().to_string()))
                 .collect(),
             rows: Vec::new(),
         };
         for g in &d.gears {
             let mut row = vec![g.gear.name().to_string(), g.channel.to_string()];
-            row.extend(keys.iter().map(|k| cell(g.indicators.get(*k).copied().unwrap_or(f64::NAN))));
+            row.extend(keys.iter().map(|k| cell(g.indicators.get(k).copied().unwrap_or(f64::NAN))));
             t.rows.push((row, false));
         }
         tables.push(t);
@@ -101,7 +111,7 @@ pub fn diagnosis_section(
                 vec![
                     s.gear.name().to_string(),
                     s.channel.to_string(),
-                    crate::report::figures::indicator_label(&s.indicator),
+                    s.indicator.label().to_string(),
                     cell(s.value),
                     cell(s.baseline_centre),
                     format!("{} to {}", cell(s.baseline_range[0]), cell(s.baseline_range[1])),

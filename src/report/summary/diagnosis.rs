@@ -6,7 +6,6 @@ use super::{
 };
 use crate::signal::Spectrum;
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// How the spectrum image shows its levels (`diagnose --spectrum`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -82,11 +81,11 @@ pub struct Diagnosis {
     /// Mesh harmonics with sidebands on the deciding channel.
     pub mesh_harmonics: Vec<MeshHarmonic>,
     /// Indicators of the deciding gear and channel.
-    pub indicators: BTreeMap<String, f64>,
+    pub indicators: super::Indicators,
     /// Indicators per gear and channel.
     pub gears: Vec<GearIndicators>,
     /// Raw-signal RMS and kurtosis per channel (for reference only).
-    pub raw: Vec<BTreeMap<String, f64>>,
+    pub raw: Vec<super::Indicators>,
     /// Verdict.
     pub verdict: Verdict,
     /// Envelope analysis of the deciding channel (with a sample rate).

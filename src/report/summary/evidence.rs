@@ -1,9 +1,8 @@
 //! The evidence of a diagnosis: mesh harmonics and sidebands, gear indicators and their blocks, the
 //! envelope, the cepstrum, the comparison with a model.
 
-use super::Shaft;
+use super::{Indicators, Shaft};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 
 /// A sideband line.
 #[derive(Clone, Debug, Serialize)]
@@ -49,8 +48,8 @@ pub struct GearIndicators {
     pub mesh_order: usize,
     /// Revolutions averaged in the TSA.
     pub revolutions: usize,
-    /// Indicators keyed by lower-case name.
-    pub indicators: BTreeMap<String, f64>,
+    /// Indicators of the gear's average.
+    pub indicators: Indicators,
     /// Residual signal (TSA without shaft and mesh lines) over one revolution.
     #[serde(skip)]
     pub residual: Vec<f64>,
@@ -71,27 +70,14 @@ pub struct GearIndicators {
 /// Indicators of one block of whole revolutions of one gear on one channel.
 #[derive(Clone, Debug, Default)]
 pub struct Block {
-    /// Indicators keyed by lower-case name, plus `residual_m2` and `residual_m4` (second and fourth
-    /// central moments of the residual signal, for NA4*).
-    pub indicators: BTreeMap<String, f64>,
+    /// Indicators of the block's average, with the residual's second and fourth central moments (for NA4*).
+    pub indicators: Indicators,
     /// TSA amplitude by order 0..=K (K about 3.5 mesh harmonics), for the spectral-change indicator.
     pub amplitudes: Vec<f64>,
     /// Complex order spectrum (re, im) of the block's residual signal, orders 0..=K (K at most 4096; DC
     /// zero), for the change against a baseline; empty unless a baseline of two files or a profile asks for
     /// it, and on the blocks past the first 256 of a long recording.
     pub residual_spectrum: Vec<(f64, f64)>,
-}
-
-/// Where an indicator is scored: ratios of moments and energies vary by factors between blocks (their
-/// block-to-block spread is skewed, M6A from 11 to 25 around 13 on a real healthy gearbox), so they are
-/// scored on their logarithm; the spectral change is already a distance in dB.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Scale {
-    /// The value itself.
-    Linear,
-    /// Its natural logarithm.
-    Log,
 }
 
 /// A line of the envelope's order spectrum at a shaft order.

@@ -128,7 +128,7 @@ pub struct PlanetIndicators {
     /// Passes averaged.
     pub passes: usize,
     /// Indicators of the average (FM4, M6A, kurtosis, RMS of its difference signal...).
-    pub indicators: BTreeMap<String, f64>,
+    pub indicators: super::Indicators,
     /// The average over one planet revolution relative to the carrier.
     #[serde(skip)]
     pub samples: Vec<f64>,

@@ -4,6 +4,7 @@
 mod diagnosis;
 mod evidence;
 mod identify;
+mod indicator;
 mod machine;
 mod speed;
 mod verdict;
@@ -11,6 +12,7 @@ mod verdict;
 pub use diagnosis::*;
 pub use evidence::*;
 pub use identify::*;
+pub use indicator::*;
 pub use machine::*;
 pub use speed::*;
 pub use verdict::*;

@@ -91,7 +91,7 @@ pub struct Score {
     /// 1-based channel.
     pub channel: usize,
     /// Indicator name (lower case).
-    pub indicator: String,
+    pub indicator: Indicator,
     /// Median over this recording's blocks.
     pub value: f64,
     /// Blocks of this recording.
