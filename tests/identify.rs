@@ -403,7 +403,7 @@ fn misfits_and_unresolved_orders_are_said() {
     let rec = |name: &str| format!("data/recordings/gear-z14z39-fs10kHz-{name}.wav");
     assert!(warnings(&rec("healthy"), &z13).contains("do not fit"));
     let w = warnings(&rec("cracked-pinion-tooth3"), &healthy);
-    assert!(w.contains("does not explain") && w.contains("--faults"), "{w}");
+    assert!(w.contains("does not explain") && w.contains("cracks and pits"), "{w}");
     let w = warnings(&rec("healthy"), &healthy);
     assert!(!w.contains("do not fit") && !w.contains("does not explain"), "{w}");
     let e = identify(&[&repo(&rec("wheel-eccentricity")), "--scene", &healthy, "--wheel-orders", "2"]);

@@ -121,7 +121,7 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     if let Some(r) = k.rpm {
         if !(r.is_finite() && r > 0.0) {
             return Err(gearvib::jobs::JobError::Value {
-                what: "rpm".into(),
+                what: gearvib::jobs::Given::ShaftSpeed,
                 message: format!("{r} is not a positive speed"),
             }
             .into());
@@ -130,7 +130,7 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     if let Some((a, b)) = k.teeth {
         if a < 3 || b < 3 {
             return Err(gearvib::jobs::JobError::Value {
-                what: "teeth".into(),
+                what: gearvib::jobs::Given::Teeth,
                 message: format!("({a}, {b}): at least 3 teeth each"),
             }
             .into());

@@ -9,7 +9,7 @@ pub mod progress;
 pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, LearnArgs, one_line, parse_args, parse_from};
 
 use crate::Error;
-use crate::jobs::{self, ChannelRole, JobError};
+use crate::jobs::{self, ChannelRole, Given, JobError};
 use crate::report::summary::{VerdictState, to_json_line};
 use crate::scene::Scene;
 use std::io::Write;
@@ -151,26 +151,30 @@ fn restate_for_flags(e: Error) -> Error {
         Error::Job(JobError::Aliasing { file, message }) => {
             Error::Job(JobError::Aliasing { file, message: format!("{message} or pass --allow-aliasing") })
         }
-        Error::Job(JobError::Value { what, message }) if what == "sample rate" => CliError::flag("--fs", message),
-        Error::Job(JobError::Value { what, message }) if what == "shaft speed" => {
-            CliError::flag("--rpm/--shaft-hz", message)
-        }
-        Error::Job(JobError::Value { what, message }) if what == "pinion orders" => {
-            CliError::flag("--pinion-orders", message)
-        }
-        Error::Job(JobError::Value { what, message }) if what == "wheel orders" => {
-            CliError::flag("--wheel-orders", message)
-        }
-        Error::Job(JobError::Value { what, message }) if what == "orders" => {
-            CliError::flag("--pinion-orders/--wheel-orders", message)
-        }
-        Error::Job(JobError::Value { what, message }) if what == "pit width" => CliError::flag("--pit-width", message),
-        Error::Job(JobError::Value { what, message }) if what == "sweep steps" => CliError::flag("--steps", message),
+        Error::Job(JobError::Value { what, message }) => match flag_of(what) {
+            Some(flag) => CliError::flag(flag, message),
+            None => Error::Job(JobError::Value { what, message }),
+        },
         Error::Job(JobError::Parameter { scene, name, message }) => {
             CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
         }
         other => other,
     }
+}
+
+/// The flag that gives a value, where one flag does.
+fn flag_of(what: Given) -> Option<&'static str> {
+    Some(match what {
+        Given::SampleRate => "--fs",
+        Given::ShaftSpeed => "--rpm/--shaft-hz",
+        Given::Teeth => "--teeth",
+        Given::PinionOrders => "--pinion-orders",
+        Given::WheelOrders => "--wheel-orders",
+        Given::Orders => "--pinion-orders/--wheel-orders",
+        Given::PitWidth => "--pit-width",
+        Given::SweepSteps => "--steps",
+        Given::SweepRange | Given::SweepValues | Given::Baseline => return None,
+    })
 }
 
 fn warn_all(warnings: &[String]) {
@@ -606,4 +610,39 @@ fn identify(out: &mut dyn Write, a: &IdentifyArgs) -> Result<u8, Error> {
         eprintln!("gearvib: report written to {}", dir.join("index.html").display());
     }
     Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// Every flag an error is restated with is a flag of some command (a renamed flag would otherwise leave
+    /// errors naming one that does not exist).
+    #[test]
+    fn every_flag_named_for_a_given_value_exists() {
+        let cli = args::Cli::command();
+        let longs: Vec<String> = cli
+            .get_subcommands()
+            .flat_map(|c| c.get_arguments().filter_map(|a| a.get_long().map(|l| format!("--{l}"))).collect::<Vec<_>>())
+            .collect();
+        let all = [
+            Given::SampleRate,
+            Given::ShaftSpeed,
+            Given::Teeth,
+            Given::PinionOrders,
+            Given::WheelOrders,
+            Given::Orders,
+            Given::PitWidth,
+            Given::SweepRange,
+            Given::SweepSteps,
+            Given::SweepValues,
+            Given::Baseline,
+        ];
+        for what in all {
+            for flag in flag_of(what).into_iter().flat_map(|f| f.split('/')) {
+                assert!(longs.iter().any(|l| l == flag), "{what}: {flag} is no flag");
+            }
+        }
+    }
 }

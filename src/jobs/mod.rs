@@ -49,6 +49,52 @@ impl std::fmt::Display for ChannelRole {
     }
 }
 
+/// A value given to a job, named in errors about it (the command line names its flag, the Python bindings
+/// its keyword).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Given {
+    /// The sample rate, Hz.
+    SampleRate,
+    /// The shaft speed (rpm or Hz).
+    ShaftSpeed,
+    /// The gears' teeth.
+    Teeth,
+    /// The pinion orders an identification fits.
+    PinionOrders,
+    /// The wheel orders an identification fits.
+    WheelOrders,
+    /// The pinion and wheel orders together.
+    Orders,
+    /// The pit width of a local-fault search, tooth pitches.
+    PitWidth,
+    /// A sweep's range.
+    SweepRange,
+    /// A sweep's number of steps.
+    SweepSteps,
+    /// A sweep's list of values.
+    SweepValues,
+    /// The healthy recordings of a baseline.
+    Baseline,
+}
+
+impl std::fmt::Display for Given {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::SampleRate => "sample rate",
+            Self::ShaftSpeed => "shaft speed",
+            Self::Teeth => "teeth",
+            Self::PinionOrders => "pinion orders",
+            Self::WheelOrders => "wheel orders",
+            Self::Orders => "orders",
+            Self::PitWidth => "pit width",
+            Self::SweepRange => "sweep range",
+            Self::SweepSteps => "sweep steps",
+            Self::SweepValues => "sweep values",
+            Self::Baseline => "baseline",
+        })
+    }
+}
+
 /// Errors of the job layer: an input that does not fit the job, or a result that cannot be trusted.
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
@@ -95,8 +141,8 @@ pub enum JobError {
     /// A given value is out of its meaningful range.
     #[error("{what}: {message}")]
     Value {
-        /// The quantity, in words ("sample rate", "shaft speed").
-        what: String,
+        /// The value that is wrong.
+        what: Given,
         /// What is wrong.
         message: String,
     },

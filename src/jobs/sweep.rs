@@ -1,6 +1,6 @@
 //! Parameter sweeps: Floquet analysis and steady state over a range of one scene parameter, in parallel.
 
-use super::JobError;
+use super::{Given, JobError};
 use crate::Error;
 use crate::report::format::num;
 use crate::report::summary::{SweepPoint, SweepSummary};
@@ -164,7 +164,7 @@ pub fn sweep(
     let (from, to, steps) = range;
     if !(from.is_finite() && to.is_finite() && (2..=1_000_000).contains(&steps)) {
         return Err(JobError::Value {
-            what: "sweep range".into(),
+            what: Given::SweepRange,
             message: format!("needs finite bounds and 2..=1000000 values, got from {from} to {to} in {steps}"),
         }
         .into());
@@ -194,7 +194,7 @@ fn whole_values(path: &str, from: f64, to: f64, steps: usize) -> Result<Vec<f64>
     let count = ((hi - lo).abs() + 1.0) * if (hi - lo) * (to - from) >= 0.0 { 1.0 } else { 0.0 };
     if count < steps as f64 {
         return Err(JobError::Value {
-            what: "sweep steps".into(),
+            what: Given::SweepSteps,
             message: format!(
                 "`{path}` takes whole numbers and {} to {} holds {}, fewer than the {steps} values asked",
                 num(from),
@@ -224,7 +224,7 @@ pub fn sweep_values(
 ) -> Result<Vec<SweepPoint>, Error> {
     if values.is_empty() || values.len() > MAX_SWEEP_VALUES || values.iter().any(|v| !v.is_finite()) {
         return Err(JobError::Value {
-            what: "sweep values".into(),
+            what: Given::SweepValues,
             message: format!(
                 "needs 1..=1000000 finite values, got {} ({} not finite)",
                 values.len(),

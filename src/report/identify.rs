@@ -172,7 +172,7 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             state: VerdictState::Healthy,
             word: "NO LOCAL FAULT".into(),
             line: if out.fault_candidates.is_empty() {
-                "no local-fault search asked (--faults crack,pit)".into()
+                "no local-fault search asked (cracks, pits)".into()
             } else {
                 "no local fault: no pit or crack on any tooth explains the lines beyond their noise".into()
             },

@@ -183,7 +183,7 @@ pub(super) fn analyse_parts<'a>(
         if let (Some((zp, zw)), Shaft::Wheel) = (o.teeth, *name) {
             if zp == zw {
                 warnings.push(format!(
-                    "--teeth {zp},{zw}: with equal teeth the gears turn together, so their averages are the same signal and a fault cannot be told to be on the pinion or the wheel; check --teeth"
+                    "teeth {zp},{zw}: with equal teeth the gears turn together, so their averages are the same signal and a fault cannot be told to be on the pinion or the wheel; check the teeth"
                 ));
             }
         }
@@ -376,7 +376,7 @@ fn check_mesh_order(path: &Path, z: usize, points: usize, gear: Shaft, source: S
         format!(
             "mesh order {z} needs more than {points} samples per revolution of the {gear}: the shaft speed ({}) is too high for the sample rate, or the teeth are wrong",
             match source {
-                SpeedSource::Estimated => "estimated; give --rpm",
+                SpeedSource::Estimated => "estimated; give the shaft speed",
                 SpeedSource::Given => "given",
                 SpeedSource::Tachometer => "from the tachometer",
             }
@@ -583,7 +583,7 @@ pub(super) fn mesh_harmonics(d: &Diagnosis, channel: usize, shafts: &[(Shaft, f6
 fn other_gear_note(z: usize, other: Option<&OtherGear>) -> String {
     match other {
         Some(g) if g.confidence >= MIN_OTHER_GEAR_CONFIDENCE => format!(
-            "teeth of the meshing gear estimated: {} (its +-1 sidebands at +-{:.4} orders of the tracked shaft stand {:.0} dB over their floor; confidence {:.2}): the tracked shaft carries the {} gear; give --teeth {z},{} to analyse both gears",
+            "teeth of the meshing gear estimated: {} (its +-1 sidebands at +-{:.4} orders of the tracked shaft stand {:.0} dB over their floor; confidence {:.2}): the tracked shaft carries the {} gear; give the teeth as {z},{} to analyse both gears",
             g.teeth,
             g.sideband_orders,
             g.line_over_floor_db,
@@ -595,6 +595,6 @@ fn other_gear_note(z: usize, other: Option<&OtherGear>) -> String {
             "the meshing gear's teeth were not estimated: the best count, {}, rests on weak or ambiguous sidebands ({:.0} dB over their floor, confidence {:.2} under {MIN_OTHER_GEAR_CONFIDENCE})",
             g.teeth, g.line_over_floor_db, g.confidence
         ),
-        None => "the meshing gear's teeth were not estimated: no sidebands of another gear stand 12 dB over their floor (a true-running healthy gear shows none); give --teeth when known".into(),
+        None => "the meshing gear's teeth were not estimated: no sidebands of another gear stand 12 dB over their floor (a true-running healthy gear shows none); give the teeth when known".into(),
     }
 }

@@ -11,7 +11,7 @@
 //! blocks (m = 5 gives 8.0 spreads for 1e-3, m = 30 gives 3.5, many blocks 3.09). A median over several
 //! blocks scatters less than one block, so the real rate is lower still.
 
-use super::JobError;
+use super::{Given, JobError};
 use crate::Error;
 use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft};
 use crate::signal::spectrum::Fft;
@@ -288,9 +288,9 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
     for (key, blocks) in pooled {
         if blocks.len() < MIN_BASELINE_BLOCKS {
             return Err(JobError::Value {
-                what: "baseline".into(),
+                what: Given::Baseline,
                 message: format!(
-                    "{} revolutions of the {} (channel {}) give {} block(s) of {block_revs}; the statistical baseline needs at least {MIN_BASELINE_BLOCKS}: give a longer healthy recording, several, or a smaller --block-revs",
+                    "{} revolutions of the {} (channel {}) give {} block(s) of {block_revs}; the statistical baseline needs at least {MIN_BASELINE_BLOCKS}: give a longer healthy recording, several, or fewer revolutions per block",
                     revs[&key],
                     key.0,
                     key.1,

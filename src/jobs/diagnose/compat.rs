@@ -82,7 +82,7 @@ pub struct Compatibility {
 pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, Error> {
     let refuse = |what: String| -> Error {
         JobError::Value {
-            what: "baseline".into(),
+            what: Given::Baseline,
             message: format!("{} is not comparable with {}: {what}", b.file, d.file),
         }
         .into()

@@ -37,7 +37,7 @@ use tracking::{nominal_speed, track};
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};
 
-use super::{ChannelRole, JobError};
+use super::{ChannelRole, Given, JobError};
 use crate::Error;
 use crate::io::{self, Recording};
 use crate::model::Quantity;
@@ -404,7 +404,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             Some(q) => q,
             None => {
                 d.warnings.push(format!(
-                    "the recording's unit ({}) does not say what it measures: taken as velocity for the model comparison; give --quantity",
+                    "the recording's unit ({}) does not say what it measures: taken as velocity for the model comparison; give the quantity it measures",
                     if d.unit.is_empty() { "none" } else { &d.unit }
                 ));
                 Quantity::Velocity

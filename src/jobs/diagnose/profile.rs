@@ -5,7 +5,7 @@
 
 use super::{BaselineFacts, DiagnoseJob, Geometry, Options, baseline::Reference};
 use crate::Error;
-use crate::jobs::JobError;
+use crate::jobs::{Given, JobError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -76,7 +76,7 @@ pub fn learn(job: &LearnJob) -> Result<Profile, Error> {
         DiagnoseJob { baselines: job.healthy.clone(), options: job.options.clone(), ..Default::default() };
     let p = super::prepare(&diagnose_job)?;
     let (Some(facts), Some(geometry), Some(reference)) = (p.facts, p.geometry, p.reference) else {
-        return Err(JobError::Value { what: "healthy recordings".into(), message: "none given".into() }.into());
+        return Err(JobError::Value { what: Given::Baseline, message: "no healthy recordings given".into() }.into());
     };
     let profile = Profile {
         format: FORMAT.into(),

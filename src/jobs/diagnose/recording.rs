@@ -142,7 +142,7 @@ pub(super) fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_rev
     let per_rev = fs / hz;
     if per_rev.is_nan() || per_rev < MIN_SAMPLES_PER_REV {
         return Err(JobError::Value {
-            what: "shaft speed".into(),
+            what: Given::ShaftSpeed,
             message: format!(
                 "{hz:.6e} Hz gives {per_rev:.3e} samples per revolution at the {fs} Hz sample rate of {}; at least {MIN_SAMPLES_PER_REV} are needed: the speed is far too high for this recording (rpm given as Hz?)",
                 path.display()
@@ -153,7 +153,7 @@ pub(super) fn check_given_speed(path: &Path, hz: f64, fs: f64, n: usize, min_rev
     let revs = n as f64 / per_rev;
     if revs < min_revs as f64 {
         return Err(JobError::Value {
-            what: "shaft speed".into(),
+            what: Given::ShaftSpeed,
             message: format!(
                 "{} Hz gives only {revs:.2} revolutions in the {n} samples of {}; the time-synchronous average needs at least {min_revs}: is the speed too low, or the recording too short?",
                 crate::report::format::sig(hz, 6),
@@ -173,7 +173,7 @@ pub(super) fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<O
         let (lo, hi) = SAMPLE_RATE_RANGE_HZ;
         if !(fs.is_finite() && (lo..=hi).contains(&fs)) {
             return Err(JobError::Value {
-                what: "sample rate".into(),
+                what: Given::SampleRate,
                 message: format!("must be between {lo} Hz and {hi:e} Hz, got {fs:e} Hz"),
             }
             .into());

@@ -18,7 +18,7 @@ pub(super) fn teeth_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize, 
     let (best, a_best) = (z.saturating_sub(3).max(1)..=z + 3).map(|k| (k, at(k))).max_by(|a, b| a.1.total_cmp(&b.1))?;
     (best != z).then(|| {
         format!(
-            "the given teeth do not fit the {gear}: its TSA line at order {best} is {:.1} times the line at the given mesh order {z}; check --teeth (a mesh line stands above its sidebands)",
+            "the given teeth do not fit the {gear}: its TSA line at order {best} is {:.1} times the line at the given mesh order {z}; check the given teeth (a mesh line stands above its sidebands)",
             a_best / at(z).max(f64::MIN_POSITIVE)
         )
     })
@@ -221,7 +221,7 @@ pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Op
     let first = scan.iter().find(|g| g.teeth == zw).map_or(0.0, |g| g.first_amplitude);
     (best.teeth != zw && best.first_amplitude > WHEEL_MISFIT_RATIO * first).then(|| {
         format!(
-            "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {} teeth, {:.1} times those a wheel of {zw} would give; check --teeth",
+            "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {} teeth, {:.1} times those a wheel of {zw} would give; check the given teeth",
             zp as f64 / best.teeth as f64,
             best.teeth,
             best.first_amplitude / first.max(f64::MIN_POSITIVE)

@@ -97,7 +97,7 @@ pub(super) fn nominal_speed(
                 return Err(bad(
                     path,
                     format!(
-                        "no plausible shaft speed: the signal follows a tooth mesh (a cycle every {}) but no longer period (a shaft) stands out on its angle; give --rpm (or --teeth) or a tachometer channel",
+                        "no plausible shaft speed: the signal follows a tooth mesh (a cycle every {}) but no longer period (a shaft) stands out on its angle; give the shaft speed (or the teeth) or a tachometer channel",
                         fs.map_or(format!("{lag:.2} samples"), |f| format!("{lag:.2} samples, {:.1} Hz", f / lag))
                     ),
                 ));
@@ -110,7 +110,7 @@ pub(super) fn nominal_speed(
         return Err(bad(
             path,
             format!(
-                "no plausible shaft speed: the signal repeats every {:.2} samples, too short for a shaft (likely the tooth mesh), and no longer period stands out (the speed may vary too much to estimate); give --rpm or a tachometer channel",
+                "no plausible shaft speed: the signal repeats every {:.2} samples, too short for a shaft (likely the tooth mesh), and no longer period stands out (the speed may vary too much to estimate); give the shaft speed or a tachometer channel",
                 est.period_samples
             ),
         ));
@@ -156,7 +156,7 @@ pub(super) fn nominal_speed(
             .filter(|&z| z >= 8),
         doubt: (est.confidence < UNSURE_REPETITION).then(|| {
             format!(
-                "the shaft speed was estimated from a repetition of autocorrelation {:.2} (under {UNSURE_REPETITION}): the signal hardly repeats there, so averages on that period cannot clear the machine; give the speed (--rpm) or a tachometer channel",
+                "the shaft speed was estimated from a repetition of autocorrelation {:.2} (under {UNSURE_REPETITION}): the signal hardly repeats there, so averages on that period cannot clear the machine; give the shaft speed or a tachometer channel",
                 est.confidence
             )
         }),
@@ -294,7 +294,7 @@ impl MeshShaft {
             mesh_order: self.mesh_order,
             doubt: (self.confidence < UNSURE_SPEED && self.from_comb).then(|| {
                 format!(
-                    "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the speed (--rpm) or a tachometer channel",
+                    "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",
                     self.confidence
                 )
             }),

@@ -71,7 +71,7 @@ pub(super) fn sample_rate(job: &IdentifyJob, rec: &Recording) -> Result<f64, Err
     })?;
     let (lo, hi) = crate::jobs::diagnose::SAMPLE_RATE_RANGE_HZ;
     if !(fs.is_finite() && (lo..=hi).contains(&fs)) {
-        return Err(value("sample rate", format!("must be between {lo} Hz and {hi:e} Hz, got {fs:e} Hz")));
+        return Err(value(Given::SampleRate, format!("must be between {lo} Hz and {hi:e} Hz, got {fs:e} Hz")));
     }
     Ok(fs)
 }
@@ -84,7 +84,7 @@ pub(super) fn quantity(job: &IdentifyJob, rec: &Recording, c: usize, warnings: &
         Some(q) => q,
         None => {
             warnings.push(format!(
-                "channel {} names no unit: taken as velocity (dq/dt); give --quantity if it is not",
+                "channel {} names no unit: taken as velocity (dq/dt); give the quantity if it is not",
                 c + 1
             ));
             Quantity::Velocity
@@ -159,11 +159,11 @@ pub(super) fn resolvable_harmonics(job: &IdentifyJob, p: &GearPairParams, per_re
 pub(super) fn check_orders(job: &IdentifyJob, p: &GearPairParams) -> Result<(), Error> {
     let (z1, z2) = (p.pinion_teeth, p.wheel_teeth);
     if job.pinion_orders == 0 && job.wheel_orders == 0 {
-        return Err(value("orders", "--pinion-orders and --wheel-orders are both 0: nothing to fit"));
+        return Err(value(Given::Orders, "the pinion and wheel orders to fit are both 0: nothing to fit"));
     }
     if 2 * job.pinion_orders >= z1 {
         return Err(value(
-            "pinion orders",
+            Given::PinionOrders,
             format!(
                 "{} with {z1} pinion teeth: the sidebands of orders {} and {} of neighbouring mesh harmonics fall on the same lines, so orders from z1 / 2 = {} up are not identifiable; use at most {}",
                 job.pinion_orders,
@@ -176,7 +176,7 @@ pub(super) fn check_orders(job: &IdentifyJob, p: &GearPairParams) -> Result<(), 
     }
     if 2 * job.wheel_orders >= z2 {
         return Err(value(
-            "wheel orders",
+            Given::WheelOrders,
             format!("{} with {z2} wheel teeth: use at most {}", job.wheel_orders, (z2 - 1) / 2),
         ));
     }
@@ -184,7 +184,7 @@ pub(super) fn check_orders(job: &IdentifyJob, p: &GearPairParams) -> Result<(), 
     // (an abort), 1e-300 overflowed, and below 0.01 the transfer's solve cannot meet its tolerance
     if !(job.pit_width_teeth.is_finite() && (0.01..=3.0).contains(&job.pit_width_teeth)) {
         return Err(value(
-            "pit width",
+            Given::PitWidth,
             format!(
                 "must be in [0.01, 3] tooth pitches (a narrower pit's profile needs more harmonics than the model resolves), got {:e}",
                 job.pit_width_teeth

@@ -21,7 +21,7 @@ pub use input::{MAX_PERIOD_ORDER, MAX_SPEED_OFFSET};
 pub use results::POOR_FIT_CHI2;
 use results::*;
 
-use super::JobError;
+use super::{Given, JobError};
 use crate::Error;
 use crate::io::{self, Recording};
 use crate::model::Quantity;
@@ -81,8 +81,8 @@ fn bad(path: &Path, msg: impl std::fmt::Display) -> Error {
     JobError::Input { file: path.display().to_string(), message: msg.to_string() }.into()
 }
 
-fn value(what: &str, msg: impl std::fmt::Display) -> Error {
-    JobError::Value { what: what.into(), message: msg.to_string() }.into()
+fn value(what: Given, msg: impl std::fmt::Display) -> Error {
+    JobError::Value { what, message: msg.to_string() }.into()
 }
 
 /// Runs the identification.
@@ -116,7 +116,7 @@ pub fn run(job: &IdentifyJob) -> Result<Identification, Error> {
     let setup = Setup::new(params, job.pinion_orders, job.wheel_orders, harmonics, quantity);
     if setup.max_m() > MAX_PERIOD_ORDER {
         return Err(value(
-            "wheel orders",
+            Given::WheelOrders,
             format!(
                 "the hunting period of {} pinion revolutions puts the lines up to harmonic {} of it (at most {MAX_PERIOD_ORDER}): fit no wheel orders, or fewer mesh harmonics",
                 setup.period_revs,
@@ -272,7 +272,7 @@ fn identify(
     if chi2_per_dof > POOR_FIT_CHI2 {
         warnings.push(format!(
             "the fitted model leaves {chi2_per_dof:.0} times the noise on the lines (chi2/dof): it does not explain this recording well{}; read the errors as the best fit of a model that misses something (see the missed lines)",
-            if job.faults.is_empty() { " (a local fault? try --faults crack,pit)" } else { "" }
+            if job.faults.is_empty() { " (a local fault? search for cracks and pits too)" } else { "" }
         ));
     }
     let identifiable = f.condition < 1e10;

@@ -158,7 +158,7 @@ pub fn velocity_words(d: &Diagnosis, iso_class: Option<crate::signal::velocity::
     };
     let Some(measured) = measured_from_unit(&d.unit) else {
         return why_not(if d.unit.is_empty() {
-            "the file names no unit (give --unit m/s, mm/s, m/s^2 or g)".into()
+            "the file names no unit (give its unit: m/s, mm/s, m/s^2 or g)".into()
         } else {
             format!("the unit {} is neither a velocity nor an acceleration", d.unit)
         });
@@ -184,7 +184,7 @@ pub fn velocity_words(d: &Diagnosis, iso_class: Option<crate::signal::velocity::
                 c.zone(v).words()
             );
         }
-        None => s.push_str("; give --iso-class for its ISO 10816-3 / 20816-3 zone."),
+        None => s.push_str("; give the machine's ISO class for its ISO 10816-3 / 20816-3 zone."),
     }
     s
 }
