@@ -234,7 +234,7 @@ fn the_meshing_gears_teeth_are_estimated_when_its_sidebands_show() {
         assert_eq!(g["teeth"], zw, "{zp}/{zw}: {}", d["warnings"]);
         assert!(g["confidence"].as_f64().unwrap() >= 0.5, "{zp}/{zw}: {g}");
         let w = d["warnings"].to_string();
-        assert!(w.contains(&format!("--teeth {zp},{zw}")), "{zp}/{zw}: {w}");
+        assert!(w.contains(&format!("teeth as {zp},{zw}")), "{zp}/{zw}: {w}");
     }
     // no other gear's sidebands: a true-running wheel; and the rectangular stiffness, whose spurious lines
     // at 13 dB once made a wheel of 22 teeth

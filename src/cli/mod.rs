@@ -155,6 +155,10 @@ fn restate_for_flags(e: Error) -> Error {
             Some(flag) => CliError::flag(flag, message),
             None => Error::Job(JobError::Value { what, message }),
         },
+        Error::Job(JobError::Missing { file, message, give }) => match flag_of(give) {
+            Some(flag) => Error::Job(JobError::Input { file, message: format!("{message} ({flag})") }),
+            None => Error::Job(JobError::Input { file, message }),
+        },
         Error::Job(JobError::Parameter { scene, name, message }) => {
             CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
         }

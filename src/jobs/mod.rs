@@ -138,6 +138,16 @@ pub enum JobError {
         /// The file's rate, Hz.
         file_hz: f64,
     },
+    /// The recording does not hold what the job needs, and a value given would supply it.
+    #[error("{file}: {message}")]
+    Missing {
+        /// The file.
+        file: String,
+        /// What could not be found, and what would supply it, in words.
+        message: String,
+        /// The value to give.
+        give: Given,
+    },
     /// A given value is out of its meaningful range.
     #[error("{what}: {message}")]
     Value {

@@ -94,7 +94,7 @@ pub(super) fn nominal_speed(
         match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth, o.teeth.map(|t| t.1)) {
             Ok(Some(found)) => return Ok(found.nominal(n, warnings)),
             Ok(None) => {
-                return Err(bad(
+                return Err(missing_speed(
                     path,
                     format!(
                         "no plausible shaft speed: the signal follows a tooth mesh (a cycle every {}) but no longer period (a shaft) stands out on its angle; give the shaft speed (or the teeth) or a tachometer channel",
@@ -107,7 +107,7 @@ pub(super) fn nominal_speed(
         }
     }
     if est.mesh_lag.is_none() && est.period_samples < MIN_SAMPLES_PER_REV {
-        return Err(bad(
+        return Err(missing_speed(
             path,
             format!(
                 "no plausible shaft speed: the signal repeats every {:.2} samples, too short for a shaft (likely the tooth mesh), and no longer period stands out (the speed may vary too much to estimate); give the shaft speed or a tachometer channel",
@@ -767,4 +767,9 @@ pub(super) fn track(
         }
         None => Ok((nominal, Tracking::Constant, None, Some(z))),
     }
+}
+
+/// The error of a recording whose shaft speed could not be found: the speed must be given.
+fn missing_speed(path: &Path, message: String) -> Error {
+    JobError::Missing { file: path.display().to_string(), message, give: Given::ShaftSpeed }.into()
 }
