@@ -167,6 +167,11 @@ pub(super) fn nominal_speed(
 /// a mesh line 10 dB over the noise floor is clear on any recording that has one.
 const MIN_COMB_DB: f64 = 10.0;
 
+/// Mesh comb height over the spectrum's median from which the first channel's comb is taken without
+/// looking at the others, dB: the period the comb gives is only the tracking's start (the tracking follows
+/// the mesh line's phase from there), and a comb 20 dB over the floor puts it within a fraction of a bin.
+const CLEAR_COMB_DB: f64 = 20.0;
+
 /// The pinion period (samples) of a given nominal speed (period `nominal`), searched on the mesh comb of
 /// `zp` teeth within the tolerance on the analysed channels (the one where the comb stands highest); the
 /// nominal period when no comb stands [`MIN_COMB_DB`] over the floor, with a warning.
@@ -179,13 +184,20 @@ fn given_on_mesh_comb(
     fft: &mut Fft,
     warnings: &mut Vec<String>,
 ) -> f64 {
-    let best = channels
-        .iter()
-        .filter_map(|&c| {
-            let x = &rec.channels[c - 1];
-            speed::mesh_comb_period(fft, &x[..x.len().min(1 << 21)], nominal, zp, o.speed_tolerance).ok()
-        })
-        .max_by(|a, b| a.1.total_cmp(&b.1));
+    let comb = |fft: &mut Fft, c: usize| {
+        let x = &rec.channels[c - 1];
+        speed::mesh_comb_period(fft, &x[..x.len().min(1 << 21)], nominal, zp, o.speed_tolerance).ok()
+    };
+    // the first channel's comb when it stands clear; else every channel's (in parallel, each with its own
+    // transforms), the highest taken
+    let first = comb(fft, channels[0]);
+    let best = match first {
+        Some((_, db)) if db >= CLEAR_COMB_DB => first,
+        _ => {
+            let rest: Vec<(f64, f64)> = channels[1..].par_iter().filter_map(|&c| comb(&mut Fft::new(), c)).collect();
+            first.into_iter().chain(rest).max_by(|a, b| a.1.total_cmp(&b.1))
+        }
+    };
     match best {
         Some((p, db)) if db >= MIN_COMB_DB => p,
         Some((_, db)) => {

@@ -47,7 +47,20 @@ pub(super) fn analyse_parts<'a>(
     let mut fft = Fft::new();
     let shaft = follow_shaft(path, &mut rec, &checked, o, geometry, &mut fft, &mut warnings)?;
     let plan = plan_gears(path, o, geometry, &shaft)?;
-    let averages = average(path, &rec, &checked.channels, o, &plan, &shaft.map)?;
+    // the deciding channel's spectra beside the averages when its mesh order is known and the recording is
+    // short enough for both to hold their buffers at once
+    let early =
+        plan.gears[0].2.filter(|_| checked.samples.saturating_mul(checked.channels.len()) <= CONCURRENT_SAMPLES);
+    let (averages, early_spectra) = match early {
+        Some(z) => {
+            let (a, s) = rayon::join(
+                || average(path, &rec, &checked.channels, o, &plan, &shaft.map),
+                || evidence::spectra(path, &rec, &checked, o, geometry, &shaft, z, &mut Fft::new()),
+            );
+            (a?, Some(s))
+        }
+        None => (average(path, &rec, &checked.channels, o, &plan, &shaft.map)?, None),
+    };
     let results = gear_results(path, &rec, &checked, o, geometry, &plan, &shaft, averages, &mut fft, &mut warnings)?;
     let first = checked.channels[0];
     // the TSAs and the teeth scan are done: unless their spectra are asked for, the other channels'
@@ -55,7 +68,10 @@ pub(super) fn analyse_parts<'a>(
     if !o.all_spectra {
         free_other_channels(&mut rec, &checked.channels, first);
     }
-    let spectra = evidence::spectra(path, &rec, &checked, o, geometry, &shaft, results.mesh_orders[0], &mut fft)?;
+    let spectra = match early_spectra {
+        Some(s) => s?,
+        None => evidence::spectra(path, &rec, &checked, o, geometry, &shaft, results.mesh_orders[0], &mut fft)?,
+    };
     // only the deciding channel is read from here on (envelope, cepstrum, rpm-order map)
     free_other_channels(&mut rec, &checked.channels, first);
     let mut spectra = spectra;
@@ -66,6 +82,11 @@ pub(super) fn analyse_parts<'a>(
     let deciding = std::mem::take(&mut rec.channels[first - 1]);
     Ok(Analysed { diagnosis: d, map: shaft.map, deciding })
 }
+
+/// Most samples (over the analysed channels) for which the deciding channel's spectra run beside the
+/// averages: 2^25 samples are 128 MB of the recording, which the spectra's buffers (about as large as one
+/// channel) add to; a longer recording takes the stages one after the other, its other channels freed first.
+const CONCURRENT_SAMPLES: usize = 1 << 25;
 
 /// Track stage: the shaft's angle from one source, where it came from, and the speed it implies.
 pub(super) struct ShaftAngle {
