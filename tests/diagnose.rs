@@ -94,6 +94,17 @@ fn real_period_estimate_is_the_repetition_period() {
     assert_eq!(d0["teeth_source"], "estimated");
 }
 
+/// Without a baseline the real rig's healthy recordings are kept healthy: their gears' own pattern (FM4 up
+/// to 4.5, M6A 42 at 0 % load) is under the absolute limits, which healthy gears with manufacturing errors
+/// reach (the limits' sources are in `jobs::diagnose::Thresholds`).
+#[test]
+fn real_healthy_recordings_stay_healthy_without_a_baseline() {
+    for name in ["h30hz0", "h30hz90"] {
+        let d = diag_json(&[&real(name), "--fs-unknown"]);
+        assert_eq!(d["verdict"]["state"], "healthy", "{name}: {}", d["verdict"]);
+    }
+}
+
 fn rec(name: &str) -> String {
     repo(&format!("data/recordings/gear-z14z39-fs10kHz-{name}.wav"))
 }

@@ -83,7 +83,7 @@ pub fn diagnosis_section(
             Indicator::CrestFactor,
         ];
         let mut t = Table {
-            caption: "Condition indicators (no baseline: absolute limits FM4 4.5/6, M6A 40/80, NA4 4.5/6)".into(),
+            caption: "Condition indicators (no baseline: judged on the absolute limits the verdict names)".into(),
             header: ["gear".to_string(), "channel".to_string()]
                 .into_iter()
                 .chain(keys.iter().map(|k| k.label().to_string()))
