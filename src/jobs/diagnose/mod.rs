@@ -13,6 +13,7 @@ pub mod baseline;
 mod beyond;
 mod compare;
 mod compat;
+mod evidence;
 mod machine;
 pub mod profile;
 mod recording;
@@ -384,14 +385,14 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.local_change = d.gears.iter().filter_map(|g| r.local_change(g)).collect();
     }
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
-    verdict::local_change_evidence(&mut d);
+    evidence::local_change_evidence(&mut d);
     match &p.facts {
         Some(b) => {
             if let Some(e) = &b.envelope {
-                verdict::envelope_evidence(&mut d, e);
+                evidence::envelope_evidence(&mut d, e);
             }
         }
-        None => verdict::envelope_absolute(&mut d),
+        None => evidence::envelope_absolute(&mut d),
     }
     if let Some(m) = &p.opts.machine {
         machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref());

@@ -4,8 +4,7 @@
 
 use super::baseline::{self, Reference};
 use crate::report::summary::{
-    Diagnosis, Envelope, EnvelopeLine, GearIndicators, Indicator, Indicators, Score, Shaft, ToothOrigin, Verdict,
-    VerdictGear, VerdictState,
+    Diagnosis, GearIndicators, Indicator, Indicators, Score, Shaft, ToothOrigin, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
@@ -354,7 +353,7 @@ const LOCAL_CONCENTRATION: f64 = 3.0;
 /// lines) holds one impulse per revolution for a crack, a spall or a broken tooth. Counted from the
 /// tachometer's pulse when the angle came from one, else from the arbitrary start of the tracked angle
 /// (said so).
-fn place_tooth(d: &mut Diagnosis) {
+pub(super) fn place_tooth(d: &mut Diagnosis) {
     if d.verdict.state < VerdictState::Suspect {
         return;
     }
@@ -434,179 +433,6 @@ pub fn impulse_tooth(x: &[f64], z: usize) -> Option<usize> {
     }
     let centre = (peak_at + n - back / 2) % n;
     Some(centre * z / n + 1)
-}
-
-/// Rise of a shaft's first envelope order over the baseline's that counts as evidence, dB (an engineering
-/// choice: 10 dB is a tripling of the line against its neighbourhood).
-pub const ENVELOPE_RISE_DB: f64 = 10.0;
-/// Height over its neighbourhood the line must have in the recording itself, dB.
-pub const ENVELOPE_LINE_DB: f64 = 10.0;
-
-/// Adds the envelope spectrum's evidence against the baseline's: a shaft whose first envelope order rose
-/// by more than [`ENVELOPE_RISE_DB`] (and stands [`ENVELOPE_LINE_DB`] over its neighbourhood) has
-/// impacts once per revolution. One value per recording, without a spread: it makes a healthy verdict
-/// suspect, never faulty on its own, and supports a suspect or faulty one on the same gear.
-pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
-    let Some(e) = &d.envelope else { return };
-    let base_db = |l: &EnvelopeLine| {
-        baseline.lines.iter().find(|b| b.shaft == l.shaft && b.order == l.order).map(|b| b.over_floor_db)
-    };
-    let strongest = e
-        .lines
-        .iter()
-        .filter(|l| l.order == 1 && l.over_floor_db > ENVELOPE_LINE_DB)
-        .filter_map(|l| base_db(l).map(|b| (l, b, l.over_floor_db - b)))
-        .filter(|(_, _, r)| *r > ENVELOPE_RISE_DB)
-        .max_by(|a, b| a.2.total_cmp(&b.2));
-    let Some((line, base_db, rise_db)) = strongest else { return };
-    let same_band =
-        (e.band_hz[0] - baseline.band_hz[0]).abs() < 1.0 && (e.band_hz[1] - baseline.band_hz[1]).abs() < 1.0;
-    let reason = format!(
-        "envelope spectrum ({:.0}-{:.0} Hz band{}): {} order 1 stands {:.1} dB above its neighbourhood against {:.1} dB in the baseline (+{:.1} dB): impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
-        e.band_hz[0],
-        e.band_hz[1],
-        if same_band {
-            String::new()
-        } else {
-            format!("; the baseline's band was {:.0}-{:.0} Hz", baseline.band_hz[0], baseline.band_hz[1])
-        },
-        line.shaft,
-        line.over_floor_db,
-        base_db,
-        rise_db,
-        line.shaft
-    );
-    let gear = VerdictGear::from(line.shaft);
-    match d.verdict.state {
-        VerdictState::Healthy | VerdictState::NotJudged => {
-            d.verdict.state = VerdictState::Suspect;
-            d.verdict.gear = gear;
-            d.verdict.reasons.insert(0, reason);
-            // a machine's shaft: its gear is named from there (`machine::name_verdict`)
-            if matches!(line.shaft, Shaft::Named(_)) {
-                d.verdict.deciding = Some(line.shaft);
-            }
-        }
-        _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
-        _ => d.verdict.reasons.push(reason),
-    }
-}
-
-/// Adds the change of each gear's average against the baseline's as evidence (computed by
-/// `baseline::Reference::local_change` into `d.local_change`): a gear whose average changed at one tooth by
-/// over its limit (2.5 times what the baseline's own files show among themselves) has a local fault there;
-/// one whose mesh sidebands grew over theirs is modulated once per revolution. One value per recording
-/// each, so like the envelope the strongest makes a healthy or not-judged verdict suspect on its gear,
-/// never faulty on its own, and each supports a suspect or faulty verdict on the same gear.
-pub fn local_change_evidence(d: &mut Diagnosis) {
-    let mut found: Vec<(f64, Shaft, String)> = Vec::new();
-    for c in &d.local_change {
-        if c.value >= c.limit {
-            let at = c.tooth.map_or(String::new(), |t| format!(" at tooth {t}"));
-            found.push((
-                c.value / c.limit,
-                c.gear,
-                format!(
-                    "{} (channel {}): local change{at} against the baseline's average: the difference's largest tooth pitch holds {} times the median pitch's energy (the baseline's own files differ by at most {}; limit {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
-                    c.gear,
-                    c.channel,
-                    num(c.value),
-                    num(c.healthy),
-                    num(c.limit)
-                ),
-            ));
-        }
-        if c.sidebands >= c.sidebands_limit {
-            found.push((
-                c.sidebands / c.sidebands_limit,
-                c.gear,
-                format!(
-                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (its own files at most {}; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
-                    c.gear,
-                    c.channel,
-                    num(c.sidebands),
-                    num(c.sidebands_healthy),
-                    num(c.sidebands_limit)
-                ),
-            ));
-        }
-    }
-    found.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let on_verdict_gear = found.iter().any(|f| VerdictGear::from(f.1) == d.verdict.gear);
-    for (i, (_, shaft, reason)) in found.into_iter().enumerate() {
-        let gear = VerdictGear::from(shaft);
-        match d.verdict.state {
-            // a suspect verdict from indicators both gears' averages share (the spectral change, the mesh
-            // lines' energy) moves to the gear whose own orders changed, when its own did not
-            VerdictState::Suspect if i == 0 && d.verdict.gear != gear && !on_verdict_gear => {
-                d.verdict.cross_talk.push(format!(
-                    "the {}'s indicators moved too, but its own orders did not change against the baseline's while the {}'s did: read as the {}'s fault seen in the {}'s average",
-                    d.verdict.gear, shaft, shaft, d.verdict.gear
-                ));
-                d.verdict.gear = gear;
-                d.verdict.tooth = None;
-                d.verdict.tooth_origin = None;
-                d.verdict.reasons.insert(0, reason);
-                if matches!(shaft, Shaft::Named(_)) {
-                    d.verdict.deciding = Some(shaft);
-                }
-                place_tooth(d);
-            }
-            VerdictState::Healthy | VerdictState::NotJudged if i == 0 => {
-                d.verdict.state = VerdictState::Suspect;
-                d.verdict.gear = gear;
-                d.verdict.reasons.insert(0, reason);
-                if matches!(shaft, Shaft::Named(_)) {
-                    d.verdict.deciding = Some(shaft);
-                }
-                place_tooth(d);
-            }
-            _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
-            _ => d.verdict.reasons.push(reason),
-        }
-    }
-}
-
-/// Height of a shaft's first envelope order over its neighbourhood from which, without a baseline, it
-/// counts as evidence of impacts once per revolution, dB. Healthy recordings of four generated machines of
-/// another physics (housing resonances, noise at 0.35-0.7 of the signal, 0.5-2 % speed fluctuation) reach
-/// 22.4 dB; their spalls stand 32-48 dB and most 25-50 % cracks 28-43 dB: 30 dB keeps a 7.6 dB margin over
-/// the healthy ones. A noise-free simulation puts any line far over its floor, so the level is for recordings.
-pub const ENVELOPE_ABSOLUTE_DB: f64 = 30.0;
-
-/// Without a baseline: a shaft whose first envelope order stands over [`ENVELOPE_ABSOLUTE_DB`] makes a
-/// healthy verdict suspect on that gear (supporting evidence otherwise); a line over [`ENVELOPE_LINE_DB`]
-/// but under that limit is said in the reasons of a healthy verdict, so that the verdict and the envelope
-/// spectrum printed beside it do not contradict each other.
-pub fn envelope_absolute(d: &mut Diagnosis) {
-    let Some(e) = &d.envelope else { return };
-    let Some(line) = e.lines.iter().filter(|l| l.order == 1).max_by(|a, b| a.over_floor_db.total_cmp(&b.over_floor_db))
-    else {
-        return;
-    };
-    let band = format!("{:.0}-{:.0} Hz band", e.band_hz[0], e.band_hz[1]);
-    if line.over_floor_db > ENVELOPE_ABSOLUTE_DB {
-        let reason = format!(
-            "envelope spectrum ({band}): {} order 1 stands {:.1} dB above its neighbourhood, over the {ENVELOPE_ABSOLUTE_DB:.0} dB absolute limit without a baseline: impacts once per {} revolution (one value per recording, so supporting evidence: at most suspect on its own)",
-            line.shaft, line.over_floor_db, line.shaft
-        );
-        let gear = VerdictGear::from(line.shaft);
-        match d.verdict.state {
-            VerdictState::Healthy => {
-                d.verdict.state = VerdictState::Suspect;
-                d.verdict.gear = gear;
-                d.verdict.reasons.insert(0, reason);
-            }
-            VerdictState::NotJudged => d.verdict.reasons.push(reason),
-            _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
-            _ => d.verdict.reasons.push(reason),
-        }
-    } else if line.over_floor_db > ENVELOPE_LINE_DB && d.verdict.state == VerdictState::Healthy {
-        d.verdict.reasons.push(format!(
-            "envelope spectrum ({band}): {} order 1 stands {:.1} dB above its neighbourhood, under the {ENVELOPE_ABSOLUTE_DB:.0} dB absolute limit (healthy machines reach 22 dB): whether it rose, only a healthy recording of the same machine as baseline can tell",
-            line.shaft, line.over_floor_db
-        ));
-    }
 }
 
 /// Lowers a faulty verdict to suspect when the recording's operating point differs from the baseline's,
