@@ -133,6 +133,42 @@ pub fn crest_factor(x: &[f64]) -> f64 {
     x.iter().fold(0.0f64, |a, v| a.max(v.abs())) / rms(x)
 }
 
+/// RMS, kurtosis, crest factor and peak-to-peak of an average, in two passes over it (its mean, then the
+/// rest); the same values as [`rms`] and [`crest_factor`] of the centred signal, [`kurtosis`] and the range
+/// [`fm0`] divides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AverageMoments {
+    /// Root mean square about the mean (unit of the signal).
+    pub rms: f64,
+    /// Normalised fourth central moment.
+    pub kurtosis: f64,
+    /// Largest |x - mean| over the RMS.
+    pub crest_factor: f64,
+    /// Largest minus least value (unit of the signal).
+    pub peak_to_peak: f64,
+}
+
+impl AverageMoments {
+    /// The moments of `x` (not empty).
+    pub fn of(x: &[f64]) -> Self {
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let (mut s2, mut s4, mut peak) = (0.0, 0.0, 0.0f64);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &v in x {
+            let d = v - mean;
+            let d2 = d * d;
+            s2 += d2;
+            s4 += d2 * d2;
+            peak = peak.max(d.abs());
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        let rms = (s2 / n).sqrt();
+        Self { rms, kurtosis: n * s4 / (s2 * s2), crest_factor: peak / rms, peak_to_peak: hi - lo }
+    }
+}
+
 /// FM0 = peak-to-peak of the TSA / sum of the mesh-harmonic amplitudes.
 pub fn fm0(tsa: &[f64], mesh_amplitudes: &[f64]) -> f64 {
     let (lo, hi) = tsa.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
@@ -166,6 +202,22 @@ pub fn sideband_energy_ratio(amplitudes: &[f64], mesh: usize, spacing: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fused moments equal the separate definitions (to rounding: the same sums in another order at most).
+    #[test]
+    fn average_moments_are_the_separate_indicators() {
+        let x: Vec<f64> =
+            (0..2048).map(|i| (0.37 * i as f64).sin() + 0.2 * (0.011 * (i * i) as f64).cos() + 0.5).collect();
+        let m = AverageMoments::of(&x);
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        assert!(close(m.rms, rms(&centred)), "{} {}", m.rms, rms(&centred));
+        assert!(close(m.kurtosis, kurtosis(&x)), "{} {}", m.kurtosis, kurtosis(&x));
+        assert!(close(m.crest_factor, crest_factor(&centred)));
+        let amps = [2.0];
+        assert!(close(m.peak_to_peak / 2.0, fm0(&x, &amps)));
+    }
 
     #[test]
     fn moments_work_on_hand_computed_arrays() {

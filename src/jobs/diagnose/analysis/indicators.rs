@@ -88,20 +88,19 @@ pub(in crate::jobs::diagnose) fn tsa_indicators(
     let Decomposition { amplitudes, regular, residual, difference } = &d;
     let mesh_amps: Vec<f64> =
         (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
-    let mean = x.iter().sum::<f64>() / x.len() as f64;
-    let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
+    let moments = ind::AverageMoments::of(x);
     // indices checked here: a mesh order beyond the average's resolution (refused by the caller) reads NaN
     let side = match (z.checked_sub(1).and_then(|i| amplitudes.get(i)), amplitudes.get(z + 1)) {
         (Some(a), Some(b)) => a + b,
         _ => f64::NAN,
     };
-    let rms = ind::rms(&centred);
+    let rms = moments.rms;
     let [fm4, m6a, m8a] = ind::normalized_moments_4_6_8(difference);
     let mut m = BTreeMap::new();
     m.insert(Indicator::Rms, rms);
-    m.insert(Indicator::Kurtosis, ind::kurtosis(x));
-    m.insert(Indicator::CrestFactor, ind::crest_factor(&centred));
-    m.insert(Indicator::Fm0, ind::fm0(x, &mesh_amps));
+    m.insert(Indicator::Kurtosis, moments.kurtosis);
+    m.insert(Indicator::CrestFactor, moments.crest_factor);
+    m.insert(Indicator::Fm0, moments.peak_to_peak / mesh_amps.iter().sum::<f64>());
     m.insert(Indicator::Fm4, fm4);
     m.insert(Indicator::M6a, m6a);
     m.insert(Indicator::M8a, m8a);
