@@ -6,11 +6,12 @@ use crate::system::{PeriodicSystem, Side};
 use nalgebra::{DMatrix, DVector};
 
 /// The RK4 product of x' = P(t) x over equal steps h, from P sampled at every node and midpoint
-/// (`samples`: 2 m + 1 matrices, n x n column-major): the monodromy of the homogeneous system, the same
-/// arithmetic as [`rk4::monodromy`] without the forcing column and without evaluating P twice at a node.
+/// (`samples`: 2 m + 1 matrices, n x n column-major): the monodromy of the homogeneous system, the RK4
+/// steps of [`rk4::monodromy`] (for n = 2 and 4 grouped as one matrix per step, see `fixed_product`)
+/// without the forcing column and without evaluating P twice at a node.
 fn homogeneous_product(n: usize, h: f64, samples: &[f64]) -> DMatrix<f64> {
     // a fixed size lets the compiler unroll the gear pair's 2 x 2 products (a third of the companion's time
-    // went into the loops' bookkeeping); the same operations in the same order
+    // went into the loops' bookkeeping)
     match n {
         2 => fixed_product::<2>(h, samples),
         4 => fixed_product::<4>(h, samples),
@@ -39,23 +40,31 @@ fn fixed_product<const N: usize>(h: f64, samples: &[f64]) -> DMatrix<f64> {
             })
         })
     };
-    let combine = |w: &Block<N>, k: &Block<N>, c: f64| -> Block<N> {
-        std::array::from_fn(|col| std::array::from_fn(|row| w[col][row] + c * k[col][row]))
+    // I + c x
+    let shifted = |x: &Block<N>, c: f64| -> Block<N> {
+        std::array::from_fn(|col| std::array::from_fn(|row| f64::from(u8::from(row == col)) + c * x[col][row]))
     };
-    let mut w: Block<N> = std::array::from_fn(|col| std::array::from_fn(|row| f64::from(u8::from(row == col))));
+    let mut w: Block<N> = shifted(&[[0.0; N]; N], 0.0);
     let mut p0 = at(0);
     for i in 0..steps {
         let (pm, p1) = (at(2 * i + 1), at(2 * i + 2));
-        let k1 = product(&p0, &w);
-        let k2 = product(&pm, &combine(&w, &k1, 0.5));
-        let k3 = product(&pm, &combine(&w, &k2, 0.5));
-        let k4 = product(&p1, &combine(&w, &k3, 1.0));
-        for col in 0..N {
-            for row in 0..N {
-                let acc = k1[col][row] + 2.0 * k2[col][row] + 2.0 * k3[col][row];
-                w[col][row] += (acc + k4[col][row]) / 6.0;
-            }
-        }
+        // on a linear system the step is a matrix of P alone: k1 = A1 W with A1 = h P0, k2 = A2 W with
+        // A2 = h Pm (I + A1 / 2), k3 = A3 W with A3 = h Pm (I + A2 / 2), k4 = A4 W with A4 = h P1 (I + A3),
+        // so W <- S W with S = I + (A1 + 2 A2 + 2 A3 + A4) / 6. The steps' matrices do not wait for each
+        // other, only the product S W does (stage by stage on W, each stage waited for the one before)
+        let a1: Block<N> = std::array::from_fn(|col| std::array::from_fn(|row| h * p0[col][row]));
+        let a2 = product(&pm, &shifted(&a1, 0.5));
+        let a3 = product(&pm, &shifted(&a2, 0.5));
+        let a4 = product(&p1, &shifted(&a3, 1.0));
+        let step: Block<N> = std::array::from_fn(|col| {
+            std::array::from_fn(|row| {
+                let acc = a1[col][row] + 2.0 * a2[col][row] + 2.0 * a3[col][row] + a4[col][row];
+                f64::from(u8::from(row == col)) + acc / 6.0
+            })
+        });
+        w = std::array::from_fn(|col| {
+            std::array::from_fn(|row| (0..N).map(|kk| step[kk][row] * w[col][kk]).sum::<f64>())
+        });
         p0 = p1;
     }
     DMatrix::from_fn(N, N, |row, col| w[col][row])

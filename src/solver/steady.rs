@@ -197,12 +197,12 @@ pub fn solve_once(sys: &dyn PeriodicSystem, steps: usize) -> Result<SteadyState,
 /// measures and condition numbers.
 pub fn state_scales(sys: &dyn PeriodicSystem) -> Vec<f64> {
     let n = sys.dim();
-    let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
-    let mut mean = DMatrix::<f64>::zeros(n, n);
     let samples = 32;
-    for i in 0..samples {
-        sys.eval(sys.period_s() * i as f64 / samples as f64, crate::system::Side::Right, &mut p, &mut f);
-        mean += p.abs();
+    let mut ps = Vec::with_capacity(samples * n * n);
+    sys.eval_matrix_uniform(0.0, sys.period_s() / samples as f64, samples, &mut ps);
+    let mut mean = DMatrix::<f64>::zeros(n, n);
+    for p in ps.chunks(n * n) {
+        mean += DMatrix::from_column_slice(n, n, p).abs();
     }
     if mean.iter().any(|v| !v.is_finite()) {
         return vec![1.0; n];
