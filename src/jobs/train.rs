@@ -305,14 +305,15 @@ fn common_lines(sys: &SecondOrderSystem, steady: &SteadyState, u: &[f64]) -> Vec
 fn quasi_lines(sol: &TwoToneSolution, u: &[f64]) -> Vec<(f64, Complex<f64>, String)> {
     sol.lines_held()
         .iter()
-        .filter_map(|&(k, l)| {
+        .enumerate()
+        .filter_map(|(j, &(k, l))| {
             let w = sol.frequency_rad_s(k, l);
             // each real line once: w > 0, or w = 0 only for (0, 0)
             if w < 0.0 || (w == 0.0 && (k, l) != (0, 0)) {
                 return None;
             }
             let z: Complex<f64> =
-                u.iter().enumerate().map(|(i, wt)| sol.coefficient(i, k, l) * Complex::new(0.0, w * wt)).sum();
+                sol.line_coefficients(j).iter().zip(u).map(|(y, wt)| y * Complex::new(0.0, w * wt)).sum();
             Some((w, z, format!("{k} nu1 + {l} nu2")))
         })
         .collect()
