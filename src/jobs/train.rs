@@ -339,18 +339,6 @@ fn sensor_factor(unit: SensorUnit, sensitivity: f64, w: f64) -> Complex<f64> {
     f * (scale * sensitivity)
 }
 
-fn unit_name(u: SensorUnit) -> &'static str {
-    match u {
-        SensorUnit::MetrePerSecondSquared => "m/s^2",
-        SensorUnit::G => "g",
-        SensorUnit::MetrePerSecond => "m/s",
-        SensorUnit::MillimetrePerSecond => "mm/s",
-        SensorUnit::Metre => "m",
-        SensorUnit::Micrometre => "um",
-        SensorUnit::Volt => "V",
-    }
-}
-
 /// Samples of sum Re(Z) + 2 Re sum Z e^{i w t} at n / fs, by a phasor per line advanced one sample at a time
 /// (re-anchored every 4096 samples so rounding cannot accumulate).
 fn synthesize(lines: &[(f64, Complex<f64>)], fs: f64, frames: usize) -> Vec<f32> {
@@ -389,7 +377,7 @@ fn write_recording(scene: &TrainScene, sol: &TrainSolution, out: &std::path::Pat
         channels.push((
             s.channel,
             format!("ch{}", s.channel),
-            unit_name(s.unit).into(),
+            s.unit.name().into(),
             synthesize(&lines, o.sample_rate_hz, frames),
         ));
     }
