@@ -98,6 +98,9 @@ pub struct TrainSummary {
     pub notes: Vec<String>,
 }
 
+/// A line of the sensor quantity: angular frequency (rad/s), complex coefficient (m/s), label.
+type Line = (f64, Complex<f64>, String);
+
 /// The solved train: the sensor quantity as lines (angular frequency rad/s, complex amplitude Z with
 /// s(t) = Re Z_0 + 2 Re sum Z e^{i w t}) plus the summary.
 pub struct TrainSolution {
@@ -245,13 +248,19 @@ pub fn solve(scene: &TrainScene) -> Result<TrainSolution, Error> {
         quasi_lines(&sol, &u)
     };
     let lines = merge_equal_frequencies(lines);
-    let top = lines.iter().map(|l| l.1.norm()).fold(0.0, f64::max);
-    let mut listed: Vec<&(f64, Complex<f64>, String)> = lines.iter().collect();
-    listed.sort_by(|a, b| b.1.norm().total_cmp(&a.1.norm()));
+    // the strongest lines: each modulus once, the top SUMMARY_LINES picked before sorting
+    let mut listed: Vec<(f64, &Line)> = lines.iter().map(|l| (l.1.norm(), l)).collect();
+    let top = listed.iter().map(|l| l.0).fold(0.0, f64::max);
+    // largest first, equal ones by frequency
+    let order = |a: &(f64, &Line), b: &(f64, &Line)| b.0.total_cmp(&a.0).then(a.1.0.total_cmp(&b.1.0));
+    if listed.len() > SUMMARY_LINES {
+        listed.select_nth_unstable_by(SUMMARY_LINES, order);
+        listed.truncate(SUMMARY_LINES);
+    }
+    listed.sort_by(order);
     summary.lines = listed
         .iter()
-        .take(SUMMARY_LINES)
-        .map(|(w, z, label)| TrainLine {
+        .map(|(_, (w, z, label))| TrainLine {
             frequency_hz: w / (2.0 * PI),
             amplitude: if *w == 0.0 { z.norm() } else { 2.0 * z.norm() },
             label: label.clone(),

@@ -195,10 +195,42 @@ pub struct TwoToneReport {
     pub iterations: usize,
 }
 
-/// Complex coefficients of one series as a map harmonic -> c_j for |j| <= its harmonics.
-fn complex(s: &FourierSeries) -> (usize, Vec<C64>) {
-    let h = s.harmonics();
-    (h, s.complex_coefficients().into_iter().map(|(re, im)| C64::new(re, im)).collect())
+/// The complex coefficients c_j of a list of series (entry by entry) at the harmonics j where one of them
+/// is non-zero (and j = 0): a mesh's series over a stage's base frequency hold thousands of harmonics, of
+/// which only the mesh harmonics and the errors' orders are not zero.
+struct Harmonics {
+    /// Highest harmonic of the series.
+    h: usize,
+    /// (j, c_j of every entry), j ascending over -h..=h.
+    terms: Vec<(isize, Vec<C64>)>,
+}
+
+impl Harmonics {
+    fn new(series: &[FourierSeries]) -> Self {
+        let h = series.iter().map(|s| s.harmonics()).max().unwrap_or(0);
+        let at =
+            |s: &FourierSeries, j: usize| if j <= s.harmonics() { (s.cos[j - 1], s.sin[j - 1]) } else { (0.0, 0.0) };
+        let mut positive: Vec<(isize, Vec<C64>, Vec<C64>)> = Vec::new();
+        for j in 1..=h {
+            if series.iter().all(|s| at(s, j) == (0.0, 0.0)) {
+                continue;
+            }
+            // a cos + b sin = (a - i b)/2 e^{i..} + (a + i b)/2 e^{-i..}
+            let plus = series.iter().map(|s| at(s, j)).map(|(a, b)| C64::new(a / 2.0, -b / 2.0)).collect();
+            let minus = series.iter().map(|s| at(s, j)).map(|(a, b)| C64::new(a / 2.0, b / 2.0)).collect();
+            positive.push((j as isize, plus, minus));
+        }
+        let mean = (0, series.iter().map(|s| C64::new(s.mean, 0.0)).collect());
+        let mut terms: Vec<(isize, Vec<C64>)> = positive.iter().rev().map(|(j, _, m)| (-j, m.clone())).collect();
+        terms.push(mean);
+        terms.extend(positive.into_iter().map(|(j, p, _)| (j, p)));
+        Self { h, terms }
+    }
+
+    /// The coefficients of harmonic j (`None` when every entry's is zero, j != 0).
+    fn get(&self, j: isize) -> Option<&[C64]> {
+        self.terms.binary_search_by_key(&j, |t| t.0).ok().map(|i| self.terms[i].1.as_slice())
+    }
 }
 
 /// The operator's coefficients: per tone, the N x N stiffness matrix of each harmonic (row-major), and the
@@ -208,99 +240,82 @@ struct Operator {
     w: [f64; 2],
     mass: Vec<f64>,
     damping: Vec<f64>,
-    /// Per tone: highest stiffness harmonic h and matrices k[j + h] (N x N) for j in -h..=h.
-    stiff: [(usize, Vec<Vec<C64>>); 2],
-    /// Per tone: highest forcing harmonic and vectors f[j + h] (N).
-    force: [(usize, Vec<Vec<C64>>); 2],
+    /// Per tone: the stiffness matrices (N x N) of its harmonics.
+    stiff: [Harmonics; 2],
+    /// The mean stiffness Ka_0 + Kb_0 (N x N).
+    k0: Vec<C64>,
+    /// Per tone: the forcing vectors (N) of its harmonics.
+    force: [Harmonics; 2],
     strides: [usize; 2],
 }
 
 impl Operator {
     fn new(form: &TwoToneForm) -> Self {
         let n = form.dof;
-        let stiff = [0, 1].map(|t| {
-            let series: Vec<(usize, Vec<C64>)> = form.stiffness[t].iter().map(complex).collect();
-            let h = series.iter().map(|s| s.0).max().unwrap_or(0);
-            let mats =
-                (0..=2 * h)
-                    .map(|jj| {
-                        let j = jj as isize - h as isize;
-                        series
-                            .iter()
-                            .map(|(hs, c)| {
-                                if j.unsigned_abs() <= *hs {
-                                    c[(j + *hs as isize) as usize]
-                                } else {
-                                    C64::new(0.0, 0.0)
-                                }
-                            })
-                            .collect()
-                    })
-                    .collect();
-            (h, mats)
+        let stiff = [0, 1].map(|t| Harmonics::new(&form.stiffness[t]));
+        let force = [0, 1].map(|t| Harmonics::new(&form.forcing[t]));
+        let strides = stiff.each_ref().map(|k| {
+            k.terms
+                .iter()
+                .filter(|(j, c)| *j > 0 && c.iter().any(|c| c.norm_sqr() > 0.0))
+                .fold(0, |g, t| gcd(g, t.0 as usize))
         });
-        let force = [0, 1].map(|t| {
-            let series: Vec<(usize, Vec<C64>)> = form.forcing[t].iter().map(complex).collect();
-            let h = series.iter().map(|s| s.0).max().unwrap_or(0);
-            let vecs =
-                (0..=2 * h)
-                    .map(|jj| {
-                        let j = jj as isize - h as isize;
-                        series
-                            .iter()
-                            .map(|(hs, c)| {
-                                if j.unsigned_abs() <= *hs {
-                                    c[(j + *hs as isize) as usize]
-                                } else {
-                                    C64::new(0.0, 0.0)
-                                }
-                            })
-                            .collect()
-                    })
-                    .collect();
-            (h, vecs)
-        });
-        let strides = [0, 1].map(|t| {
-            let (h, mats): &(usize, Vec<Vec<C64>>) = &stiff[t];
-            (1..=*h).filter(|&j| mats[h + j].iter().any(|c| c.norm_sqr() > 0.0)).fold(0, gcd)
-        });
-        Self { n, w: form.omega_rad_s, mass: form.mass.clone(), damping: form.damping.clone(), stiff, force, strides }
+        let k0 = (0..n * n).map(|e| stiff.iter().filter_map(|k| k.get(0)?.get(e)).sum()).collect();
+        Self {
+            n,
+            w: form.omega_rad_s,
+            mass: form.mass.clone(),
+            damping: form.damping.clone(),
+            stiff,
+            k0,
+            force,
+            strides,
+        }
     }
 
-    /// Stiffness matrix of harmonic j of tone t (zero beyond its harmonics).
+    /// Stiffness matrix of harmonic j of tone t (`None` when zero).
     fn k(&self, t: usize, j: isize) -> Option<&[C64]> {
-        let (h, mats) = &self.stiff[t];
-        (j.unsigned_abs() <= *h).then(|| mats[(j + *h as isize) as usize].as_slice())
+        self.stiff[t].get(j)
     }
 
-    /// The diagonal block at line (k, l), -w^2 M + i w C + Ka_0 + Kb_0, appended to `out` (row-major).
-    fn diagonal(&self, k: isize, l: isize, out: &mut Vec<C64>) {
-        let w = k as f64 * self.w[0] + l as f64 * self.w[1];
-        let (ka, kb) = (self.k(0, 0), self.k(1, 0));
-        out.extend((0..self.n * self.n).map(|e| {
-            let mut v = C64::new(-w * w * self.mass[e], w * self.damping[e]);
-            if let Some(m) = ka {
-                v += m[e];
+    /// Angular frequency of line (k, l), rad/s.
+    fn omega(&self, k: isize, l: isize) -> f64 {
+        k as f64 * self.w[0] + l as f64 * self.w[1]
+    }
+
+    /// The diagonal block at angular frequency w, -w^2 M + i w C + Ka_0 + Kb_0, into `out` (row-major).
+    fn diagonal(&self, w: f64, out: &mut [C64]) {
+        for (e, o) in out.iter_mut().enumerate() {
+            *o = self.k0[e] + C64::new(-w * w * self.mass[e], w * self.damping[e]);
+        }
+    }
+
+    /// y += D(w) x for the diagonal block at w, without forming it.
+    fn diagonal_mul_add(&self, w: f64, x: &[C64], y: &mut [C64]) {
+        let n = self.n;
+        let w2 = w * w;
+        for (r, yr) in y.iter_mut().enumerate().take(n) {
+            let row = r * n..(r + 1) * n;
+            let mut acc = C64::new(0.0, 0.0);
+            for (((k, m), c), xc) in
+                self.k0[row.clone()].iter().zip(&self.mass[row.clone()]).zip(&self.damping[row]).zip(x)
+            {
+                acc += (k + C64::new(-w2 * m, w * c)) * xc;
             }
-            if let Some(m) = kb {
-                v += m[e];
-            }
-            v
-        }));
+            *yr += acc;
+        }
     }
 
     /// Forcing vector of line (k, l), or `None` when zero.
     fn forcing(&self, k: isize, l: isize) -> Option<Vec<C64>> {
         let mut f = vec![C64::new(0.0, 0.0); self.n];
         let mut any = false;
-        for (t, j) in [(0, k), (1, l)] {
-            let other = if t == 0 { l } else { k };
+        for (t, j, other) in [(0, k, l), (1, l, k)] {
             if other != 0 {
                 continue;
             }
-            let (h, vecs) = &self.force[t];
-            if j.unsigned_abs() <= *h {
-                for (fi, v) in f.iter_mut().zip(&vecs[(j + *h as isize) as usize]) {
+            if let Some(v) = self.force[t].get(j) {
+                for (fi, v) in f.iter_mut().zip(v) {
                     *fi += v;
                     any |= v.norm_sqr() > 0.0;
                 }
@@ -328,40 +343,161 @@ fn residue(x: isize, stride: usize) -> isize {
 /// The non-zero entries (row, column, value) of one coupling matrix at a class offset s.
 type Coupling = (isize, Vec<(usize, usize, C64)>);
 
-/// The preconditioner of a class: per l, the tone-a operator A_l (block diagonal D_k plus the coupling
-/// blocks K_a(s g_a) between lines k and k - s) factored exactly, in one of two ways.
+/// The preconditioner of a class: the tone-a operator per l (block diagonal D_kl plus the coupling blocks
+/// K_a(s g_a) between lines k and k - s) factored exactly, and when both tones' couplings touch only some
+/// DOFs, the tone-b operator per k as well, in product.
 ///
 /// ```text
-/// Full:    the band of A_l over every DOF (bandwidth (s_max + 1) N - 1), LU with partial pivoting
-/// Reduced: when the coupling blocks touch only p < N DOFs P (a mesh: its two gears), with F_s = K_a(s g_a)
-///          on P x P, G_k = (D_k^-1) on P x P:
-///          y_k = D_k^-1 (x_k - P c_k),  c_k = sum_s F_s z_{k-s},  z_k = y_k on P
-///          =>  z_k + G_k sum_s F_s z_{k-s} = (D_k^-1 x_k) on P        (a band of p DOFs per line)
-///          so A_l^-1 x costs a dense N x N product per line and a band of p DOFs (bandwidth
-///          (s_max + 1) p - 1) instead of one of N DOFs: the Schur complement onto the coupled DOFs.
+/// Full:    P = A_a, the band of A_a over every DOF per l (bandwidth (s_max + 1) N - 1), LU with partial
+///          pivoting
+/// Reduced: P = A_a D^-1 A_b (or P = A_a when tone b touches every DOF): P - A = A_a D^-1 A_b - A
+///          = E_a D^-1 E_b, second order in the two modulations where A_a alone leaves E_b
+///          (E_t = A_t - D the couplings). Each A_t^-1 by the Schur complement onto the coupled DOFs
+///          (`Chains`), along its own chains of lines.
 /// ```
 enum Precond {
     Full(Vec<(Band, Vec<usize>)>),
     Reduced {
-        /// The coupled DOFs P.
-        support: Vec<usize>,
-        /// D_k^-1 (N x N, row-major) per line, in the class's order (l-major).
+        /// D^-1 (N x N, row-major) per line, in the class's order (l-major).
         dinv: Vec<C64>,
-        /// The coupling blocks F_s (p x p, row-major) with their offsets s.
-        coupling: Vec<(isize, Vec<C64>)>,
-        /// Per l: the factored band of the reduced system.
-        bands: Vec<(Band, Vec<usize>)>,
+        /// The tone-a operator's chains (one per l, along k).
+        a: Chains,
+        /// The tone-b operator's chains (one per k, along l), when tone b couples only some DOFs.
+        b: Option<Chains>,
     },
 }
 
-/// One class: its lines, the preconditioner's factors per l, and the coupling lists.
+/// A tone's operator restricted to chains of lines (one chain per line of the other tone), inverted by the
+/// Schur complement onto the DOFs P its coupling touches (a mesh: its two gears).
+///
+/// ```text
+/// chain c, position q (line c chain + q pos): D_q the diagonal block, F_s = K_t(s g_t) on P x P,
+/// G_q = (D_q^-1) on P x P:
+///     y_q = D_q^-1 (x_q - P c_q),  c_q = sum_s F_s z_{q-s},  z_q = y_q on P
+///     =>  z_q + G_q sum_s F_s z_{q-s} = (D_q^-1 x_q) on P        (a band of p DOFs per position)
+/// so A_t^-1 x costs a dense N x N product per line and a band of p DOFs (bandwidth (s_max + 1) p - 1)
+/// instead of one of N DOFs.
+/// ```
+struct Chains {
+    /// Line index of chain c, position q: c chain + q pos.
+    chain: usize,
+    pos: usize,
+    /// Positions per chain.
+    len: usize,
+    /// The coupled DOFs P.
+    support: Vec<usize>,
+    /// The coupling blocks F_s (p x p, row-major) with their offsets s.
+    coupling: Vec<(isize, Vec<C64>)>,
+    /// Per chain: the factored band of the reduced system.
+    bands: Vec<(Band, Vec<usize>)>,
+}
+
+impl Chains {
+    /// The chains of tone `t` over a class of `na` x `nb` lines (l-major); `None` when a reduced band
+    /// cannot be factored.
+    fn new(
+        op: &Operator,
+        t: usize,
+        couple: &[(isize, isize)],
+        support: &[usize],
+        dinv: &[C64],
+        na: usize,
+        nb: usize,
+    ) -> Option<Self> {
+        let (n, p) = (op.n, support.len());
+        let (chain, pos, len, count) = if t == 0 { (na, 1, na, nb) } else { (1, na, nb, na) };
+        let coupling: Vec<(isize, Vec<C64>)> = couple
+            .iter()
+            .filter_map(|&(s, j)| {
+                let m = op.k(t, j)?;
+                Some((s, (0..p * p).map(|e| m[support[e / p] * n + support[e % p]]).collect()))
+            })
+            .collect();
+        let band_blocks = coupling.iter().map(|c| c.0.unsigned_abs()).max().unwrap_or(0);
+        let bw = (band_blocks + 1) * p - 1;
+        let mut bands = Vec::with_capacity(count);
+        for c in 0..count {
+            let mut b = Band::new(len * p, bw, bw);
+            for q in 0..len {
+                let line = c * chain + q * pos;
+                let d = &dinv[line * n * n..(line + 1) * n * n];
+                for a in 0..p {
+                    b.add(q * p + a, q * p + a, C64::new(1.0, 0.0));
+                }
+                for (s, f) in &coupling {
+                    let src = q as isize - s;
+                    if src < 0 || src >= len as isize {
+                        continue;
+                    }
+                    // G_q F_s, G_q = D_q^-1 on P x P
+                    for a in 0..p {
+                        for e in 0..p {
+                            let v: C64 = (0..p).map(|m| d[support[a] * n + support[m]] * f[m * p + e]).sum();
+                            b.add(q * p + a, src as usize * p + e, v);
+                        }
+                    }
+                }
+            }
+            let pivots = b.factor()?;
+            bands.push((b, pivots));
+        }
+        Some(Self { chain, pos, len, support: support.to_vec(), coupling, bands })
+    }
+
+    /// x = A_t^-1 x in place, `dinv` the class's D^-1 blocks, `n` the DOFs.
+    fn solve(&self, dinv: &[C64], n: usize, x: &mut [C64]) {
+        let (p, len) = (self.support.len(), self.len);
+        let mut t = vec![C64::new(0.0, 0.0); n];
+        let mut z = vec![C64::new(0.0, 0.0); len * p];
+        let mut c = vec![C64::new(0.0, 0.0); p];
+        for (ch, (band, piv)) in self.bands.iter().enumerate() {
+            let line = |q: usize| ch * self.chain + q * self.pos;
+            // t_q = D_q^-1 x_q (kept in x), its coupled DOFs the reduced right-hand side
+            for q in 0..len {
+                let at = line(q);
+                let d = &dinv[at * n * n..(at + 1) * n * n];
+                let xq = &mut x[at * n..(at + 1) * n];
+                for (r, tr) in t.iter_mut().enumerate() {
+                    *tr = d[r * n..(r + 1) * n].iter().zip(xq.iter()).map(|(a, b)| a * b).sum();
+                }
+                xq.copy_from_slice(&t);
+                for (a, &dof) in self.support.iter().enumerate() {
+                    z[q * p + a] = t[dof];
+                }
+            }
+            band.solve_factored(piv, &mut z);
+            // y_q = t_q - D_q^-1 on (all, P) times c_q, c_q = sum_s F_s z_{q-s}
+            for q in 0..len {
+                c.fill(C64::new(0.0, 0.0));
+                for (s, f) in &self.coupling {
+                    let src = q as isize - s;
+                    if src < 0 || src >= len as isize {
+                        continue;
+                    }
+                    let zs = &z[src as usize * p..(src as usize + 1) * p];
+                    for (a, ca) in c.iter_mut().enumerate() {
+                        *ca += f[a * p..(a + 1) * p].iter().zip(zs).map(|(u, v)| u * v).sum::<C64>();
+                    }
+                }
+                let at = line(q);
+                let d = &dinv[at * n * n..(at + 1) * n * n];
+                let xq = &mut x[at * n..(at + 1) * n];
+                for (r, xr) in xq.iter_mut().enumerate() {
+                    *xr -= self.support.iter().zip(&c).map(|(&dof, ca)| d[r * n + dof] * ca).sum::<C64>();
+                }
+            }
+        }
+    }
+}
+
+/// One class: its lines, the preconditioner's factors, and the coupling lists.
 struct Class<'a> {
     op: &'a Operator,
     ks: Vec<isize>,
     ls: Vec<isize>,
-    /// Diagonal blocks per (il, ik).
-    diag: Vec<C64>,
-    /// The exact inverse of the tone-a operator per l.
+    /// Angular frequency of each line (l-major), rad/s.
+    omegas: Vec<f64>,
+    /// The exact inverse of the tone-a operator per l (times that of tone b per k).
     precond: Precond,
     /// The coupling matrices' non-zero entries (row, column, value) per class offset, tone a and tone b
     /// (a mesh's stiffness couples only its two gears: 4 entries of N^2).
@@ -377,33 +513,41 @@ impl<'a> Class<'a> {
             if g == 0 {
                 return Vec::new();
             }
-            let h = op.stiff[t].0 as isize;
+            let h = op.stiff[t].h as isize;
             let smax = h / g as isize;
             (-smax..=smax).filter(|&s| s != 0).map(|s| (s, s * g as isize)).collect()
         };
         let (couple_a, couple_b) = (coupling(0), coupling(1));
-        let mut diag = Vec::with_capacity(ks.len() * ls.len() * n * n);
-        for &l in &ls {
-            for &k in &ks {
-                op.diagonal(k, l, &mut diag);
-            }
-        }
-        let na = ks.len();
-        let support: Vec<usize> = (0..n)
-            .filter(|&d| {
-                couple_a.iter().any(|&(_, j)| {
-                    op.k(0, j)
-                        .is_some_and(|m| (0..n).any(|e| m[d * n + e].norm_sqr() > 0.0 || m[e * n + d].norm_sqr() > 0.0))
+        let omegas: Vec<f64> = ls.iter().flat_map(|&l| ks.iter().map(move |&k| op.omega(k, l))).collect();
+        let (na, nb) = (ks.len(), ls.len());
+        let support = |t: usize, couple: &[(isize, isize)]| -> Vec<usize> {
+            (0..n)
+                .filter(|&d| {
+                    couple.iter().any(|&(_, j)| {
+                        op.k(t, j).is_some_and(|m| {
+                            (0..n).any(|e| m[d * n + e].norm_sqr() > 0.0 || m[e * n + d].norm_sqr() > 0.0)
+                        })
+                    })
                 })
-            })
-            .collect();
-        let precond = if support.len() < n {
-            match reduced(op, &couple_a, &support, &diag, na, ls.len()) {
-                Some(p) => p,
-                None => Precond::Full(full(op, &couple_a, &diag, na, ls.len())?),
+                .collect()
+        };
+        let (support_a, support_b) = (support(0, &couple_a), support(1, &couple_b));
+        let reduced = || -> Option<Precond> {
+            if support_a.len() >= n {
+                return None;
             }
-        } else {
-            Precond::Full(full(op, &couple_a, &diag, na, ls.len())?)
+            let dinv = inverses(op, &omegas)?;
+            let a = Chains::new(op, 0, &couple_a, &support_a, &dinv, na, nb)?;
+            let b = if support_b.is_empty() || support_b.len() >= n {
+                None
+            } else {
+                Some(Chains::new(op, 1, &couple_b, &support_b, &dinv, na, nb)?)
+            };
+            Some(Precond::Reduced { dinv, a, b })
+        };
+        let precond = match reduced() {
+            Some(p) => p,
+            None => Precond::Full(full(op, &couple_a, &omegas, na, nb)?),
         };
         let sparse = |t: usize, couple: &[(isize, isize)]| -> Vec<Coupling> {
             couple
@@ -417,15 +561,34 @@ impl<'a> Class<'a> {
                 .collect()
         };
         let (sparse_a, sparse_b) = (sparse(0, &couple_a), sparse(1, &couple_b));
-        Some(Self { op, ks, ls, diag, precond, sparse_a, sparse_b })
+        Some(Self { op, ks, ls, omegas, precond, sparse_a, sparse_b })
     }
+}
+
+/// The inverses of the diagonal blocks D(w) at the angular frequencies `omegas` (N x N, row-major, one
+/// after another); `None` when one is singular.
+fn inverses(op: &Operator, omegas: &[f64]) -> Option<Vec<C64>> {
+    let n = op.n;
+    let mut out = Vec::with_capacity(omegas.len() * n * n);
+    let mut d = vec![C64::new(0.0, 0.0); n * n];
+    for &w in omegas {
+        op.diagonal(w, &mut d);
+        if n == 4 {
+            let inv = nalgebra::Matrix4::from_row_slice(&d).try_inverse()?;
+            out.extend((0..16).map(|e| inv[(e / 4, e % 4)]));
+        } else {
+            let inv = nalgebra::DMatrix::from_row_slice(n, n, &d).try_inverse()?;
+            out.extend((0..n * n).map(|e| inv[(e / n, e % n)]));
+        }
+    }
+    Some(out)
 }
 
 /// The full band of the tone-a operator per l, factored (see [`Precond`]); `None` for an exactly zero pivot.
 fn full(
     op: &Operator,
     couple_a: &[(isize, isize)],
-    diag: &[C64],
+    omegas: &[f64],
     na: usize,
     nl: usize,
 ) -> Option<Vec<(Band, Vec<usize>)>> {
@@ -433,10 +596,11 @@ fn full(
     let band_blocks = couple_a.iter().map(|c| c.0.unsigned_abs()).max().unwrap_or(0);
     let bw = (band_blocks + 1) * n - 1;
     let mut lu = Vec::with_capacity(nl);
+    let mut d = vec![C64::new(0.0, 0.0); n * n];
     for il in 0..nl {
         let mut a = Band::new(na * n, bw, bw);
         for ik in 0..na {
-            let d = &diag[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
+            op.diagonal(omegas[il * na + ik], &mut d);
             for r in 0..n {
                 for c in 0..n {
                     a.add(ik * n + r, ik * n + c, d[r * n + c]);
@@ -461,64 +625,6 @@ fn full(
     Some(lu)
 }
 
-/// The reduced preconditioner (see [`Precond`]) on the coupled DOFs `support`; `None` when a diagonal
-/// block D_k or a reduced band cannot be factored (the full band is used then).
-fn reduced(
-    op: &Operator,
-    couple_a: &[(isize, isize)],
-    support: &[usize],
-    diag: &[C64],
-    na: usize,
-    nl: usize,
-) -> Option<Precond> {
-    let (n, p) = (op.n, support.len());
-    let mut dinv = Vec::with_capacity(diag.len());
-    for d in diag.chunks_exact(n * n) {
-        if n == 4 {
-            let inv = nalgebra::Matrix4::from_row_slice(d).try_inverse()?;
-            dinv.extend((0..16).map(|e| inv[(e / 4, e % 4)]));
-        } else {
-            let inv = nalgebra::DMatrix::from_row_slice(n, n, d).try_inverse()?;
-            dinv.extend((0..n * n).map(|e| inv[(e / n, e % n)]));
-        }
-    }
-    let coupling: Vec<(isize, Vec<C64>)> = couple_a
-        .iter()
-        .filter_map(|&(s, j)| {
-            let m = op.k(0, j)?;
-            Some((s, (0..p * p).map(|e| m[support[e / p] * n + support[e % p]]).collect()))
-        })
-        .collect();
-    let band_blocks = coupling.iter().map(|c| c.0.unsigned_abs()).max().unwrap_or(0);
-    let bw = (band_blocks + 1) * p - 1;
-    let mut bands = Vec::with_capacity(nl);
-    for il in 0..nl {
-        let mut b = Band::new(na * p, bw, bw);
-        for ik in 0..na {
-            let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
-            for a in 0..p {
-                b.add(ik * p + a, ik * p + a, C64::new(1.0, 0.0));
-            }
-            for (s, f) in &coupling {
-                let src = ik as isize - s;
-                if src < 0 || src >= na as isize {
-                    continue;
-                }
-                // G_k F_s, G_k = D_k^-1 on P x P
-                for a in 0..p {
-                    for c in 0..p {
-                        let v: C64 = (0..p).map(|e| d[support[a] * n + support[e]] * f[e * p + c]).sum();
-                        b.add(ik * p + a, src as usize * p + c, v);
-                    }
-                }
-            }
-        }
-        let pivots = b.factor()?;
-        bands.push((b, pivots));
-    }
-    Some(Precond::Reduced { support: support.to_vec(), dinv, coupling, bands })
-}
-
 impl Class<'_> {
     fn len(&self) -> usize {
         self.ks.len() * self.ls.len() * self.op.n
@@ -528,19 +634,10 @@ impl Class<'_> {
     fn apply(&self, x: &[C64], y: &mut [C64]) {
         let (n, na, nb) = (self.op.n, self.ks.len(), self.ls.len());
         y.fill(C64::new(0.0, 0.0));
-        let block = |y: &mut [C64], at: usize, m: &[C64], from: usize| {
-            for r in 0..n {
-                let mut acc = C64::new(0.0, 0.0);
-                for c in 0..n {
-                    acc += m[r * n + c] * x[from + c];
-                }
-                y[at + r] += acc;
-            }
-        };
         for il in 0..nb {
             for ik in 0..na {
                 let at = (il * na + ik) * n;
-                block(y, at, &self.diag[(il * na + ik) * n * n..(il * na + ik + 1) * n * n], at);
+                self.op.diagonal_mul_add(self.omegas[il * na + ik], &x[at..at + n], &mut y[at..at + n]);
                 for (s, entries) in &self.sparse_a {
                     let src = ik as isize - s;
                     if src >= 0 && src < na as isize {
@@ -559,7 +656,7 @@ impl Class<'_> {
         }
     }
 
-    /// x = P^-1 x in place (tone-a operator per l).
+    /// x = P^-1 x in place (see [`Precond`]).
     fn precondition(&self, x: &mut [C64]) {
         let (n, na) = (self.op.n, self.ks.len());
         let m = na * n;
@@ -569,45 +666,17 @@ impl Class<'_> {
                     lu.solve_factored(piv, &mut x[il * m..(il + 1) * m]);
                 }
             }
-            Precond::Reduced { support, dinv, coupling, bands } => {
-                let p = support.len();
-                let mut t = vec![C64::new(0.0, 0.0); n];
-                let mut z = vec![C64::new(0.0, 0.0); na * p];
-                let mut c = vec![C64::new(0.0, 0.0); p];
-                for (il, (band, piv)) in bands.iter().enumerate() {
-                    let xl = &mut x[il * m..(il + 1) * m];
-                    // t_k = D_k^-1 x_k (kept in x), its coupled DOFs the reduced right-hand side
-                    for ik in 0..na {
-                        let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
-                        let xk = &mut xl[ik * n..(ik + 1) * n];
-                        for (r, tr) in t.iter_mut().enumerate() {
-                            *tr = (0..n).map(|c| d[r * n + c] * xk[c]).sum();
-                        }
-                        xk.copy_from_slice(&t);
-                        for (a, &dof) in support.iter().enumerate() {
-                            z[ik * p + a] = t[dof];
-                        }
+            Precond::Reduced { dinv, a, b } => {
+                a.solve(dinv, n, x);
+                if let Some(b) = b {
+                    // x = A_b^-1 D x
+                    let mut t = vec![C64::new(0.0, 0.0); n];
+                    for (xq, &w) in x.chunks_exact_mut(n).zip(&self.omegas) {
+                        t.fill(C64::new(0.0, 0.0));
+                        self.op.diagonal_mul_add(w, xq, &mut t);
+                        xq.copy_from_slice(&t);
                     }
-                    band.solve_factored(piv, &mut z);
-                    // y_k = t_k - D_k^-1 on (all, P) times c_k, c_k = sum_s F_s z_{k-s}
-                    for ik in 0..na {
-                        c.fill(C64::new(0.0, 0.0));
-                        for (s, f) in coupling {
-                            let src = ik as isize - s;
-                            if src < 0 || src >= na as isize {
-                                continue;
-                            }
-                            let zs = &z[src as usize * p..(src as usize + 1) * p];
-                            for (a, ca) in c.iter_mut().enumerate() {
-                                *ca += (0..p).map(|e| f[a * p + e] * zs[e]).sum::<C64>();
-                            }
-                        }
-                        let d = &dinv[(il * na + ik) * n * n..(il * na + ik + 1) * n * n];
-                        let xk = &mut xl[ik * n..(ik + 1) * n];
-                        for (r, xr) in xk.iter_mut().enumerate() {
-                            *xr -= (0..p).map(|a| d[r * n + support[a]] * c[a]).sum::<C64>();
-                        }
-                    }
+                    b.solve(dinv, n, x);
                 }
             }
         }
@@ -633,6 +702,7 @@ fn gmres(
     let len = class.len();
     let bnorm = norm(b);
     let mut tmp = vec![C64::new(0.0, 0.0); len];
+    let (mut z, mut w) = (tmp.clone(), tmp.clone());
     let (mut x, mut r) = match x0 {
         Some(x) => {
             class.apply(&x, &mut tmp);
@@ -660,10 +730,9 @@ fn gmres(
         g[0] = C64::new(beta, 0.0);
         let mut used = 0;
         for j in 0..RESTART {
-            let mut z = v[j].clone();
+            z.copy_from_slice(&v[j]);
             class.precondition(&mut z);
-            class.apply(&z, &mut tmp);
-            let mut w = tmp.clone();
+            class.apply(&z, &mut w);
             for (i, vi) in v.iter().enumerate() {
                 let hij: C64 = vi.iter().zip(&w).map(|(a, b)| a.conj() * b).sum();
                 h[i][j] = hij;
@@ -743,7 +812,7 @@ fn solve_with(
     // the classes holding a forcing line: (k, 0) lines of tone a, (0, l) lines of tone b
     let mut classes: Vec<(isize, isize)> = Vec::new();
     for t in 0..2 {
-        let hf = op.force[t].0 as isize;
+        let hf = op.force[t].h as isize;
         for j in -hf.min(if t == 0 { kk } else { ll })..=hf.min(if t == 0 { kk } else { ll }) {
             let (k, l) = if t == 0 { (j, 0) } else { (0, j) };
             if op.forcing(k, l).is_some() {
@@ -1000,9 +1069,9 @@ pub fn solve(
 ) -> Result<(TwoToneSolution, TwoToneReport), SolverError> {
     let op = Operator::new(form);
     let g = op.strides;
-    let forced = [op.force[0].0, op.force[1].0];
+    let forced = [op.force[0].h, op.force[1].h];
     let start = |t: usize| {
-        let need = (2 * op.stiff[t].0).max(forced[t]).max(8);
+        let need = (2 * op.stiff[t].h).max(forced[t]).max(8);
         if g[t] == 0 { 0 } else { need.saturating_sub(g[t] / 2).div_ceil(g[t]).max(1) }
     };
     let mut n = [start(0), start(1)];
