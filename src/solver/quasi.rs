@@ -823,17 +823,33 @@ fn solve_with(
             }
         }
     }
+    // the coefficients are real, so Y_{-k,-l} = conj(Y_kl): of a class and its mirror (-k mod g_a, -l mod
+    // g_b), whose lines are the negated ones, one is solved and the other mirrored
+    let mirror = |c: (isize, isize)| (residue(-c.0, op.strides[0]), residue(-c.1, op.strides[1]));
+    let solved_here: Vec<(isize, isize)> =
+        classes.iter().copied().filter(|&c| !(mirror(c) < c && classes.contains(&mirror(c)))).collect();
     // the classes are independent: solved in parallel, gathered in order
     use rayon::prelude::*;
-    let solved: Vec<Option<ClassSolution>> = classes
+    let solved: Vec<Option<ClassSolution>> = solved_here
         .par_iter()
         .map(|&(ra, rb)| solve_class(op, [ra, rb], [kk, ll], rtol, guess))
         .collect::<Result<_, _>>()?;
     let mut iterations = 0;
-    for c in solved.into_iter().flatten() {
-        iterations += c.iterations;
-        coarse.push_class(&c.ks, &c.ls, op.strides, &c.gmres);
-        sol.push_class(&c.ks, &c.ls, op.strides, &c.corrected);
+    for &c in &classes {
+        let (at, mirrored) = match solved_here.iter().position(|&x| x == c) {
+            Some(i) => (i, false),
+            None => (solved_here.iter().position(|&x| x == mirror(c)).expect("a class or its mirror is solved"), true),
+        };
+        let Some(cs) = &solved[at] else { continue };
+        if mirrored {
+            let m = cs.mirrored(n);
+            coarse.push_class(&m.ks, &m.ls, op.strides, &m.gmres);
+            sol.push_class(&m.ks, &m.ls, op.strides, &m.corrected);
+        } else {
+            iterations += cs.iterations;
+            coarse.push_class(&cs.ks, &cs.ls, op.strides, &cs.gmres);
+            sol.push_class(&cs.ks, &cs.ls, op.strides, &cs.corrected);
+        }
     }
     if sol.coeffs.iter().any(|c| !c.re.is_finite() || !c.im.is_finite()) {
         return Err(SolverError::NonFinite { what: "two-frequency harmonic-balance solution".into() });
@@ -857,6 +873,22 @@ struct ClassSolution {
     gmres: Vec<C64>,
     corrected: Vec<C64>,
     iterations: usize,
+}
+
+impl ClassSolution {
+    /// The mirror class (lines -k, -l, ascending) and its coefficients conj(Y_kl), `n` DOFs per line.
+    fn mirrored(&self, n: usize) -> ClassSolution {
+        let negated = |xs: &[isize]| xs.iter().rev().map(|x| -x).collect::<Vec<_>>();
+        // line (ik, il) of the mirror is line (na - 1 - ik, nb - 1 - il) here: the l-major order reversed
+        let flip = |y: &[C64]| y.chunks_exact(n).rev().flat_map(|line| line.iter().map(|c| c.conj())).collect();
+        ClassSolution {
+            ks: negated(&self.ks),
+            ls: negated(&self.ls),
+            gmres: flip(&self.gmres),
+            corrected: flip(&self.corrected),
+            iterations: 0,
+        }
+    }
 }
 
 /// Solves the class of residues `r` (k mod g_a, l mod g_b) at truncation `h`, from `guess` when given;
