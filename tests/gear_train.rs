@@ -147,24 +147,25 @@ fn incommensurate_two_stage_box_solves_to_1e_8() {
 }
 
 /// The two-frequency balance's error estimate against its true error measured by the long direct
-/// integration (the paper's rk4 product over the common period of the 20/40-15/45 train, asked for 1e-11):
+/// integration (the paper's rk4 product over the common period of the 20/40-15/45 train, asked for 1e-12):
 /// at each tolerance the time-domain difference from the integration, relative to the state's size,
 /// stays below the estimate, and the estimate is not uselessly far above it. Tolerances of 1e-7 and below
-/// are not checked here: the truth would be the integration's own error (about 4e-10 in this measure).
+/// are not checked here: the truth would come near the integration's own error (3.9e-11 in this measure,
+/// against the balance solved to 1e-10; 3.9e-10 when the integration was asked for 1e-11).
 #[test]
 fn two_frequency_error_estimate_bounds_the_error_against_direct_integration() {
     let t = train([20, 40, 15, 45]);
     let (sys, _) = common(&t);
-    let opts = SolverOptions { method: Method::Rk4, tolerance: 1e-11, ..Default::default() };
+    let opts = SolverOptions { method: Method::Rk4, tolerance: 1e-12, ..Default::default() };
     let direct = solve(&sys, &opts).unwrap();
     assert!(direct.trusted, "{:?}", direct.warnings);
     let form = t.matrices().two_tone(t.speed_hz);
-    for tol in [1e-4, 1e-5, 1e-6] {
+    for tol in [1e-3, 1e-4, 1e-5, 1e-6] {
         let (q, rep) = quasi::solve(&form, tol, 4096).unwrap();
         let truth = compare(&q, &direct, &sys, 97);
-        // the truth must stand clear of the integration's own error (1e-11 asked, 4e-10 at most in the
+        // the truth must stand ten times clear of the integration's own error (1e-12 asked, 3.9e-11 in the
         // time-domain measure), else it measures the reference
-        assert!(truth > 1e-8, "tol {tol:e}: truth {truth:e} too close to the reference's own error");
+        assert!(truth > 4e-10, "tol {tol:e}: truth {truth:e} too close to the reference's own error");
         assert!(
             truth <= rep.error_estimate,
             "tol {tol:e}: truth {truth:e} above the estimate {:e}",

@@ -98,6 +98,9 @@ pub struct TrainSummary {
     pub notes: Vec<String>,
 }
 
+/// A line of the sensor quantity: angular frequency (rad/s), complex coefficient (m/s), label.
+type Line = (f64, Complex<f64>, String);
+
 /// The solved train: the sensor quantity as lines (angular frequency rad/s, complex amplitude Z with
 /// s(t) = Re Z_0 + 2 Re sum Z e^{i w t}) plus the summary.
 pub struct TrainSolution {
@@ -245,13 +248,19 @@ pub fn solve(scene: &TrainScene) -> Result<TrainSolution, Error> {
         quasi_lines(&sol, &u)
     };
     let lines = merge_equal_frequencies(lines);
-    let top = lines.iter().map(|l| l.1.norm()).fold(0.0, f64::max);
-    let mut listed: Vec<&(f64, Complex<f64>, String)> = lines.iter().collect();
-    listed.sort_by(|a, b| b.1.norm().total_cmp(&a.1.norm()));
+    // the strongest lines: each modulus once, the top SUMMARY_LINES picked before sorting
+    let mut listed: Vec<(f64, &Line)> = lines.iter().map(|l| (l.1.norm(), l)).collect();
+    let top = listed.iter().map(|l| l.0).fold(0.0, f64::max);
+    // largest first, equal ones by frequency
+    let order = |a: &(f64, &Line), b: &(f64, &Line)| b.0.total_cmp(&a.0).then(a.1.0.total_cmp(&b.1.0));
+    if listed.len() > SUMMARY_LINES {
+        listed.select_nth_unstable_by(SUMMARY_LINES, order);
+        listed.truncate(SUMMARY_LINES);
+    }
+    listed.sort_by(order);
     summary.lines = listed
         .iter()
-        .take(SUMMARY_LINES)
-        .map(|(w, z, label)| TrainLine {
+        .map(|(_, (w, z, label))| TrainLine {
             frequency_hz: w / (2.0 * PI),
             amplitude: if *w == 0.0 { z.norm() } else { 2.0 * z.norm() },
             label: label.clone(),
@@ -305,14 +314,15 @@ fn common_lines(sys: &SecondOrderSystem, steady: &SteadyState, u: &[f64]) -> Vec
 fn quasi_lines(sol: &TwoToneSolution, u: &[f64]) -> Vec<(f64, Complex<f64>, String)> {
     sol.lines_held()
         .iter()
-        .filter_map(|&(k, l)| {
+        .enumerate()
+        .filter_map(|(j, &(k, l))| {
             let w = sol.frequency_rad_s(k, l);
             // each real line once: w > 0, or w = 0 only for (0, 0)
             if w < 0.0 || (w == 0.0 && (k, l) != (0, 0)) {
                 return None;
             }
             let z: Complex<f64> =
-                u.iter().enumerate().map(|(i, wt)| sol.coefficient(i, k, l) * Complex::new(0.0, w * wt)).sum();
+                sol.line_coefficients(j).iter().zip(u).map(|(y, wt)| y * Complex::new(0.0, w * wt)).sum();
             Some((w, z, format!("{k} nu1 + {l} nu2")))
         })
         .collect()
@@ -336,18 +346,6 @@ fn sensor_factor(unit: SensorUnit, sensitivity: f64, w: f64) -> Complex<f64> {
         _ => Complex::new(1.0, 0.0),
     };
     f * (scale * sensitivity)
-}
-
-fn unit_name(u: SensorUnit) -> &'static str {
-    match u {
-        SensorUnit::MetrePerSecondSquared => "m/s^2",
-        SensorUnit::G => "g",
-        SensorUnit::MetrePerSecond => "m/s",
-        SensorUnit::MillimetrePerSecond => "mm/s",
-        SensorUnit::Metre => "m",
-        SensorUnit::Micrometre => "um",
-        SensorUnit::Volt => "V",
-    }
 }
 
 /// Samples of sum Re(Z) + 2 Re sum Z e^{i w t} at n / fs, by a phasor per line advanced one sample at a time
@@ -388,7 +386,7 @@ fn write_recording(scene: &TrainScene, sol: &TrainSolution, out: &std::path::Pat
         channels.push((
             s.channel,
             format!("ch{}", s.channel),
-            unit_name(s.unit).into(),
+            s.unit.name().into(),
             synthesize(&lines, o.sample_rate_hz, frames),
         ));
     }

@@ -125,6 +125,22 @@ pub enum SensorUnit {
     Volt,
 }
 
+impl SensorUnit {
+    /// The unit's name as machine files, sidecars and `--unit` write it (`m/s^2`, `g`, `m/s`, `mm/s`, `m`,
+    /// `um`, `V`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SensorUnit::MetrePerSecondSquared => "m/s^2",
+            SensorUnit::G => "g",
+            SensorUnit::MetrePerSecond => "m/s",
+            SensorUnit::MillimetrePerSecond => "mm/s",
+            SensorUnit::Metre => "m",
+            SensorUnit::Micrometre => "um",
+            SensorUnit::Volt => "V",
+        }
+    }
+}
+
 /// A vibration sensor channel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sensor {

@@ -20,7 +20,7 @@
 use super::analysis::{Analysed, analyse_parts};
 use super::verdict::{concentration, impulse_tooth};
 use super::*;
-use crate::model::kinematics::{Machine, Member, Ratio, SensorUnit, Stage};
+use crate::model::kinematics::{Machine, Member, Ratio, Stage};
 use crate::report::summary::{
     MachineDiagnosis, MachineSideband, NamedHz, StageDiagnosis, StageGear, StageHarmonic, StageKind, ToothOrigin,
 };
@@ -147,19 +147,6 @@ pub(super) fn shaft_hz(o: &Options, tracked_hz: Option<f64>) -> ShaftHz {
     ))
 }
 
-/// The unit name the rest of the pipeline reads (as a sidecar or `--unit` says it).
-fn unit_name(u: SensorUnit) -> &'static str {
-    match u {
-        SensorUnit::MetrePerSecondSquared => "m/s^2",
-        SensorUnit::G => "g",
-        SensorUnit::MetrePerSecond => "m/s",
-        SensorUnit::MillimetrePerSecond => "mm/s",
-        SensorUnit::Metre => "m",
-        SensorUnit::Micrometre => "um",
-        SensorUnit::Volt => "V",
-    }
-}
-
 /// The pair options that track the machine's tracked shaft: its teeth and its mate's, its nominal speed
 /// (the given speed or the file's, through the ratio chain), the tachometer, the sensors' unit.
 ///
@@ -205,7 +192,7 @@ fn pair_options(path: &Path, o: &Options, m: &Machine) -> Result<Options, Error>
     p.teeth = Some((z, mate as usize));
     if p.unit.is_none() {
         if let Some(s) = m.sensors.first() {
-            p.unit = Some(unit_name(s.unit).to_string());
+            p.unit = Some(s.unit.name().to_string());
             if p.sensitivity.is_none() && s.sensitivity != 1.0 {
                 p.sensitivity = Some(s.sensitivity);
             }
@@ -274,7 +261,8 @@ fn analyse_machine(
     let Analysed { mut diagnosis, map, deciding } = analyse_parts(path, rec, p, geometry)?;
     let t = tracked(m, p);
     let mut fft = Fft::new();
-    let stages = (0..m.stages.len()).map(|k| stage(&mut fft, &diagnosis, m, t, k, &map, &deciding, p)).collect();
+    let cx = StageContext { d: &diagnosis, m, t, map: &map, deciding: &deciding, o: p };
+    let stages = (0..m.stages.len()).map(|k| stage(&mut fft, &cx, k)).collect();
     if t != m.reference() || m.tachometer.as_ref().is_some_and(|x| x.shaft != t) {
         diagnosis.warnings.push(format!(
             "orders and the averages' angles are those of the tracked shaft `{}`; every other shaft's angle is it times the exact ratio",
@@ -290,18 +278,22 @@ fn tracked_order(m: &Machine, t: usize, r: Ratio) -> f64 {
     r.to_f64() / m.order(t).abs().to_f64()
 }
 
-/// Stage `k`'s gears, lines and (planetary) orders and planet averages.
-#[allow(clippy::too_many_arguments)]
-fn stage(
-    fft: &mut Fft,
-    d: &Diagnosis,
-    m: &Machine,
+/// What every stage of one recording is read against: the pair pipeline's diagnosis, the machine, the
+/// tracked shaft, its angle map, the deciding channel's samples and the options.
+#[derive(Clone, Copy)]
+struct StageContext<'a> {
+    d: &'a Diagnosis,
+    m: &'a Machine,
+    /// Index of the tracked shaft.
     t: usize,
-    k: usize,
-    map: &AngleMap,
-    deciding: &[f32],
-    o: &Options,
-) -> StageDiagnosis {
+    map: &'a AngleMap,
+    deciding: &'a [f32],
+    o: &'a Options,
+}
+
+/// Stage `k`'s gears, lines and (planetary) orders and planet averages.
+fn stage(fft: &mut Fft, cx: &StageContext<'_>, k: usize) -> StageDiagnosis {
+    let StageContext { d, m, t, .. } = *cx;
     let mesh = m.mesh_order(k).unwrap_or(Ratio::ZERO);
     let f_t = d.shaft_hz.reference();
     let gears = match &m.stages[k] {
@@ -332,7 +324,7 @@ fn stage(
         mesh_order,
         mesh_hz: f_t.map(|f| f * mesh_order),
         mesh_harmonics: harmonics(d, m, t, k),
-        planetary: matches!(m.stages[k], Stage::Planetary(_)).then(|| planetary(fft, d, m, t, k, map, deciding, o)),
+        planetary: matches!(m.stages[k], Stage::Planetary(_)).then(|| planetary(fft, cx, k)),
     }
 }
 

@@ -4,8 +4,8 @@
 
 use super::super::analysis::tsa_indicators;
 use super::super::*;
-use super::tracked_order;
-use crate::model::kinematics::{Machine, Member, Stage};
+use super::{StageContext, tracked_order};
+use crate::model::kinematics::{Member, Stage};
 use crate::report::summary::{PlanetIndicators, PlanetaryDiagnosis};
 use crate::signal::planetary::{PlanetSeparation, SeparationWindow, planet_averages};
 
@@ -14,17 +14,8 @@ use crate::signal::planetary::{PlanetSeparation, SeparationWindow, planet_averag
 const PLANET_WINDOW_TEETH: usize = 4;
 
 /// A planetary stage's characteristic orders (of the tracked shaft) and its planets' averages.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn planetary(
-    fft: &mut Fft,
-    d: &Diagnosis,
-    m: &Machine,
-    t: usize,
-    k: usize,
-    map: &AngleMap,
-    deciding: &[f32],
-    o: &Options,
-) -> PlanetaryDiagnosis {
+pub(super) fn planetary(fft: &mut Fft, cx: &StageContext<'_>, k: usize) -> PlanetaryDiagnosis {
+    let StageContext { d, m, t, .. } = *cx;
     let Stage::Planetary(st) = &m.stages[k] else { unreachable!("called for planetary stages") };
     let f_t = d.shaft_hz.reference();
     let mut orders = BTreeMap::new();
@@ -43,7 +34,7 @@ pub(super) fn planetary(
         }
     }
     let frequencies_hz = f_t.map(|f| orders.iter().map(|(k, v)| (k.clone(), v * f)).collect()).unwrap_or_default();
-    let (planet_averages, planet_fault_energy, no_averages) = match separate(fft, m, t, st, map, deciding, o) {
+    let (planet_averages, planet_fault_energy, no_averages) = match separate(fft, cx, st) {
         Ok((a, e)) => (a, e, None),
         Err(why) => (Vec::new(), Vec::new(), Some(why)),
     };
@@ -61,16 +52,12 @@ pub(super) fn planetary(
 /// The planets' separated averages (McFadden 1991/1994) of the deciding channel on the carrier's angle,
 /// with the indicators of each (its mesh order: the planet's teeth, per planet revolution relative to the
 /// carrier).
-#[allow(clippy::too_many_arguments)]
 fn separate(
     fft: &mut Fft,
-    m: &Machine,
-    t: usize,
+    cx: &StageContext<'_>,
     st: &crate::model::kinematics::PlanetaryStage,
-    map: &AngleMap,
-    deciding: &[f32],
-    o: &Options,
 ) -> Result<(Vec<PlanetIndicators>, Vec<f64>), String> {
+    let StageContext { m, t, map, deciding, o, .. } = *cx;
     let Member::Shaft(c) = st.carrier else {
         return Err("the carrier is fixed: the planets do not pass the sensor".into());
     };
