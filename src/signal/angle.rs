@@ -841,7 +841,7 @@ mod tests {
             (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let x = (0..n)
-            .map(|i| {
+            .map(|_| {
                 angle.push(th);
                 let v = (TAU * 60.0 * th).cos()
                     + 0.3 * (TAU * 59.0 * th + 0.5).cos()
