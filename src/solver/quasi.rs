@@ -187,11 +187,11 @@ pub struct TwoToneReport {
     /// Error of the linear solves (GMRES), in the measure of [`difference`]: the size of one preconditioned
     /// correction of GMRES's solution, which is then applied (included in `error_estimate`).
     pub solve_error: f64,
-    /// Classes (k mod g_a, l mod g_b) solved.
+    /// Classes (k mod g_a, l mod g_b) held (of a class and its mirror only one is solved).
     pub classes: usize,
     /// Coupling strides g_a, g_b of the stiffness harmonics (0: that tone does not vary the stiffness).
     pub strides: [usize; 2],
-    /// Total GMRES iterations over all classes and truncations.
+    /// Total GMRES iterations over the classes solved and the truncations.
     pub iterations: usize,
 }
 
