@@ -230,7 +230,9 @@ def test_two_threads_diagnose_at_once_and_agree():
         t.start()
     for t in threads:
         t.join()
-    assert json_part(out[0]) == json_part(out[1]) and out[0]["verdict"]["state"] == "faulty"
+    assert json_part(out[0]) == json_part(out[1])
+    # without a baseline the crack's FM4 (7.6) lies between the absolute limits 6.5 and 9: suspect
+    assert out[0]["verdict"]["state"] == "suspect" and out[0]["verdict"]["gear"] == "pinion"
 
 
 def test_fleet_on_dask_equals_the_cli(tmp_path):
