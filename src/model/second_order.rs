@@ -143,6 +143,57 @@ impl PeriodicSystem for SecondOrderSystem {
             f[n + i] = solved[(i, 2 * n)];
         }
     }
+    /// P at equally spaced times with every mass, damping and stiffness entry a Fourier series: each entry
+    /// sampled once over all the times ([`FourierSeries::sample_uniform`](crate::system::FourierSeries::sample_uniform):
+    /// one inverse FFT over a period, else turned phasors) instead of a sine and cosine per harmonic and
+    /// time, and no forcing (the multiplier companion samples P alone; the press over its cam period:
+    /// 14600 times, most of its `auto` solve). Piecewise entries: P at each time.
+    fn eval_matrix_uniform(&self, t0: f64, dt: f64, count: usize, out: &mut Vec<f64>) {
+        let sampled = |entries: &[Coefficient]| -> Option<Vec<Vec<f64>>> {
+            entries
+                .iter()
+                .map(|c| match c {
+                    Coefficient::Fourier(s) => {
+                        let mut v = vec![0.0; count];
+                        s.sample_uniform(t0, dt, &mut v);
+                        Some(v)
+                    }
+                    Coefficient::Piecewise(_) => None,
+                })
+                .collect()
+        };
+        let (Some(k), Some(c), Some(m)) = (sampled(&self.stiffness), sampled(&self.damping), sampled(&self.mass))
+        else {
+            let mut p = DMatrix::zeros(2 * self.dof, 2 * self.dof);
+            for j in 0..count {
+                self.eval_matrix(t0 + j as f64 * dt, Side::Right, &mut p);
+                out.extend_from_slice(p.as_slice());
+            }
+            return;
+        };
+        let n = self.dof;
+        let mut rhs = DMatrix::zeros(n, 2 * n);
+        for j in 0..count {
+            for i in 0..n {
+                for l in 0..n {
+                    rhs[(i, l)] = k[i * n + l][j];
+                    rhs[(i, n + l)] = c[i * n + l][j];
+                }
+            }
+            let solved = match &self.constant_mass_inverse {
+                Some(inverse) => inverse * &rhs,
+                None => DMatrix::from_fn(n, n, |i, l| m[i * n + l][j])
+                    .lu()
+                    .solve(&rhs)
+                    .expect("mass matrix checked invertible at construction"),
+            };
+            // P = [0 I; -M^-1 K  -M^-1 C], column by column
+            for col in 0..2 * n {
+                out.extend((0..n).map(|row| f64::from(u8::from(col == n + row))));
+                out.extend((0..n).map(|row| -solved[(row, col)]));
+            }
+        }
+    }
     fn piecewise_constant(&self) -> bool {
         let flat = |c: &Coefficient| matches!(c, Coefficient::Piecewise(_)) || c.is_constant();
         self.mass.iter().chain(&self.damping).chain(&self.stiffness).chain(&self.forcing).all(flat)
@@ -188,5 +239,50 @@ impl PeriodicSystem for SecondOrderSystem {
             .map(Coefficient::harmonics)
             .max()
             .unwrap_or(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::system::FourierSeries;
+
+    #[test]
+    fn eval_matrix_uniform_matches_eval() {
+        // two DOFs with a varying mass (a cam's follower), damping and stiffness, against eval at each time:
+        // over exactly one period (the inverse-FFT path, 64 and 65 times) and not (turned phasors)
+        let w = 2.0 * std::f64::consts::PI / 0.5;
+        let f = |mean: f64, cos: Vec<f64>, sin: Vec<f64>| Coefficient::Fourier(FourierSeries::new(w, mean, cos, sin));
+        let sys = SecondOrderSystem::new(
+            0.5,
+            vec![
+                f(2.0, vec![0.3, 0.1], vec![0.05]),
+                f(0.2, vec![], vec![]),
+                f(0.2, vec![], vec![]),
+                f(1.0, vec![0.1], vec![]),
+            ],
+            vec![f(0.4, vec![0.1], vec![]), f(0.0, vec![], vec![]), f(0.0, vec![], vec![]), f(0.3, vec![], vec![0.02])],
+            vec![
+                f(900.0, vec![80.0, 20.0], vec![10.0]),
+                f(-100.0, vec![], vec![]),
+                f(-100.0, vec![], vec![]),
+                f(500.0, vec![], vec![30.0]),
+            ],
+            vec![f(0.0, vec![1.0], vec![]), f(0.0, vec![], vec![])],
+        )
+        .unwrap();
+        let mut p = DMatrix::zeros(4, 4);
+        for (t0, dt, count) in [(0.0, 0.5 / 64.0, 64), (0.1, 0.5 / 64.0, 65), (0.03, 0.0071, 40)] {
+            let mut out = Vec::new();
+            sys.eval_matrix_uniform(t0, dt, count, &mut out);
+            assert_eq!(out.len(), count * 16);
+            for (j, got) in out.chunks(16).enumerate() {
+                sys.eval_matrix(t0 + j as f64 * dt, Side::Right, &mut p);
+                for (g, want) in got.iter().zip(p.iter()) {
+                    // entries up to ~500: a few hundred eps of the FFT or the turned phasors, and the solve
+                    assert!((g - want).abs() <= 1e-12 * 500.0, "{count} times, time {j}: {g} against {want}");
+                }
+            }
+        }
     }
 }

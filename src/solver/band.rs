@@ -27,14 +27,16 @@ impl Band {
         let k = self.idx(i, j);
         self.ab[k] += v;
     }
-    /// y += A x for the band as built (before [`Band::factor`]): the reference of the tests.
-    #[cfg(test)]
+    fn get(&self, i: usize, j: usize) -> C64 {
+        self.ab[self.idx(i, j)]
+    }
+    /// y += A x for the band as built (before [`Band::factor`]).
     pub(super) fn mul_add(&self, x: &[C64], y: &mut [C64]) {
         for (j, xj) in x.iter().enumerate() {
             for (i, yi) in
                 y.iter_mut().enumerate().take((j + self.kl).min(self.n - 1) + 1).skip(j.saturating_sub(self.ku))
             {
-                *yi += self.ab[self.idx(i, j)] * xj;
+                *yi += self.get(i, j) * xj;
             }
         }
     }
@@ -120,24 +122,25 @@ impl Band {
 /// (for further solves with the same matrix).
 pub(super) type Refined = (Vec<C64>, Vec<C64>, Band, Vec<usize>);
 
-/// r -= A x for the matrix A being solved (from its own coefficients: the band is factored in place).
-pub(super) type Residual<'a> = &'a dyn Fn(&[C64], &mut [C64]);
-
-/// A class system solved, with one step of iterative refinement when `refine` gives the residual: x from
-/// the LU, r = b - A x, the correction A d = r with the same factors, x + d returned with d. The size of d
-/// against x is the rounding error the LU left (a near-singular system, as at a multiplier near +1, makes
-/// it large). Without `refine` d is zero.
-pub(super) fn solve_refined(a: Band, mut b: Vec<C64>, refine: Option<Residual>) -> Option<Refined> {
-    let mut lu = a;
-    let pivots = lu.factor()?;
-    let Some(subtract_product) = refine else {
+/// A class system solved with one step of iterative refinement: x from the LU, the residual r = b - A x,
+/// the correction A d = r with the same factors, x + d returned with d. The size of d against x is the
+/// rounding error the LU left (a near-singular system, as at a multiplier near +1, makes it large).
+pub(super) fn solve_refined(a: Band, mut b: Vec<C64>, refine: bool) -> Option<Refined> {
+    if !refine {
+        let mut lu = a;
+        let pivots = lu.factor()?;
         lu.solve_factored(&pivots, &mut b);
         let zero = vec![C64::new(0.0, 0.0); b.len()];
         return Some((b, zero, lu, pivots));
-    };
-    let mut d = b.clone();
+    }
+    let original = Band { n: a.n, kl: a.kl, ku: a.ku, ab: a.ab.clone() };
+    let mut lu = a;
+    let pivots = lu.factor()?;
+    let rhs = b.clone();
     lu.solve_factored(&pivots, &mut b);
-    subtract_product(&b, &mut d);
+    let mut ax = vec![C64::new(0.0, 0.0); b.len()];
+    original.mul_add(&b, &mut ax);
+    let mut d: Vec<C64> = rhs.iter().zip(&ax).map(|(r, v)| r - v).collect();
     lu.solve_factored(&pivots, &mut d);
     let x = b.iter().zip(&d).map(|(x, dx)| x + dx).collect();
     Some((x, d, lu, pivots))

@@ -276,16 +276,6 @@ impl Classes {
         }
     }
 
-    /// r -= L x for one class (its `members`, `x` and `r` nd values per member): the operator applied from
-    /// its coefficients, for the residual of iterative refinement without a copy of the band.
-    fn subtract_product(&self, members: &[isize], x: &[C64], r: &mut [C64]) {
-        let (nd, band) = (self.nd, self.band_blocks);
-        for (j, &n) in members.iter().enumerate() {
-            let js = j.saturating_sub(band)..(j + band + 1).min(members.len());
-            self.couple_row(n, members, js, x, &mut r[j * nd..(j + 1) * nd]);
-        }
-    }
-
     /// b_j -= L_{m_j n} e for the class members m_j = `members[j]`, j in `js` (`b`: nd values per member,
     /// `e` the nd values of harmonic n): [`Classes::couple`] for a column of blocks, with the fast path of
     /// [`Classes::couple_row`].
@@ -510,7 +500,7 @@ impl Classes {
         let starts = [h + 1 + (r0 - (h + 1)).rem_euclid(g), -h - 1 - (-h - 1 - r0).rem_euclid(g)];
         for (side, start) in [1isize, -1].into_iter().zip(starts) {
             if nd == 1 && !self.varying[0] {
-                if !self.extend_scalar(side, start, members, x, forcing, hf, weight, h_cap, small, beyond) {
+                if !self.extend_scalar(side, start, small, x, (forcing, hf), weight, h_cap, beyond) {
                     return false;
                 }
                 continue;
@@ -574,13 +564,11 @@ impl Classes {
         &self,
         side: isize,
         start: isize,
-        members: &[isize],
+        small: f64,
         x: &[C64],
-        forcing: &[Vec<C64>],
-        hf: usize,
+        (forcing, hf): (&[Vec<C64>], usize),
         weight: f64,
         h_cap: isize,
-        small: f64,
         beyond: &mut [Vec<[f64; 2]>],
     ) -> bool {
         let (g, hc, h) = (self.stride as isize, self.co.h as isize, self.h);
@@ -590,7 +578,6 @@ impl Classes {
         let kd: Vec<C64> = (1..=band as isize).map(|d| k[(hc + side * d * g) as usize]).collect();
         // the class's values in the order of this side: inside members toward it, then the continuation
         let mut seq: Vec<C64> = if side > 0 { x.to_vec() } else { x.iter().rev().copied().collect() };
-        debug_assert_eq!(members.len(), x.len());
         let coupling: f64 = kd.iter().map(|k| k.norm_sqr().sqrt()).sum();
         // how many of the last values were each below the stopping bound of their own harmonic
         let mut quiet = 0;
@@ -740,9 +727,7 @@ fn solve_classes(
         let Some(rhs) = (!members.is_empty()).then(|| classes.rhs(&members, forcing, hf)).flatten() else {
             continue;
         };
-        let residual = |x: &[C64], r: &mut [C64]| classes.subtract_product(&members, x, r);
-        let (x, dx, lu, pivots) = solve_refined(classes.matrix(&members), rhs, refine.then_some(&residual as _))
-            .ok_or(SolverError::Singular)?;
+        let (x, dx, lu, pivots) = solve_refined(classes.matrix(&members), rhs, refine).ok_or(SolverError::Singular)?;
         let weight = if r != 0 && 2 * r != classes.count() { 2.0 } else { 1.0 };
         if want_tail {
             let d = classes.tail(&members, &x, &lu, &pivots, forcing, hf, weight, &mut sums, &mut corr);
@@ -832,18 +817,12 @@ impl Tail {
     /// least 1/2). `None` without a continuation or when even its end does not meet `target`.
     fn predict(&self, of: &HillSolution, target: f64) -> Option<usize> {
         let beyond = self.beyond.as_ref()?;
-        let h = of.harmonics as isize;
         let len = beyond.iter().map(Vec::len).max()?;
         // per component and derivative: the weight beyond H + o for every offset o, over the size
         let mut worst = vec![0.0f64; len + 1];
         for (b, y) in beyond.iter().zip(&of.coeffs) {
             for deriv in 0..2 {
-                let size: f64 = (-h..=h)
-                    .map(|n| {
-                        let w = if deriv == 1 { (n as f64 * of.omega).abs() } else { 1.0 };
-                        y[(n + h) as usize].norm_sqr().sqrt() * w
-                    })
-                    .sum();
+                let size = component_size(y, of.omega, deriv == 1);
                 if size <= 0.0 {
                     continue;
                 }
@@ -865,21 +844,36 @@ impl Tail {
 /// The per-DOF sums of [`Classes::tail`] relative to the solution's own sum_n |Y_n| (times |n| w for
 /// velocities): the largest over components, as in [`relative_size`].
 fn tail_size(sums: &[[f64; 2]], of: &HillSolution) -> f64 {
-    let h = of.harmonics as isize;
     let mut worst: f64 = 0.0;
     for (s, y) in sums.iter().zip(&of.coeffs) {
         for (deriv, err) in s.iter().enumerate() {
-            let size: f64 = (-h..=h)
-                .map(|n| {
-                    y[(n + h) as usize].norm_sqr().sqrt() * if deriv == 1 { (n as f64 * of.omega).abs() } else { 1.0 }
-                })
-                .sum();
+            let size = component_size(y, of.omega, deriv == 1);
             if size > 0.0 {
                 worst = worst.max(err / size);
             }
         }
     }
     worst
+}
+
+/// A component's size in the measure of [`difference`]: sum_n |Y_n| over its coefficients `y` (harmonics
+/// -H..=H), each times |n| w (w = `omega`, rad/s) for the velocity.
+fn component_size(y: &[C64], omega: f64, velocity: bool) -> f64 {
+    let h = (y.len() / 2) as f64;
+    let term = |i: usize, v: &C64| v.norm_sqr().sqrt() * if velocity { ((i as f64 - h) * omega).abs() } else { 1.0 };
+    // four partial sums: one sum's additions in a row bound the loop (the hunting period: 27809
+    // coefficients per component, four sums per solve)
+    let mut acc = [0.0; 4];
+    let quads = y.chunks_exact(4);
+    let rest = quads.remainder();
+    for (q, quad) in quads.enumerate() {
+        for (l, (a, v)) in acc.iter_mut().zip(quad).enumerate() {
+            *a += term(4 * q + l, v);
+        }
+    }
+    let done = y.len() - rest.len();
+    let tail: f64 = rest.iter().enumerate().map(|(l, v)| term(done + l, v)).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// Harmonic balance of one operator (the mass, damping and stiffness of `form`; its own forcing is
@@ -936,18 +930,12 @@ pub fn difference(a: &HillSolution, b: &HillSolution) -> f64 {
 /// Size of `delta` relative to `of` (same truncation): per state component, sum_n |dY_n| (times n w for
 /// velocities) over sum_n |Y_n|, the largest over components; a bound on the time-domain change.
 fn relative_size(delta: &HillSolution, of: &HillSolution) -> f64 {
-    let h = of.harmonics as isize;
     let mut worst: f64 = 0.0;
     for (d, y) in delta.coeffs.iter().zip(&of.coeffs) {
-        for deriv in [false, true] {
-            let weight = |n: isize| if deriv { (n as f64 * of.omega).abs() } else { 1.0 };
-            let (mut diff, mut size) = (0.0, 0.0);
-            for n in -h..=h {
-                diff += d[(n + h) as usize].norm_sqr().sqrt() * weight(n);
-                size += y[(n + h) as usize].norm_sqr().sqrt() * weight(n);
-            }
+        for velocity in [false, true] {
+            let size = component_size(y, of.omega, velocity);
             if size > 0.0 {
-                worst = worst.max(diff / size);
+                worst = worst.max(component_size(d, of.omega, velocity) / size);
             }
         }
     }
@@ -1264,8 +1252,8 @@ mod tests {
 
     #[test]
     fn the_operator_applied_matches_its_band() {
-        // subtract_product (the residual of iterative refinement, from the coefficients) against the band
-        // matrix the class solve factors, built column by column: one DOF with constant mass and damping
+        // couple_row over a class (the tail's residual, from the coefficients) against the band matrix the
+        // class solve factors, built column by column: one DOF with constant mass and damping
         // (the dot-product path), and two DOFs with a varying mass (the block path)
         let one = hill_form();
         let mut two = hill_form();
@@ -1291,7 +1279,11 @@ mod tests {
                 let mut want = vec![C64::new(0.0, 0.0); x.len()];
                 classes.matrix(&members).mul_add(&x, &mut want);
                 let mut got = vec![C64::new(0.0, 0.0); x.len()];
-                classes.subtract_product(&members, &x, &mut got);
+                let band = classes.band_blocks;
+                for (j, &n) in members.iter().enumerate() {
+                    let js = j.saturating_sub(band)..(j + band + 1).min(members.len());
+                    classes.couple_row(n, &members, js, &x, &mut got[j * nd..(j + 1) * nd]);
+                }
                 let scale = want.iter().map(|v| v.norm()).fold(0.0, f64::max);
                 for (g, w) in got.iter().zip(&want) {
                     // the same products summed in another order: rounding of the largest entries (~1e3)

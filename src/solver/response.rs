@@ -996,61 +996,68 @@ pub fn solve_response(
 mod tests {
     use super::*;
 
-    /// x' = -x + f with f = 1 on [0, T/2), 0 after: piecewise constant, one state.
-    struct Square;
+    /// Whether t lies on the first half [0, 1/2) of the unit period, taking the `side` limit at a jump.
+    fn first_half(t: f64, side: Side) -> bool {
+        let tau = t.rem_euclid(1.0);
+        if side == Side::Right { tau < 0.5 } else { tau > 0.0 && tau <= 0.5 }
+    }
 
-    impl PeriodicSystem for Square {
+    /// A test system of period 1 whose coefficients jump at 1/2: `dim` states, P and f written by
+    /// `coefficients(t, on the first half)`.
+    struct HalfJump {
+        dim: usize,
+        max_harmonic: usize,
+        piecewise_constant: bool,
+        coefficients: fn(f64, bool, &mut DMatrix<f64>, &mut DVector<f64>),
+    }
+
+    impl PeriodicSystem for HalfJump {
         fn dim(&self) -> usize {
-            1
+            self.dim
         }
         fn period_s(&self) -> f64 {
             1.0
         }
         fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
-            p[(0, 0)] = -1.0;
-            let tau = t.rem_euclid(1.0);
-            let first = if side == Side::Right { tau < 0.5 } else { tau > 0.0 && tau <= 0.5 };
-            f[0] = if first { 1.0 } else { 0.0 };
+            (self.coefficients)(t, first_half(t, side), p, f);
         }
         fn breakpoints(&self) -> Vec<f64> {
             vec![0.5]
         }
         fn piecewise_constant(&self) -> bool {
-            true
+            self.piecewise_constant
         }
         fn max_harmonic(&self) -> usize {
-            0
+            self.max_harmonic
         }
     }
 
+    /// x' = -x + f with f = 1 on [0, T/2), 0 after: piecewise constant, one state.
+    const SQUARE: HalfJump = HalfJump {
+        dim: 1,
+        max_harmonic: 0,
+        piecewise_constant: true,
+        coefficients: |_, first, p, f| {
+            p[(0, 0)] = -1.0;
+            f[0] = if first { 1.0 } else { 0.0 };
+        },
+    };
+
     /// x'' + 0.3 x' + k(t) x = cos(2 pi t) + 0.2 with k = 50 on [0, 1/2), 40 after: several oscillations per
     /// period, so the probe has interior extremes on many steps.
-    struct Oscillator;
-
-    impl PeriodicSystem for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn period_s(&self) -> f64 {
-            1.0
-        }
-        fn eval(&self, t: f64, side: Side, p: &mut DMatrix<f64>, f: &mut DVector<f64>) {
-            let tau = t.rem_euclid(1.0);
-            let first = if side == Side::Right { tau < 0.5 } else { tau > 0.0 && tau <= 0.5 };
+    const OSCILLATOR: HalfJump = HalfJump {
+        dim: 2,
+        max_harmonic: 1,
+        piecewise_constant: false,
+        coefficients: |t, first, p, f| {
             p[(0, 0)] = 0.0;
             p[(0, 1)] = 1.0;
             p[(1, 0)] = if first { -50.0 } else { -40.0 };
             p[(1, 1)] = -0.3;
             f[0] = 0.0;
             f[1] = (2.0 * std::f64::consts::PI * t).cos() + 0.2;
-        }
-        fn breakpoints(&self) -> Vec<f64> {
-            vec![0.5]
-        }
-        fn max_harmonic(&self) -> usize {
-            1
-        }
-    }
+        },
+    };
 
     /// The exact periodic solution: x = 1 - A e^-t on the first half, B e^-(t - 1/2) on the second, with
     /// B = 1 - A e^-1/2 and A = 1 - B e^-1/2 (continuity at both ends).
@@ -1066,7 +1073,7 @@ mod tests {
     /// grid of two runs of different step (41 steps, a jump at 0.5) with a probe mixing the state and a constant.
     #[test]
     fn hermite_closed_forms_match_quadrature_of_the_same_dense_output() {
-        let sys = Oscillator;
+        let sys = OSCILLATOR;
         let grid = rk4::Grid::new(1.0, &[0.5], 41);
         let x0 = DVector::from_vec(vec![0.02, -0.1]);
         let states = rk4::trajectory(&sys, &grid, &x0);
@@ -1087,7 +1094,7 @@ mod tests {
 
     #[test]
     fn piecewise_lines_and_rms_match_the_closed_form() {
-        let sys = Square;
+        let sys = SQUARE;
         let grid = rk4::Grid::new(1.0, &[0.5], 2);
         let states = vec![exact(0.0), exact(0.5), exact(0.0)];
         let traj = Trajectory::Grid { grid, states, scheme: rk4::Scheme::Magnus4 };

@@ -41,13 +41,13 @@ pub trait PeriodicSystem: Sync {
         self.eval(t, side, p, &mut f);
     }
     /// Appends P at the equally spaced times t0 + j dt (s), j = 0..count (each n x n column-major, the right
-    /// limit at a breakpoint) to `out`; the default evaluates [`PeriodicSystem::eval_matrix`] at each time, a
-    /// model may share work between the times.
+    /// limit at a breakpoint) to `out`; the default evaluates [`PeriodicSystem::eval`] at each time (into one
+    /// P and f for all of them), a model may share work between the times.
     fn eval_matrix_uniform(&self, t0: f64, dt: f64, count: usize, out: &mut Vec<f64>) {
         let n = self.dim();
-        let mut p = DMatrix::zeros(n, n);
+        let (mut p, mut f) = (DMatrix::zeros(n, n), DVector::zeros(n));
         for j in 0..count {
-            self.eval_matrix(t0 + j as f64 * dt, Side::Right, &mut p);
+            self.eval(t0 + j as f64 * dt, Side::Right, &mut p, &mut f);
             out.extend_from_slice(p.as_slice());
         }
     }
