@@ -23,10 +23,62 @@ pub fn rms<T: Sample>(x: &[T]) -> f64 {
     (x.iter().map(|v| v.f() * v.f()).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
+/// Lanes of the sums below: four independent partial sums, which the compiler can keep in one vector
+/// register (a single running sum waits for every addition in turn).
+const LANES: usize = 4;
+
+/// Sum of `x` in [`LANES`] partial sums.
+fn lane_sum(x: &[f64]) -> f64 {
+    let mut acc = [0.0; LANES];
+    let chunks = x.chunks_exact(LANES);
+    let rest: f64 = chunks.remainder().iter().sum();
+    for c in chunks {
+        for k in 0..LANES {
+            acc[k] += c[k];
+        }
+    }
+    acc.iter().sum::<f64>() + rest
+}
+
+/// Sums of (x - m)^2, ^4, ^6 and ^8, in [`LANES`] partial sums each.
+fn central_sums(x: &[f64], m: f64) -> [f64; 4] {
+    let mut acc = [[0.0; LANES]; 4];
+    let chunks = x.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..LANES {
+            let d2 = (c[k] - m) * (c[k] - m);
+            let d4 = d2 * d2;
+            acc[0][k] += d2;
+            acc[1][k] += d4;
+            acc[2][k] += d4 * d2;
+            acc[3][k] += d4 * d4;
+        }
+    }
+    let mut out = acc.map(|a| a.iter().sum::<f64>());
+    for v in rest {
+        let d2 = (v - m) * (v - m);
+        let d4 = d2 * d2;
+        out[0] += d2;
+        out[1] += d4;
+        out[2] += d4 * d2;
+        out[3] += d4 * d4;
+    }
+    out
+}
+
 /// Sum of (x - mean)^2.
 pub fn sum_sq_dev(x: &[f64]) -> f64 {
-    let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
-    x.iter().map(|v| (v - m) * (v - m)).sum()
+    let m = lane_sum(x) / x.len().max(1) as f64;
+    let mut acc = [0.0; LANES];
+    let chunks = x.chunks_exact(LANES);
+    let rest: f64 = chunks.remainder().iter().map(|v| (v - m) * (v - m)).sum();
+    for c in chunks {
+        for k in 0..LANES {
+            acc[k] += (c[k] - m) * (c[k] - m);
+        }
+    }
+    acc.iter().sum::<f64>() + rest
 }
 
 /// Normalised central moment N^(k/2 - 1) sum (x - xbar)^k / (sum (x - xbar)^2)^(k/2), k even:
@@ -46,16 +98,7 @@ pub fn normalized_moment<T: Sample>(x: &[T], k: i32) -> f64 {
 /// [`normalized_moment`] for k = 4, 6 and 8 (FM4, M6A, M8A) in one pass.
 pub fn normalized_moments_4_6_8(x: &[f64]) -> [f64; 3] {
     let n = x.len() as f64;
-    let m = x.iter().sum::<f64>() / n;
-    let (mut s2, mut s4, mut s6, mut s8) = (0.0, 0.0, 0.0, 0.0);
-    for v in x {
-        let d2 = (v - m) * (v - m);
-        let d4 = d2 * d2;
-        s2 += d2;
-        s4 += d4;
-        s6 += d4 * d2;
-        s8 += d4 * d4;
-    }
+    let [s2, s4, s6, s8] = central_sums(x, lane_sum(x) / n);
     [n * s4 / (s2 * s2), n * n * s6 / (s2 * s2 * s2), n * n * n * s8 / (s2 * s2 * s2 * s2)]
 }
 
@@ -152,21 +195,29 @@ impl AverageMoments {
     /// The moments of `x` (not empty).
     pub fn of(x: &[f64]) -> Self {
         let n = x.len() as f64;
-        let mean = x.iter().sum::<f64>() / n;
-        let (mut s2, mut s4, mut peak) = (0.0, 0.0, 0.0f64);
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for &v in x {
-            let d = v - mean;
-            let d2 = d * d;
-            s2 += d2;
-            s4 += d2 * d2;
-            peak = peak.max(d.abs());
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
+        let mean = lane_sum(x) / n;
+        let [s2, s4, _, _] = central_sums(x, mean);
+        let (lo, hi) = lane_range(x);
         let rms = (s2 / n).sqrt();
+        let peak = (hi - mean).max(mean - lo);
         Self { rms, kurtosis: n * s4 / (s2 * s2), crest_factor: peak / rms, peak_to_peak: hi - lo }
     }
+}
+
+/// Least and largest value of `x`, in [`LANES`] partial ranges.
+fn lane_range(x: &[f64]) -> (f64, f64) {
+    let (mut lo, mut hi) = ([f64::INFINITY; LANES], [f64::NEG_INFINITY; LANES]);
+    let chunks = x.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for k in 0..LANES {
+            lo[k] = lo[k].min(c[k]);
+            hi[k] = hi[k].max(c[k]);
+        }
+    }
+    let lo = lo.iter().chain(rest).copied().fold(f64::INFINITY, f64::min);
+    let hi = hi.iter().chain(rest).copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
 }
 
 /// FM0 = peak-to-peak of the TSA / sum of the mesh-harmonic amplitudes.
@@ -202,6 +253,28 @@ pub fn sideband_energy_ratio(amplitudes: &[f64], mesh: usize, spacing: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sums in lanes equal one running sum (to rounding), whatever the length's remainder.
+    #[test]
+    fn lane_sums_equal_the_plain_sums() {
+        for n in [1usize, 3, 4, 5, 1027] {
+            let x: Vec<f64> = (0..n).map(|i| (1.3 * i as f64).sin().powi(3) + 0.1 * i as f64 / n as f64).collect();
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-11 * b.abs().max(1e-300);
+            let m = x.iter().sum::<f64>() / n as f64;
+            let ssd: f64 = x.iter().map(|v| (v - m) * (v - m)).sum();
+            assert!(close(sum_sq_dev(&x), ssd), "{n}");
+            if n > 2 {
+                let fused = normalized_moments_4_6_8(&x);
+                for (k, f) in [4, 6, 8].into_iter().zip(fused) {
+                    assert!(close(f, normalized_moment(&x, k)), "{n} {k}: {f} {}", normalized_moment(&x, k));
+                }
+                let am = AverageMoments::of(&x);
+                let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+                assert_eq!(am.peak_to_peak, hi - lo, "{n}");
+            }
+        }
+    }
 
     /// The fused moments equal the separate definitions (to rounding: the same sums in another order at most).
     #[test]

@@ -104,7 +104,7 @@ pub(in crate::jobs::diagnose) fn tsa_indicators(
     m.insert(Indicator::Fm4, fm4);
     m.insert(Indicator::M6a, m6a);
     m.insert(Indicator::M8a, m8a);
-    m.insert(Indicator::Na4, ind::kurtosis(residual));
+    m.insert(Indicator::Na4, ind::normalized_moments_4_6_8(residual)[0]);
     m.insert(Indicator::Er, ind::energy_ratio(difference, regular));
     m.insert(Indicator::Si, side / 2.0);
     m.insert(Indicator::Slf, side / rms);
