@@ -124,7 +124,13 @@ pub(in crate::jobs::diagnose) enum PendingBlock {
 
 /// Blocks from a recording's start whose residual order spectrum is kept for the local-change indicator
 /// (256 blocks of 16 revolutions: 4096 revolutions, 16 MB at most per gear and channel).
-pub(in crate::jobs::diagnose) const SPECTRUM_BLOCKS: usize = 256;
+const SPECTRUM_BLOCKS: usize = 256;
+
+/// Whether block `i` keeps its residual's order spectrum: the first [`SPECTRUM_BLOCKS`] when a baseline's
+/// change will be measured.
+pub(in crate::jobs::diagnose) fn keeps_spectrum(o: &Options, i: usize) -> bool {
+    o.residual_spectra && i < SPECTRUM_BLOCKS
+}
 /// Highest order of a block's residual spectrum kept (a crack's change lives up to the housing's
 /// resonances, far above the mesh harmonics: 4096 orders of a 12 Hz shaft reach 49 kHz).
 const SPECTRUM_ORDERS: usize = 4096;

@@ -200,8 +200,8 @@ impl GearPlan {
 
     /// The lines besides its mesh of the `gi`-th gear's shaft (none on a single pair).
     fn others(&self, gi: usize) -> &OtherLines {
-        static NONE: std::sync::OnceLock<OtherLines> = std::sync::OnceLock::new();
-        self.machine_shafts.as_ref().map_or_else(|| NONE.get_or_init(OtherLines::default), |ms| &ms[gi].others)
+        static NONE: OtherLines = OtherLines { mesh: Vec::new(), foreign: Vec::new() };
+        self.machine_shafts.as_ref().map_or(&NONE, |ms| &ms[gi].others)
     }
 }
 
@@ -270,16 +270,19 @@ fn average(
     map: &AngleMap,
 ) -> Result<Averages, Error> {
     let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
-    // the first blocks keep their residual's order spectrum when a baseline's change will be measured
-    let keep = |i: usize| o.residual_spectra && i < SPECTRUM_BLOCKS;
     let (tsas, early_scan) = rayon::join(
         || {
             let mut out = Vec::new();
             for (gi, &(_, ratio, z)) in plan.gears.iter().enumerate() {
                 let on_block = |fft: &mut Fft, _: usize, i: usize, b: &[f64]| match z {
-                    Some(z) => {
-                        PendingBlock::Done(block_indicators(fft, b, z, plan.others(gi), o.shaft_orders, keep(i)))
-                    }
+                    Some(z) => PendingBlock::Done(block_indicators(
+                        fft,
+                        b,
+                        z,
+                        plan.others(gi),
+                        o.shaft_orders,
+                        keeps_spectrum(o, i),
+                    )),
                     None => PendingBlock::Raw(b.to_vec()),
                 };
                 let per_channel =
@@ -363,7 +366,6 @@ fn gear_results(
             pending.push((*name, *c, z, plan.others(gi), t, std::mem::take(&mut block_lists[i])));
         }
     }
-    let keep = |i: usize| o.residual_spectra && i < SPECTRUM_BLOCKS;
     let first = checked.channels[0];
     let (gears, (wheel_warning, other_gear)) = rayon::join(
         || {
@@ -377,7 +379,9 @@ fn gear_results(
                         .enumerate()
                         .map(|(i, b)| match b {
                             PendingBlock::Done(b) => b,
-                            PendingBlock::Raw(b) => block_indicators(&mut fft, &b, z, others, o.shaft_orders, keep(i)),
+                            PendingBlock::Raw(b) => {
+                                block_indicators(&mut fft, &b, z, others, o.shaft_orders, keeps_spectrum(o, i))
+                            }
                         })
                         .collect();
                     g
