@@ -2,7 +2,7 @@
 
 use super::heatmap::{colour_bar, draw_heatmap};
 use super::legend::{Entry, draw_legend, entries, legend_rows};
-use super::text::{fmt_tick, font, marker_rows, shorten, text_size, wrap};
+use super::text::{fmt_log_tick, fmt_tick, font, marker_rows, shorten, text_size, wrap};
 use super::*;
 use plotters::prelude::*;
 
@@ -150,6 +150,11 @@ pub(super) struct Frame<'a, 'b> {
     right: i32,
 }
 
+/// A tick label on a logarithmic or a linear axis.
+fn tick(log: bool, v: f64) -> String {
+    if log { fmt_log_tick(v) } else { fmt_tick(v) }
+}
+
 pub(super) fn draw_in<X, Y>(chart: &Chart, area: &Area<'_>, frame: Frame<'_, '_>, xs: X, ys: Y) -> DrawResult
 where
     X: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
@@ -170,10 +175,11 @@ where
         if named {
             chart.x_ticks.iter().find(|t| (t.0 - *v).abs() < 1e-9).map_or(String::new(), |t| t.1.clone())
         } else {
-            fmt_tick(*v)
+            tick(chart.x_log, *v)
         }
     };
-    let y_fmt = |v: &f64| if chart.y_whole && (v - v.round()).abs() > 1e-9 { String::new() } else { fmt_tick(*v) };
+    let y_fmt =
+        |v: &f64| if chart.y_whole && (v - v.round()).abs() > 1e-9 { String::new() } else { tick(chart.y_log, *v) };
     // at most one x tick label per 90 px of plot: wider ones ("-0.0015") would run into each other
     let x_ticks = (c.plotting_area().dim_in_pixel().0 / 90).max(2) as usize;
     let y_ticks = (c.plotting_area().dim_in_pixel().1 / 40).max(2) as usize;

@@ -58,12 +58,29 @@ pub(super) fn shorten(area: &Area<'_>, text: &str, px: u32, width: i32) -> Strin
 pub(super) fn fmt_tick(v: f64) -> String {
     let a = v.abs();
     // tick positions carry rounding noise: anything this small is the zero tick
-    if a < 1e-12 {
-        "0".into()
-    } else if (9.999e-4..1e5).contains(&a) {
+    if a < 1e-12 { "0".into() } else { fmt_log_tick(v) }
+}
+
+/// A tick label on a logarithmic axis, where no tick is zero (1e-13 is a decade, not rounding noise).
+pub(super) fn fmt_log_tick(v: f64) -> String {
+    if (9.999e-4..1e5).contains(&v.abs()) {
         // four significant digits: 0.0015 and 0.002 stay apart, a tick at 12250 is not rounded
         crate::report::format::sig(v, 4)
     } else {
         format!("{v:.0e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A linear axis snaps rounding noise to zero; a log axis labels every decade, 1e-14 included.
+    #[test]
+    fn log_ticks_are_never_zero() {
+        assert_eq!(fmt_tick(3e-17), "0");
+        assert_eq!(fmt_log_tick(1e-14), "1e-14");
+        assert_eq!(fmt_log_tick(1e-13), "1e-13");
+        assert_eq!(fmt_log_tick(0.001), fmt_tick(0.001));
     }
 }
