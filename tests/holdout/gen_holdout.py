@@ -57,6 +57,10 @@ MACHINES = [
     dict(name="m4-z21z64", zp=21, zw=64, fs=25600.0, f1=29.0, T=12.0, fmt="i16", seed=404),
     dict(name="m5-z16z45", zp=16, zw=45, fs=44100.0, f1=17.3, T=15.0, fmt="f32", seed=505),
     dict(name="m6-z25z58", zp=25, zw=58, fs=32000.0, f1=31.5, T=10.0, fmt="f32", seed=606),
+    # housings with low panel modes too (250-900 Hz): the first mesh harmonics are not under the w^2 roll-off
+    dict(name="m7-z29z71", zp=29, zw=71, fs=40000.0, f1=24.0, T=12.0, fmt="f32", seed=707, panel=True),
+    dict(name="m8-z15z52", zp=15, zw=52, fs=25600.0, f1=35.0, T=10.0, fmt="i16", seed=808, panel=True),
+    dict(name="m9-z22z49", zp=22, zw=49, fs=51200.0, f1=16.0, T=16.0, fmt="f32", seed=909, panel=True),
 ]
 
 # faults per machine; gear "A" / "B" alternate by machine index so both gears get every kind
@@ -124,6 +128,10 @@ def machine_params(m):
     p["slip"] = r.uniform(0.005, 0.02)
     # nameplate speed: the true speed plus the motor's slip, rounded to 10 rpm
     p["nominal_rpm"] = float(round(m["f1"] * 60.0 * (1 + p["slip"]) / 10.0) * 10.0)
+    if m.get("panel"):  # drawn last, so the machines without panel modes are unchanged
+        p["house_f"] = np.concatenate((r.uniform(250.0, 900.0, 2), p["house_f"]))
+        p["house_zeta"] = np.concatenate((r.uniform(0.03, 0.06, 2), p["house_zeta"]))
+        p["house_g"] = np.concatenate((r.uniform(0.5, 1.0, 2) * r.choice([-1, 1], 2), p["house_g"]))
     return p
 
 

@@ -234,7 +234,7 @@ def report(jobs, mdirs):
             )
         )
     print()
-    hdr = "%-16s %6s %7s %8s %7s %9s %9s %7s %9s %9s %6s" % (
+    hdr = "%-16s %6s %7s %8s %7s %9s %9s %7s %9s %9s %6s %9s" % (
         "mode",
         "faults",
         "FAULTY",
@@ -246,9 +246,10 @@ def report(jobs, mdirs):
         "hlt FAULTY",
         "hlt SUSP",
         "n.j./err",
+        "speed off",
     )
     print("per mode (F|S = FAULTY or SUSPECT; gear ok and tooth among F|S; tooth compared when named from the "
-          "tachometer; n.j./err = not judged or error, faults + healthy)")
+          "tachometer; n.j./err = not judged or error, faults + healthy; speed off = pinion speed used more than 0.5 % from the true mean)")
     print(hdr)
     modes = ["%s-%s" % (s, b) for s in SPEEDS for b in BASES]
     for mode in modes:
@@ -265,8 +266,13 @@ def report(jobs, mdirs):
         hf = [j for j in he if j["res"]["state"] == "faulty"]
         hs = [j for j in he if j["res"]["state"] == "suspect"]
         nj = [j for j in js if j["res"]["state"] in ("not_judged", "error", None)]
+        off = [
+            j
+            for j in js
+            if j["res"]["speed"] and abs(j["res"]["speed"] / j["truth"]["true_mean_speed_hz"] - 1) > 0.005
+        ]
         print(
-            "%-16s %6d %7d %8d %7d %5d/%-3d %5d/%-3d %7d %9d %9d %6d"
+            "%-16s %6d %7d %8d %7d %5d/%-3d %5d/%-3d %7d %9d %9d %6d %9d"
             % (
                 mode,
                 len(fa),
@@ -281,8 +287,23 @@ def report(jobs, mdirs):
                 len(hf),
                 len(hs),
                 len(nj),
+                len(off),
             )
         )
+    print()
+    print("per machine, faults flagged F|S / on the right gear (of 8), healthy flagged F|S after the '+', by mode:")
+    mnames = [os.path.basename(m) for m in mdirs]
+    print("%-16s " % "mode" + " ".join("%10s" % m[:9] for m in mnames))
+    for mode in modes:
+        row = []
+        for m in mnames:
+            js = [j for j in jobs if j["mode"] == mode and j["machine"] == m]
+            fa = [j for j in js if j["truth"]["fault"] is not None]
+            fl = [j for j in fa if j["res"]["state"] in ("faulty", "suspect")]
+            go = [j for j in fl if j["res"]["gear"] == j["truth"]["gear"]]
+            hf = [j for j in js if j["truth"]["fault"] is None and j["res"]["state"] in ("faulty", "suspect")]
+            row.append("%d/%d+%d" % (len(fl), len(go), len(hf)))
+        print("%-16s " % mode + " ".join("%10s" % x for x in row))
     print()
     print("per fault kind, flagged F|S / on the right gear (all machines), by mode:")
     kinds = []
