@@ -147,7 +147,7 @@ pub fn local_change_evidence(d: &mut Diagnosis) {
 pub const ENVELOPE_ABSOLUTE_DB: f64 = 30.0;
 
 /// Without a baseline: a shaft whose first envelope order stands over [`ENVELOPE_ABSOLUTE_DB`] makes a
-/// healthy verdict suspect on that gear (supporting evidence otherwise); a line over [`ENVELOPE_LINE_DB`]
+/// healthy (or not-judged) verdict suspect on that gear (supporting evidence otherwise); a line over [`ENVELOPE_LINE_DB`]
 /// but under that limit is said in the reasons of a healthy verdict, so that the verdict and the envelope
 /// spectrum printed beside it do not contradict each other.
 pub fn envelope_absolute(d: &mut Diagnosis) {
@@ -163,13 +163,14 @@ pub fn envelope_absolute(d: &mut Diagnosis) {
             line.shaft, line.over_floor_db, line.shaft
         );
         let gear = VerdictGear::from(line.shaft);
+        // a recording not judged on its averages (its speed unconfirmed) is still suspect on impacts that
+        // stand this high at a shaft's order
         match d.verdict.state {
-            VerdictState::Healthy => {
+            VerdictState::Healthy | VerdictState::NotJudged => {
                 d.verdict.state = VerdictState::Suspect;
                 d.verdict.gear = gear;
                 d.verdict.reasons.insert(0, reason);
             }
-            VerdictState::NotJudged => d.verdict.reasons.push(reason),
             _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
             _ => d.verdict.reasons.push(reason),
         }

@@ -167,17 +167,66 @@ fn follow_shaft(
         fluctuation_percent: 100.0 * speeds.wander,
         line_snr_db,
     };
+    let doubt = nominal.doubt.or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o)).or_else(|| {
+        let zp = o.teeth.map(|t| t.0).filter(|_| nominal.source == SpeedSource::Estimated)?;
+        on_mains(zp, profile.mean_hz?, &speeds)
+    });
     Ok(ShaftAngle {
         period: map.mean_period_samples(),
         map,
         source: nominal.source,
         confidence: nominal.confidence,
-        doubt: nominal.doubt,
+        doubt,
         mesh_from_lag,
         tracked_z,
         profile,
         speeds,
         given,
+    })
+}
+
+/// Why the averages on a given speed cannot clear the machine: the given speed's mesh comb was not found
+/// (its height over the spectrum `comb_db`, dB, when it was sought and not found) and the tracking did not follow the mesh line, so the averages run on the
+/// nameplate speed as given, which a motor's slip puts up to the speed tolerance off, on a shaft that may
+/// wander: a fault is smeared over the revolution there (on generated machines of another physics, 20 of the
+/// 38 faults called healthy this way ran on a speed over 0.5 % off).
+fn unconfirmed_speed(comb_db: Option<f64>, profile: &SpeedProfile, o: &Options) -> Option<String> {
+    let db = comb_db?;
+    if profile.tracking != Tracking::Constant {
+        return None;
+    }
+    let comb = if db.is_finite() {
+        format!("its mesh comb stands only {db:.1} dB over the spectrum")
+    } else {
+        "its mesh comb could not be measured".to_string()
+    };
+    Some(format!(
+        "the given speed was not confirmed: {comb} and the mesh line could not be followed, so the averages run on the given speed as it is, which a motor's slip can put up to {:.1} % off; give a tachometer channel or the measured speed",
+        100.0 * o.speed_tolerance
+    ))
+}
+
+/// Largest relative distance of an estimated mesh frequency from a multiple of the mains frequency for it
+/// to be taken for hum: grids hold 50 or 60 Hz within about 0.05 Hz (0.1 %).
+const MAINS_MATCH: f64 = 1e-3;
+
+/// Largest fluctuation (fraction) of a tracked speed that a mains line shows: hum follows the grid, steady
+/// to 1e-4 over seconds, while a machine's shaft wanders by 0.5-2 % (a mesh line taken for the mesh on
+/// generated machines of another physics fluctuated 0.01-0.08 %).
+const MAINS_STEADY: f64 = 1e-3;
+
+/// Why a speed estimated from the teeth may be hum: the pinion's mesh (`zp` times the shaft's `shaft_hz`)
+/// lies on a harmonic 1..=20 of 50 or 60 Hz and is as steady as the grid.
+fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<String> {
+    let mesh = zp as f64 * shaft_hz;
+    let mains = [50.0, 60.0].into_iter().find(|&f: &f64| {
+        let k = (mesh / f).round();
+        (1.0..=20.0).contains(&k) && (mesh / (k * f) - 1.0).abs() <= MAINS_MATCH
+    })?;
+    (speeds.wander <= MAINS_STEADY).then(|| {
+        format!(
+            "the mesh found ({mesh:.2} Hz, {zp} x {shaft_hz:.3} Hz) lies on a harmonic of the {mains:.0} Hz mains and is as steady as the grid: it may be hum taken for the mesh, so averages on that speed cannot clear the machine; give the shaft speed or a tachometer channel"
+        )
     })
 }
 

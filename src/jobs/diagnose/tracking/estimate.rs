@@ -102,6 +102,7 @@ impl MeshShaft {
                     self.confidence
                 )
             }),
+            unconfirmed_comb_db: None,
         }
     }
 }

@@ -20,6 +20,9 @@ pub(super) struct Nominal {
     pub(super) mesh_order: Option<usize>,
     /// Why an estimated speed is too doubtful for a verdict of health to rest on it.
     pub(super) doubt: Option<String>,
+    /// A given speed whose mesh comb was sought and not found (its height over the spectrum, dB): unless the
+    /// tracking then follows the mesh line, the averages rest on the nameplate speed as it is.
+    pub(super) unconfirmed_comb_db: Option<f64>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -44,15 +47,16 @@ pub(super) fn nominal_speed(
             confidence: 1.0,
             mesh_order: None,
             doubt: None,
+            unconfirmed_comb_db: None,
         });
     }
     if let Some(hz) = o.shaft_hz {
         let fs = fs
             .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
         check_given_speed(path, hz, fs, n, o.min_revolutions)?;
-        let period = match o.teeth {
+        let (period, unconfirmed_comb_db) = match o.teeth {
             Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
-            None => fs / hz,
+            None => (fs / hz, None),
         };
         return Ok(Nominal {
             map: AngleMap::constant(period, 0.0, n),
@@ -60,6 +64,7 @@ pub(super) fn nominal_speed(
             confidence: 1.0,
             mesh_order: None,
             doubt: None,
+            unconfirmed_comb_db,
         });
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
@@ -145,6 +150,7 @@ pub(super) fn nominal_speed(
                 confidence: est.confidence,
                 mesh_order: None,
                 doubt: None,
+                unconfirmed_comb_db: None,
             });
         }
     }
@@ -163,6 +169,7 @@ pub(super) fn nominal_speed(
                 est.confidence
             )
         }),
+        unconfirmed_comb_db: None,
     })
 }
 
@@ -177,7 +184,8 @@ const CLEAR_COMB_DB: f64 = 20.0;
 
 /// The pinion period (samples) of a given nominal speed (period `nominal`), searched on the mesh comb of
 /// `zp` teeth within the tolerance on the analysed channels (the one where the comb stands highest); the
-/// nominal period when no comb stands [`MIN_COMB_DB`] over the floor, with a warning.
+/// nominal period when no comb stands [`MIN_COMB_DB`] over the floor, with a warning and the comb's height
+/// (dB; `None` when the comb confirmed the speed).
 fn given_on_mesh_comb(
     rec: &Recording,
     channels: &[usize],
@@ -186,7 +194,7 @@ fn given_on_mesh_comb(
     o: &Options,
     fft: &mut Fft,
     warnings: &mut Vec<String>,
-) -> f64 {
+) -> (f64, Option<f64>) {
     let comb = |fft: &mut Fft, c: usize| {
         let x = &rec.channels[c - 1];
         speed::mesh_comb_period(fft, &x[..x.len().min(1 << 21)], nominal, zp, o.speed_tolerance).ok()
@@ -202,15 +210,15 @@ fn given_on_mesh_comb(
         }
     };
     match best {
-        Some((p, db)) if db >= MIN_COMB_DB => p,
+        Some((p, db)) if db >= MIN_COMB_DB => (p, None),
         Some((_, db)) => {
             warnings.push(format!(
                 "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: the given speed is used as it is",
                 100.0 * o.speed_tolerance
             ));
-            nominal
+            (nominal, Some(db))
         }
-        None => nominal,
+        None => (nominal, Some(f64::NEG_INFINITY)),
     }
 }
 
