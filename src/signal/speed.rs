@@ -249,6 +249,44 @@ pub fn refine_near<T: Sample>(
     Ok(est)
 }
 
+/// The repetition period within +-`tolerance` (relative) of a period `near` that is known to be a shaft's
+/// revolution (a baseline's, found on a healthy recording of the same machine): the highest peak of the
+/// summed normalised autocorrelation of `channels` in that window, refined like [`estimate_period`]'s. Unlike
+/// [`refine_near`] it never takes a whole fraction or a multiple of the lag for the shaft: the revolution is
+/// known, and a faulty gear's strong mesh harmonic or a second impulse per revolution (which make a half or a
+/// quarter of it repeat almost as well) must not cut it.
+///
+/// # Errors
+/// Too short a record for two periods, or no peak inside the window (the signal does not repeat there).
+pub fn period_near<T: Sample>(
+    fft: &mut Fft,
+    channels: &[&[T]],
+    near: f64,
+    tolerance: f64,
+) -> Result<PeriodEstimate, SignalError> {
+    let n = channels.iter().map(|c| c.len()).min().unwrap_or(0);
+    let lo = ((near * (1.0 - tolerance)).floor() as usize).max(2);
+    let hi = (near * (1.0 + tolerance)).ceil() as usize;
+    if channels.is_empty() || n < 2 * hi + 4 {
+        return Err(SignalError::TooShort { what: "repetition period".into(), needed: 2 * hi + 4, got: n });
+    }
+    let lag_max = n / 2;
+    let mut sum = vec![0.0; lag_max + 1];
+    for c in channels {
+        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
+            *s += r / channels.len() as f64;
+        }
+    }
+    let best = (lo..=hi).max_by(|a, b| sum[*a].total_cmp(&sum[*b])).unwrap_or(lo);
+    // a maximum on the window's edge is the flank of a peak outside it, not a period inside
+    if best == lo || best == hi || sum[best] <= 0.0 {
+        return Err(SignalError::Invalid(format!(
+            "no repetition period found between {lo} and {hi} samples: give the shaft speed"
+        )));
+    }
+    Ok(PeriodEstimate { period_samples: refine(&sum, best as f64), confidence: sum[best], mesh_lag: None })
+}
+
 /// A nominal shaft period checked on the mesh comb: the shaft period (samples) within +-`tolerance`
 /// (relative) of `nominal` at which the mesh harmonics k z f (k = 1..=4, below 0.45 cycles per sample) of a
 /// gear of `z` teeth hold the most amplitude in the averaged spectrum of `x`, and that comb's height over
@@ -436,6 +474,32 @@ pub fn teeth_candidates<T: Sample>(
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn a_known_revolution_is_not_cut_into_quarters() {
+        // a shaft of 1000.37 samples whose fourth order is strong (a resonant fourth mesh harmonic, a cracked
+        // gear) and whose first is weak: a quarter of the revolution repeats almost as well as the whole, so
+        // the search for the shortest repetition takes the quarter; near the known revolution the window's own
+        // peak is the revolution. The autocorrelation of two cosines peaks exactly at the common period, and
+        // the parabolic refinement over its multiples leaves well under 0.05 samples on 40 revolutions
+        let p = 1000.37;
+        let x: Vec<f64> = (0..40_000)
+            .map(|i| {
+                let t = i as f64 / p;
+                (2.0 * PI * 4.0 * t).cos()
+                    + 0.3 * (2.0 * PI * t + 0.5).cos()
+                    + 0.05 * ((i * 7919 % 1013) as f64 / 1013.0 - 0.5)
+            })
+            .collect();
+        let mut fft = Fft::new();
+        let quarter = refine_near(&mut fft, &[x.as_slice()], 1.01 * p, 0.03).expect("a period");
+        assert!((quarter.period_samples / (p / 4.0) - 1.0).abs() < 0.01, "{quarter:?}");
+        let whole = period_near(&mut fft, &[x.as_slice()], 1.01 * p, 0.03).expect("a period");
+        assert!((whole.period_samples - p).abs() < 0.05, "{whole:?}");
+        assert!(whole.mesh_lag.is_none());
+        // a window between the quarter's multiples holds no peak of its own (only flanks): refused
+        assert!(period_near(&mut fft, &[x.as_slice()], 0.375 * p, 0.05).is_err());
+    }
 
     #[test]
     fn tacho_pulses_works() {

@@ -196,6 +196,52 @@ pub fn sideband_growth(x: &[(f64, f64)], reference: &[(f64, f64)], z: usize) -> 
     (own > 0.0).then(|| change / own)
 }
 
+/// How much a gear's own modulation pattern changed: the energy of the difference `x - c_k reference` over the
+/// energy of `c_k reference`, summed over every order that is not a mesh harmonic (orders k z +- j, j < z / 2,
+/// in the band of mesh harmonic k), with c_k the complex least-squares scale of the reference within that band.
+///
+/// A gear's average holds, around each mesh harmonic, the sidebands its own teeth put there (each tooth's
+/// profile and pitch error, its runout): the mesh's carrier times the gear's modulation. A change of the
+/// other gear of the pair (its wear, a load change) changes the carrier, the amplitude and phase of each mesh
+/// harmonic, and with it every sideband of that band by the same complex factor, which `c_k` takes out; a
+/// change of this gear's own teeth (wear that differs from tooth to tooth, a crack, runout) changes the
+/// pattern within the band and stays. Both gears' averages see the same mesh harmonics, so the energy
+/// indicators and the spectral change move on both for a fault of either; this measure tells which gear's
+/// own teeth changed. `None` when there is nothing to compare (z < 3, an empty or all-zero reference).
+pub fn pattern_change(x: &[(f64, f64)], reference: &[(f64, f64)], z: usize) -> Option<f64> {
+    let len = x.len().min(reference.len());
+    if z < 3 || len < 2 {
+        return None;
+    }
+    let (mut change, mut own) = (0.0, 0.0);
+    // the bands: orders (k - 1/2) z < order <= (k + 1/2) z around harmonic k, the first from order 1
+    let mut lo = 1;
+    while lo < len {
+        let k = (lo + z / 2) / z;
+        let hi = (k * z + z / 2 + 1).clamp(lo + 1, len);
+        let band = (lo..hi).filter(|o| o % z != 0);
+        // c = sum x conj(r) / sum |r|^2
+        let (mut re, mut im, mut rr) = (0.0, 0.0, 0.0);
+        for o in band.clone() {
+            let ((a, b), (c, d)) = (x[o], reference[o]);
+            re += a * c + b * d;
+            im += b * c - a * d;
+            rr += c * c + d * d;
+        }
+        if rr > 0.0 && rr.is_finite() {
+            let (cr, ci) = (re / rr, im / rr);
+            for o in band {
+                let (c, d) = reference[o];
+                let (pr, pi) = (cr * c - ci * d, cr * d + ci * c);
+                change += (x[o].0 - pr).powi(2) + (x[o].1 - pi).powi(2);
+                own += pr * pr + pi * pi;
+            }
+        }
+        lo = hi;
+    }
+    (own > 0.0 && change.is_finite()).then(|| change / own)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -284,6 +330,48 @@ mod tests {
         let scaled: Vec<f64> = base.iter().map(|v| 1.2 * v).collect();
         let x = order_spectrum(&mut fft, &scaled, 60);
         assert!(sideband_growth(&x, &r, 17).expect("a reference") < 1e-20);
+    }
+
+    /// The order spectrum of a 17-tooth gear's average: mesh harmonics 1..=3 (orders 17, 34, 51), each
+    /// multiplied by the complex carrier `carrier[k]`, with the sidebands of `pattern` (a per-order modulation,
+    /// orders 1..=8 each side) around each, as an amplitude- and phase-modulated mesh puts them.
+    fn modulated(carrier: [(f64, f64); 3], pattern: &[(f64, f64)]) -> OrderSpectrum {
+        let z = 17;
+        let mut x = vec![(0.0, 0.0); 4 * z];
+        for (k, c) in carrier.iter().enumerate() {
+            let h = (k + 1) * z;
+            x[h] = *c;
+            // the modulation a(theta) = sum_j A_j exp(i j theta) times the carrier C exp(i h theta): order
+            // h + j holds C A_j (here A_j = pattern[j - 1] above the harmonic, its re and im swapped below)
+            for (j, m) in pattern.iter().enumerate() {
+                let times = |a: (f64, f64)| (c.0 * a.0 - c.1 * a.1, c.0 * a.1 + c.1 * a.0);
+                x[h + j + 1] = times(*m);
+                x[h - j - 1] = times((m.1, m.0));
+            }
+        }
+        x
+    }
+
+    #[test]
+    fn a_carrier_change_is_not_a_pattern_change() {
+        // the same gear's pattern under other carriers (another mesh: each harmonic's amplitude and phase
+        // changed differently) leaves nothing; a pattern changed at one order by a known amount leaves that
+        // amount's energy share, to rounding
+        let pattern: Vec<(f64, f64)> = (1..=8).map(|j| (0.3 / j as f64, 0.1 * (j as f64).sin())).collect();
+        let r = modulated([(1.0, 0.0), (0.5, 0.2), (0.2, -0.1)], &pattern);
+        let x = modulated([(0.4, 0.9), (-0.7, 0.1), (0.05, 0.3)], &pattern);
+        let g = pattern_change(&x, &r, 17).expect("a reference");
+        assert!(g < 1e-24, "{g}");
+        // the global scale of [`sideband_growth`] does not take the per-harmonic change out
+        assert!(sideband_growth(&x, &r, 17).expect("a reference") > 0.1);
+        // a pattern change at the second sideband, 0.05 added to its modulation, with the carriers unchanged:
+        // the band's least-squares scale absorbs a little of it, so the share lies just under the plain one
+        let mut changed = pattern.clone();
+        changed[1].0 += 0.05;
+        let x = modulated([(1.0, 0.0), (0.5, 0.2), (0.2, -0.1)], &changed);
+        let g = pattern_change(&x, &r, 17).expect("a reference");
+        let plain = 2.0 * 0.05f64.powi(2) / (2.0 * pattern.iter().map(|m| m.0 * m.0 + m.1 * m.1).sum::<f64>());
+        assert!(g < plain && g > 0.8 * plain, "{g} against {plain}");
     }
 
     #[test]

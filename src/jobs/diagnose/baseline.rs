@@ -173,6 +173,9 @@ struct GearReference {
     /// The sideband growth of each baseline file against the other files'.
     #[serde(default)]
     sidebands_healthy: Vec<f64>,
+    /// The pattern change ([`tsa_change::pattern_change`]) of each baseline file against the other files'.
+    #[serde(default)]
+    pattern_healthy: Vec<f64>,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -318,7 +321,8 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 rms_db(l, &others)
             })
             .collect();
-        let (residual_mean, local_healthy, sidebands_healthy) = local_reference(&mut fft, &per_file[&key], teeth[&key]);
+        let LocalReference { residual_mean, local_healthy, sidebands_healthy, pattern_healthy } =
+            local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
         for k in Indicator::DECIDING {
             let values: Vec<f64> = match k {
@@ -340,6 +344,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 residual_mean,
                 local_healthy,
                 sidebands_healthy,
+                pattern_healthy,
             },
         );
     }
@@ -362,10 +367,11 @@ fn spectra(blocks: &[&Block]) -> Vec<OrderSpectrum> {
 /// values: the halves of one recording differ by less than separate recordings do (the real rig's healthy
 /// file, channel 2: 2.9 between the quarters of one half, 11.4 between its two halves), so the local
 /// change needs two healthy files at least.
-fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpectrum, Vec<f64>, Vec<f64>) {
+fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> LocalReference {
     let files: Vec<Vec<OrderSpectrum>> = files.iter().map(|f| spectra(f)).filter(|s| !s.is_empty()).collect();
+    let mut out = LocalReference::default();
     if files.is_empty() {
-        return (Vec::new(), Vec::new(), Vec::new());
+        return out;
     }
     // every file's blocks shifted onto the first file's mean, then onto the mean of them all: block by
     // block, so that a tracked angle's slow wander between blocks does not smear the high orders
@@ -375,8 +381,6 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpec
         aligned = files.iter().map(|f| aligned_mean(fft, f, &reference)).collect();
         reference = tsa_change::mean(&slices(&aligned));
     }
-    let mut healthy = Vec::new();
-    let mut sidebands = Vec::new();
     for f in 0..aligned.len() {
         if aligned.len() < 2 {
             break;
@@ -384,10 +388,22 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> (OrderSpec
         let others: Vec<&[(f64, f64)]> =
             aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
         let r = tsa_change::mean(&others);
-        healthy.extend(tsa_change::concentration(fft, &aligned[f], &r, z).map(|c| c.ratio));
-        sidebands.extend(tsa_change::sideband_growth(&aligned[f], &r, z));
+        out.local_healthy.extend(tsa_change::concentration(fft, &aligned[f], &r, z).map(|c| c.ratio));
+        out.sidebands_healthy.extend(tsa_change::sideband_growth(&aligned[f], &r, z));
+        out.pattern_healthy.extend(tsa_change::pattern_change(&aligned[f], &r, z));
     }
-    (reference, healthy, sidebands)
+    out.residual_mean = reference;
+    out
+}
+
+/// What [`local_reference`] gives: the baseline's mean residual spectrum and how far each file's differs
+/// from the others' (local change, sideband growth, pattern change).
+#[derive(Default)]
+struct LocalReference {
+    residual_mean: OrderSpectrum,
+    local_healthy: Vec<f64>,
+    sidebands_healthy: Vec<f64>,
+    pattern_healthy: Vec<f64>,
 }
 
 /// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first.
@@ -424,6 +440,8 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
     let sidebands = tsa_change::sideband_growth(&mean, &reference, z).unwrap_or(f64::NAN);
     let sidebands_healthy = r.sidebands_healthy.iter().copied().fold(f64::NAN, f64::max);
+    let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
+    let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
     let n = tsa_change::points(mean.len().min(reference.len()), z);
     let tooth = tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::verdict::impulse_tooth(&d, z));
     Some(LocalChange {
@@ -437,6 +455,8 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
         sidebands,
         sidebands_healthy,
         sidebands_limit: (SIDEBAND_RISE * sidebands_healthy).max(SIDEBAND_MIN),
+        pattern,
+        pattern_healthy,
     })
 }
 

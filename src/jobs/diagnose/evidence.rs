@@ -64,13 +64,87 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
     }
 }
 
+/// Puts a verdict that rests on the indicators both gears' averages share on the gear whose own teeth changed.
+///
+/// Both averages of a pair hold the same mesh harmonics (order z of one gear is order z' of the other), so
+/// the energy indicators (ER, FM0, NA4*) and the spectral change move on both for a change of either gear,
+/// and which one moved further against its baseline is no evidence of where the change is: a worn pinion
+/// changes the wheel's mesh harmonics as much as its own. What only the changed gear shows is its own
+/// pattern around those harmonics (`pattern` of its [`LocalChange`]: its teeth's sidebands with each
+/// harmonic's change of amplitude and phase taken out). When the deciding gear's own average holds no
+/// impulse (FM4, M6A under their suspect limits: a local fault would put one there) and the other gear's
+/// pattern changed by more, beyond what the baseline's own files show among themselves, the verdict moves to
+/// the other gear, its state kept (the shared indicators say how large the change is, not where).
+///
+/// Returns whether both gears' pattern changes were known (then they, not the local change's sideband
+/// evidence, decide between the gears: see [`local_change_evidence`]).
+pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
+    // (gear, excess over the healthy files', value, healthy value, channel), the largest excess per gear
+    let excess = |shaft: Shaft| {
+        d.local_change
+            .iter()
+            .filter(|c| c.gear == shaft && c.pattern.is_finite() && c.pattern_healthy.is_finite())
+            .map(|c| (c.pattern - c.pattern_healthy, c.pattern, c.pattern_healthy, c.channel))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+    };
+    let (Some(pinion), Some(wheel)) = (excess(Shaft::Pinion), excess(Shaft::Wheel)) else { return false };
+    let (gear, other, own, theirs) = match d.verdict.gear {
+        VerdictGear::Pinion => (Shaft::Pinion, Shaft::Wheel, pinion, wheel),
+        VerdictGear::Wheel => (Shaft::Wheel, Shaft::Pinion, wheel, pinion),
+        _ => return true,
+    };
+    if d.verdict.state < VerdictState::Suspect || theirs.0 <= own.0.max(0.0) {
+        return true;
+    }
+    let impulse =
+        d.scores.iter().any(|s| s.gear == gear && s.indicator.local() && s.decides && s.spreads >= s.suspect_at);
+    if impulse {
+        return true;
+    }
+    let moved: Vec<&str> = {
+        let mut v: Vec<&str> = d
+            .scores
+            .iter()
+            .filter(|s| s.gear == gear && s.decides && s.spreads >= s.suspect_at)
+            .map(|s| s.indicator.label())
+            .collect();
+        v.dedup();
+        v
+    };
+    let reason = format!(
+        "{other} (channel {}): its own teeth changed against the baseline: the pattern around its mesh harmonics (each harmonic's change of amplitude and phase taken out) differs by {} of its energy (the baseline's own files by at most {}), the {gear}'s by {} ({}): the {gear}'s {} measure the mesh both averages share, so the change is put on the {other} (one value per recording, so it names the gear, not the state)",
+        theirs.3,
+        num(theirs.1),
+        num(theirs.2),
+        num(own.1),
+        num(own.2),
+        if moved.is_empty() { "indicators".to_string() } else { moved.join(", ") },
+    );
+    d.verdict.cross_talk.push(format!(
+        "the {gear}'s indicators moved, but its own pattern changed less than the {other}'s: read as the {other}'s change seen in the {gear}'s average"
+    ));
+    d.verdict.gear = VerdictGear::from(other);
+    d.verdict.deciding = Some(other);
+    d.verdict.tooth = None;
+    d.verdict.tooth_origin = None;
+    d.verdict.reasons.insert(0, reason);
+    if let Some(g) = d.gears.iter().find(|g| g.gear == other && g.channel == theirs.3) {
+        d.indicators = g.indicators.clone();
+    }
+    place_tooth(d);
+    true
+}
+
 /// Adds the change of each gear's average against the baseline's as evidence (computed by
 /// `baseline::Reference::local_change` into `d.local_change`): a gear whose average changed at one tooth by
 /// over its limit (2.5 times what the baseline's own files show among themselves) has a local fault there;
 /// one whose mesh sidebands grew over theirs is modulated once per revolution. One value per recording
 /// each, so like the envelope the strongest makes a healthy or not-judged verdict suspect on its gear,
 /// never faulty on its own, and each supports a suspect or faulty verdict on the same gear.
-pub fn local_change_evidence(d: &mut Diagnosis) {
+///
+/// With `pattern_decided` (both gears' pattern changes known: [`pattern_evidence`] chose the gear) a suspect
+/// verdict is not moved.
+pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
     let mut found: Vec<(f64, Shaft, String)> = Vec::new();
     for c in &d.local_change {
         if c.value >= c.limit {
@@ -110,7 +184,7 @@ pub fn local_change_evidence(d: &mut Diagnosis) {
         match d.verdict.state {
             // a suspect verdict from indicators both gears' averages share (the spectral change, the mesh
             // lines' energy) moves to the gear whose own orders changed, when its own did not
-            VerdictState::Suspect if i == 0 && d.verdict.gear != gear && !on_verdict_gear => {
+            VerdictState::Suspect if i == 0 && d.verdict.gear != gear && !on_verdict_gear && !pattern_decided => {
                 d.verdict.cross_talk.push(format!(
                     "the {}'s indicators moved too, but its own orders did not change against the baseline's while the {}'s did: read as the {}'s fault seen in the {}'s average",
                     d.verdict.gear, shaft, shaft, d.verdict.gear

@@ -385,7 +385,8 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.local_change = d.gears.iter().filter_map(|g| r.local_change(g)).collect();
     }
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
-    evidence::local_change_evidence(&mut d);
+    let pattern_decided = evidence::pattern_evidence(&mut d);
+    evidence::local_change_evidence(&mut d, pattern_decided);
     match &p.facts {
         Some(b) => {
             if let Some(e) = &b.envelope {

@@ -146,6 +146,14 @@ pub struct LocalChange {
     pub sidebands_healthy: f64,
     /// From here the growth counts as evidence: 3 times `sidebands_healthy`, at least 8.
     pub sidebands_limit: f64,
+    /// Pattern change: the difference's energy at every order that is not a mesh harmonic, after each mesh
+    /// harmonic's band is scaled by its own complex factor (a change of the mesh's carrier taken out), over
+    /// the baseline's own there: how much the gear's own teeth changed (wear, runout, a local fault). NaN
+    /// when it could not be computed.
+    pub pattern: f64,
+    /// The largest of the same between the baseline's own files (NaN from one file, or a profile written
+    /// before it).
+    pub pattern_healthy: f64,
 }
 
 /// The verdict.

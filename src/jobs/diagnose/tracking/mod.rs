@@ -85,7 +85,7 @@ pub(super) fn nominal_speed(
             if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
                 return Ok(found.nominal(n, warnings));
             }
-            speed::refine_near(fft, &views, p, 0.03)
+            speed::period_near(fft, &views, p, 0.03)
         }
         None => {
             if let Some(found) = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs)) {
@@ -127,7 +127,11 @@ pub(super) fn nominal_speed(
         "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
         est.period_samples, est.confidence
     ));
-    if let Some((zp, _)) = o.teeth {
+    // a period found near the baseline's is the baseline's shaft revolution (whose own estimate already told a
+    // revolution from a hunting period), never a multiple of it: the fraction below is for a repetition found
+    // without one (a cracked pinion's strong fourth mesh harmonic would otherwise cut the baseline's
+    // revolution into four)
+    if let (Some((zp, _)), None) = (o.teeth, geometry.and_then(|g| g.period_samples)) {
         // the signal may repeat over several pinion revolutions (a hunting period): the pinion revolution
         // is the fraction of the period where the given mesh order has its strongest line
         let line = |k: usize| -> f64 {
