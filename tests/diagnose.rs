@@ -543,3 +543,24 @@ fn nothing_unscored_is_called_healthy() {
     assert_eq!(run.code, 3, "not judged has its own exit code");
     assert!(d["verdict"]["reasons"][0].as_str().unwrap().contains("not a number"));
 }
+
+/// Nothing unscored is called healthy: white noise said to be a 14/39 pair at 1800 rpm has no mesh comb
+/// to confirm the speed and no mesh line to follow, so its averages (on a speed that a motor's slip could
+/// put 5 % off) cannot clear the machine: not judged, exit code 3, the reason naming the unconfirmed speed.
+#[test]
+fn noise_with_a_given_speed_is_not_judged_healthy() {
+    let dir = temp_dir("noise-given-speed");
+    let fs = 10_000;
+    let mut rng = Rng::new(7);
+    let mut csv = String::from("time [s],dq/dt [m/s]\n");
+    for i in 0..10 * fs {
+        csv.push_str(&format!("{:.5},{:.6e}\n", i as f64 / fs as f64, 1e-3 * rng.centered()));
+    }
+    let rec = write(&dir, "noise.csv", &csv);
+    let run = gearvib(&["diagnose", &rec, "--rpm", "1800", "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    let reasons = d["verdict"]["reasons"].to_string();
+    assert!(reasons.contains("given speed was not confirmed"), "{reasons}");
+}

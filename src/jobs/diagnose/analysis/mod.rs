@@ -216,12 +216,15 @@ const MAINS_MATCH: f64 = 1e-3;
 const MAINS_STEADY: f64 = 1e-3;
 
 /// Why a speed estimated from the teeth may be hum: the pinion's mesh (`zp` times the shaft's `shaft_hz`)
-/// lies on a harmonic 1..=20 of 50 or 60 Hz and is as steady as the grid.
+/// lies on 50 or 60 Hz or its second harmonic (the strongest hum lines) and is as steady as the grid. Only
+/// those two: a machine at a synchronous speed (1500 or 1800 rpm, a drive set to 25 or 30 Hz) puts its mesh
+/// on a higher mains harmonic whenever the pinion has an even number of teeth (the bundled 14-tooth pinion
+/// at 30 Hz meshes at 420 Hz, 7 x 60), while a mesh at 50-120 Hz needs a pinion under 10 Hz.
 fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<String> {
     let mesh = zp as f64 * shaft_hz;
     let mains = [50.0, 60.0].into_iter().find(|&f: &f64| {
         let k = (mesh / f).round();
-        (1.0..=20.0).contains(&k) && (mesh / (k * f) - 1.0).abs() <= MAINS_MATCH
+        (1.0..=2.0).contains(&k) && (mesh / (k * f) - 1.0).abs() <= MAINS_MATCH
     })?;
     (speeds.wander <= MAINS_STEADY).then(|| {
         format!(
@@ -571,5 +574,30 @@ fn other_gear_note(z: usize, other: Option<&OtherGear>) -> String {
             g.teeth, g.line_over_floor_db, g.confidence
         ),
         None => "the meshing gear's teeth were not estimated: no sidebands of another gear stand 12 dB over their floor (a true-running healthy gear shows none); give the teeth when known".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn steady(wander: f64) -> angle::SpeedProfile {
+        angle::SpeedProfile { mean: 1e-3, min: 1e-3, max: 1e-3, change: 0.0, wander }
+    }
+
+    /// A mesh on 50 or 60 Hz or its second harmonic within 0.1 % and steadier than 0.1 % is doubted; a
+    /// wandering one, one off by more, and a synchronous machine's mesh on a higher harmonic are not.
+    #[test]
+    fn hum_is_told_by_its_frequency_and_steadiness() {
+        // 13 teeth x 4.6154 Hz = 60.0 Hz (the first harmonic of 60 Hz)
+        assert!(on_mains(13, 60.0 / 13.0, &steady(2e-4)).is_some());
+        // 20 teeth x 5 Hz = 100 Hz (the second harmonic of 50 Hz), 0.05 % off
+        assert!(on_mains(20, 5.0025, &steady(0.0)).is_some());
+        // 0.2 % off the mains line: the grid does not wander that far
+        assert!(on_mains(13, 1.002 * 60.0 / 13.0, &steady(0.0)).is_none());
+        // on the line but wandering by 1 %, as a machine's shaft does
+        assert!(on_mains(13, 60.0 / 13.0, &steady(0.01)).is_none());
+        // a 14-tooth pinion at a synchronous 30 Hz meshes at 420 Hz = 7 x 60 Hz: not hum
+        assert!(on_mains(14, 30.0, &steady(0.0)).is_none());
     }
 }
