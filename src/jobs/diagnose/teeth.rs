@@ -60,10 +60,15 @@ pub(super) fn pulses_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize)
             .filter(|&h| h < power.len() && h % o != 0)
             .all(|h| at(h) < PULSES_TOO_MANY_SHARE * at(o))
     });
+    // a line at z / k is the mesh only when it stands clear of the orders beside it too: on an average of
+    // 1/k revolution the shaft's own orders (the mesh's sidebands) fall between whole orders and average
+    // out, while on a true revolution a line at z / k among its neighbours is one of the shaft's harmonics
+    // (a worn 27-tooth pinion's order 9 stood over its weakened mesh line on a generated machine)
+    let clear = |o: usize| at(o) > PULSES_TOO_FEW_RATIO * at(o - 1).max(at(o + 1));
     let part = (2..=4usize)
         .filter(|k| z.is_multiple_of(*k))
         .map(|k| z / k)
-        .find(|&o| at(o) > PULSES_TOO_FEW_RATIO * mesh && at(o) > 0.0);
+        .find(|&o| at(o) > PULSES_TOO_FEW_RATIO * mesh && at(o) > 0.0 && clear(o));
     spans.or(part)
 }
 
@@ -301,6 +306,29 @@ pub(super) fn mesh_family<'a>(fft: &mut Fft, tsas: impl Iterator<Item = &'a [f64
 mod tests {
     use super::*;
     use std::f64::consts::TAU;
+
+    /// An average of `points` samples holding cosines of the given (order, amplitude).
+    fn average(points: usize, lines: &[(usize, f64)]) -> Vec<f64> {
+        (0..points)
+            .map(|i| lines.iter().map(|&(o, a)| a * (TAU * o as f64 * i as f64 / points as f64).cos()).sum())
+            .collect()
+    }
+
+    /// Two pulses per revolution given as one on a 28-tooth pinion: each average spans half a revolution,
+    /// so the mesh (fundamental 1, harmonics 0.2, 0.3) stands at orders 14, 28, 42 with nothing beside it
+    /// (the shaft's orders fall between whole ones): order 14 is found. A worn 27-tooth pinion, averaged
+    /// right, whose mesh line (0.2) lies under its shaft harmonic 9 (1.0, beside orders 8 and 10 at 0.5):
+    /// not taken for a third of a revolution.
+    #[test]
+    fn a_mesh_at_a_fraction_of_the_order_must_stand_clear_of_its_neighbours() {
+        let half = average(1024, &[(14, 1.0), (28, 0.2), (42, 0.3)]);
+        assert_eq!(pulses_misfit(std::iter::once(half.as_slice()), 28), Some(14));
+        let worn = average(1024, &[(8, 0.5), (9, 1.0), (10, 0.5), (27, 0.2), (54, 0.5), (81, 0.2)]);
+        assert_eq!(pulses_misfit(std::iter::once(worn.as_slice()), 27), None);
+        // the same shaft harmonic standing alone would be read as the mesh of a third of a revolution
+        let alone = average(1024, &[(9, 1.0), (27, 0.2), (54, 0.5), (81, 0.2)]);
+        assert_eq!(pulses_misfit(std::iter::once(alone.as_slice()), 27), Some(9));
+    }
 
     /// A 14-tooth pinion meshing with a 39-tooth wheel over 5000 revolutions, more than [`SCAN_REVS`]: the
     /// scan reads it in two parts of 2500 averaged in power and still finds the wheel's +-1 sidebands
