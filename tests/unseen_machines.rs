@@ -542,7 +542,7 @@ fn a_profile_keeps_the_local_change() {
 }
 
 /// Without a baseline, a spall and a broken tooth whose TSA indicators stay under the absolute limits are
-/// raised by their envelope order line (over 30 dB above its neighbourhood) on their own gear, and no
+/// raised (or, when the indicators pass them, found faulty on them) by their envelope order line (over 30 dB above its neighbourhood) on their own gear, and no
 /// healthy recording of those machines has an envelope line over that limit (they reach 22 dB).
 #[test]
 fn without_a_baseline_the_envelope_raises_impacts_on_their_gear() {
@@ -554,7 +554,10 @@ fn without_a_baseline_the_envelope_raises_impacts_on_their_gear() {
         let over = |o: &Outcome| o.json["verdict"]["reasons"].to_string().contains("over the 30 dB absolute limit");
         let o = diagnose(&fault, Mode::Speed, &[]);
         let truth = fault.fault.unwrap().gear.name();
-        if !(o.state == "suspect" || o.state == "faulty") || o.gear != truth || !over(&o) {
+        // a fault whose own TSA indicators already pass their absolute limits needs no envelope (the
+        // 17/29 broken wheel tooth once it is averaged on its tracked angle: M6A 269 over 250)
+        let by_indicators = o.state == "faulty" && o.json["verdict"]["reasons"].to_string().contains("M6A =");
+        if !(o.state == "suspect" || o.state == "faulty") || o.gear != truth || !(over(&o) || by_indicators) {
             wrong.push(format!("{name} {label}: {} on {}: {}", o.state, o.gear, o.json["verdict"]));
         }
         for h in &healthy {

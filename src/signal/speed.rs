@@ -287,12 +287,90 @@ pub fn period_near<T: Sample>(
     Ok(PeriodEstimate { period_samples: refine(&sum, best as f64), confidence: sum[best], mesh_lag: None })
 }
 
+/// Mesh harmonics the nominal-speed comb and the choice of the tracked harmonic look at: the first 16
+/// (below 0.45 cycles per sample). A housing or mesh resonance lifts a few harmonics of the mesh 10-15 dB
+/// over their band while the first four lie under the sensor noise (hold-out machines of
+/// `tests/holdout`: harmonics 5-10 stand, 1-4 do not), so a comb of the first four alone locked onto a
+/// sideband family there.
+pub const COMB_HARMONICS: usize = 16;
+
+/// Cap on one harmonic's height over its floor (amplitude ratio, 60 dB) in the comb's score: one strong
+/// line of something else (hum, a fan, another pair) that happens to fall on one harmonic of a wrong speed
+/// must not outweigh several harmonics of the true mesh standing 10-20 dB. A lower cap (20 dB) let an
+/// impulsive fault's sidebands tie with the mesh: on a clean recording of a cracked pinion every shaft
+/// order stands over 20 dB, so the comb of speed f (z - 1) / z, whose harmonic k is the -k sideband of
+/// mesh harmonic k, scored as the true one.
+const COMB_CAP: f64 = 1000.0;
+
+/// An averaged amplitude spectrum read for lines against its local floor (the median of 128-bin blocks).
+pub struct LineSpectrum {
+    amp: Vec<f64>,
+    floor: Vec<f64>,
+    n: usize,
+}
+
+impl LineSpectrum {
+    /// The averaged spectrum of `x` over half-overlapping Hann segments of `segment` samples.
+    ///
+    /// # Errors
+    /// Fewer than `segment` samples.
+    pub fn new<T: Sample>(fft: &mut Fft, x: &[T], segment: usize, what: &str) -> Result<Self, SignalError> {
+        if x.len() < segment {
+            return Err(SignalError::TooShort { what: what.into(), needed: segment, got: x.len() });
+        }
+        let (power, n) = super::spectrum::averaged_power(fft, x, segment, 0.5, what)?;
+        let floor = super::mesh_comb::local_floor(&power).iter().map(|p| p.sqrt()).collect();
+        Ok(Self { amp: power.iter().map(|p| p.max(0.0).sqrt()).collect(), floor, n })
+    }
+
+    /// Segment length (samples): bins are 1 / n cycles per sample apart.
+    pub fn segment(&self) -> usize {
+        self.n
+    }
+
+    /// Amplitude over the local floor of the strongest bin within half a bin of frequency `f` (cycles per
+    /// sample); 0 outside the spectrum.
+    pub fn height(&self, f: f64) -> f64 {
+        let b = f * self.n as f64;
+        if !(b.is_finite() && b >= 1.0) {
+            return 0.0;
+        }
+        let (lo, hi) = ((b - 0.5).floor() as usize, ((b + 0.5).ceil() as usize).min(self.amp.len() - 1));
+        (lo..=hi).map(|i| self.amp[i] / self.floor[i].max(f64::MIN_POSITIVE)).fold(0.0, f64::max)
+    }
+
+    /// The amplitude-weighted centre of the three bins around frequency `f` (cycles per sample): a line's
+    /// frequency to a fraction of a bin. `None` at the spectrum's ends.
+    pub fn centroid(&self, f: f64) -> Option<f64> {
+        let b = f * self.n as f64;
+        let i = if b.is_finite() && b >= 1.0 { b.round() as usize } else { return None };
+        if i + 1 >= self.amp.len() {
+            return None;
+        }
+        let w = [self.amp[i - 1], self.amp[i], self.amp[i + 1]];
+        let total = w.iter().sum::<f64>();
+        (total > 0.0).then(|| ((i - 1) as f64 * w[0] + i as f64 * w[1] + (i + 1) as f64 * w[2]) / total / self.n as f64)
+    }
+
+    /// Heights (as [`Self::height`]) of the mesh harmonics k z f, k = 1..=[`COMB_HARMONICS`], below `limit`
+    /// cycles per sample, of a pinion turning at `f` cycles per sample: (k, height).
+    pub fn harmonics(&self, f: f64, z: usize, limit: f64) -> Vec<(usize, f64)> {
+        (1..=COMB_HARMONICS)
+            .map(|k| (k, (k * z) as f64 * f))
+            .take_while(|&(_, m)| m < limit)
+            .map(|(k, m)| (k, self.height(m)))
+            .collect()
+    }
+}
+
 /// A nominal shaft period checked on the mesh comb: the shaft period (samples) within +-`tolerance`
-/// (relative) of `nominal` at which the mesh harmonics k z f (k = 1..=4, below 0.45 cycles per sample) of a
-/// gear of `z` teeth hold the most amplitude in the averaged spectrum of `x`, and that comb's height over
-/// the spectrum's median level (dB). A nameplate speed off by the motor's slip puts the comb 1-4 % away; the
-/// sidebands kz +- j that lie within the window (z above 1 / tolerance) hold less than the mesh lines on
-/// any gear that meshes, so the sum over harmonics peaks at the true speed.
+/// (relative) of `nominal` at which the mesh harmonics k z f (k = 1..=[`COMB_HARMONICS`], below 0.45 cycles
+/// per sample) of a gear of `z` teeth stand highest over their local floor, and that comb's height: the
+/// geometric mean of its three highest harmonics' amplitude over their floor, dB. The score of a candidate
+/// speed is sum_k ln(clamp(h_k, 1, 10)) with h_k harmonic k's height: noise adds about the same to every
+/// candidate, the mesh's harmonics only where they line up. A nameplate speed off by the motor's slip puts
+/// the comb 1-4 % away; a sideband family kz + j (j shaft orders) lines up with the comb of speed
+/// f (1 + j / (k z)) for one harmonic k only, so the sum over many harmonics peaks at the true speed.
 ///
 /// # Errors
 /// Too short a record for a spectrum resolving the shaft (fewer than 8 revolutions).
@@ -306,43 +384,51 @@ pub fn mesh_comb_period<T: Sample>(
     // bins of an eighth of the shaft frequency resolve the sidebands; longer segments smear under a
     // fluctuating speed
     let segment = ((8.0 * nominal).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256);
-    if x.len() < segment {
-        return Err(SignalError::TooShort { what: "mesh comb spectrum".into(), needed: segment, got: x.len() });
-    }
-    let (power, n) = super::spectrum::averaged_power(fft, x, segment, 0.5, "mesh comb spectrum")?;
-    let amp: Vec<f64> = power.iter().map(|p| p.max(0.0).sqrt()).collect();
-    let mut sorted = amp.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2].max(f64::MIN_POSITIVE);
-    // the largest amplitude within half a bin of frequency f (cycles per sample)
-    let at = |f: f64| -> f64 {
-        let b = f * n as f64;
-        let (lo, hi) = ((b - 0.5).floor().max(0.0) as usize, (b + 0.5).ceil() as usize);
-        (lo..=hi.min(amp.len() - 1)).map(|i| amp[i]).fold(0.0, f64::max)
+    let s = LineSpectrum::new(fft, x, segment, "mesh comb spectrum")?;
+    let n = s.segment();
+    // the uncapped heights break ties among candidates whose harmonics all reach the cap (a clean recording)
+    let score = |f: f64| -> f64 {
+        s.harmonics(f, z, 0.45).iter().map(|&(_, h)| h.clamp(1.0, COMB_CAP).ln() + 1e-3 * h.max(1.0).ln()).sum()
     };
-    let comb =
-        |period: f64| -> f64 { (1..=4).map(|k| (k * z) as f64 / period).filter(|&f| f < 0.45).map(at).sum::<f64>() };
-    // steps of a quarter bin at the first mesh harmonic
     let f0 = 1.0 / nominal;
-    let step = 0.25 / (n as f64 * z as f64);
-    let count = ((2.0 * tolerance * f0 / step).ceil() as usize).clamp(1, 1 << 16);
-    let (best_f, best) = (0..=count)
+    // steps of a quarter bin at the highest harmonic used
+    let top = s.harmonics(f0 * (1.0 - tolerance), z, 0.45).len().max(1);
+    let step = 0.25 / (n as f64 * (top * z) as f64);
+    let count = ((2.0 * tolerance * f0 / step).ceil() as usize).clamp(1, 1 << 18);
+    let (best_f, _) = (0..=count)
         .map(|i| f0 * (1.0 - tolerance) + i as f64 * (2.0 * tolerance * f0) / count as f64)
-        .map(|f| (f, comb(1.0 / f)))
+        .map(|f| (f, score(f)))
         .fold((f0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-    // refined on the first harmonic's own peak: the bin's centre of mass around it
-    let b = best_f * z as f64 * n as f64;
-    let i = if b.is_finite() && b >= 0.0 { b.round() as usize } else { usize::MAX };
-    let refined = if i >= 1 && i.saturating_add(1) < amp.len() {
-        let w = [amp[i - 1], amp[i], amp[i + 1]];
-        let centre = (i as f64 - 1.0) * w[0] + i as f64 * w[1] + (i as f64 + 1.0) * w[2];
-        let f = centre / w.iter().sum::<f64>().max(f64::MIN_POSITIVE) / n as f64 / z as f64;
-        if (f / best_f - 1.0).abs() < 1.0 / (n as f64 * z as f64 * best_f) { f } else { best_f }
-    } else {
-        best_f
-    };
-    let harmonics = (1..=4).filter(|&k| (k * z) as f64 * best_f < 0.45).count().max(1) as f64;
-    Ok((1.0 / refined, 20.0 * (best / harmonics / median).log10()))
+    // refined on the strongest harmonic's own peak (the grid's maximum sits anywhere on the plateau where
+    // every line is within half a bin of its harmonic): the centre of mass of its three bins
+    let refined = s
+        .harmonics(best_f, z, 0.45)
+        .into_iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .and_then(|(k, _)| s.centroid((k * z) as f64 * best_f).map(|f| f / (k * z) as f64))
+        .filter(|f| ((f - best_f) * n as f64 * z as f64).abs() < 1.0)
+        .unwrap_or(best_f);
+    let best_f = refined;
+    let mut heights: Vec<f64> = s.harmonics(best_f, z, 0.45).iter().map(|&(_, h)| h).collect();
+    heights.sort_by(|a, b| b.total_cmp(a));
+    heights.truncate(3);
+    let mean_db =
+        heights.iter().map(|h| 20.0 * h.max(f64::MIN_POSITIVE).log10()).sum::<f64>() / heights.len().max(1) as f64;
+    Ok((1.0 / best_f, mean_db))
+}
+
+/// The mesh harmonic of a gear of `z` teeth that stands highest over its local floor, of the first
+/// [`COMB_HARMONICS`] below `limit` cycles per sample, on a shaft of period `period` samples: (its shaft
+/// order k z, its height in dB). The spectrum is averaged over segments of about 8 revolutions of the
+/// first 2^21 samples. `None` when the record is too short.
+pub fn strongest_mesh_harmonic<T: Sample>(x: &[T], period: f64, z: usize, limit: f64) -> Option<(f64, f64)> {
+    let segment = ((8.0 * period).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256);
+    let s = LineSpectrum::new(&mut Fft::new(), &x[..x.len().min(1 << 21)], segment, "mesh harmonics").ok()?;
+    s.harmonics(1.0 / period, z, limit)
+        .into_iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|&(_, h)| h > 0.0)
+        .map(|(k, h)| ((k * z) as f64, 20.0 * h.log10()))
 }
 
 /// One candidate shaft of [`teeth_candidates`].
@@ -616,6 +702,34 @@ mod tests {
             let (p, snr) = mesh_comb_period(&mut Fft::new(), &x, nominal, 23, 0.05).unwrap();
             assert!((p / true_period - 1.0).abs() < 1e-3, "nominal {nominal}: found {p}");
             assert!(snr > 20.0, "{snr}");
+        }
+    }
+
+    #[test]
+    fn mesh_comb_is_not_taken_by_an_impulsive_faults_sideband_family() {
+        // a mesh of 14 teeth (harmonics 1..6, amplitude 1) and an impulse once per revolution that puts
+        // every shaft order 1..100 at amplitude 0.05 (a cracked tooth), a true period of 333.3 samples,
+        // little noise: every candidate comb f m / 14 lines up with shaft orders, and only the true one
+        // with the mesh lines, 26 dB higher; nominal 3 % low and high
+        let true_period = 1000.0 / 3.0;
+        let mut state = 99u64;
+        let mut noise = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let x: Vec<f64> = (0..300_000)
+            .map(|i| {
+                let th = 2.0 * PI * i as f64 / true_period;
+                let mesh: f64 = (1..=6).map(|k| ((14 * k) as f64 * th).cos()).sum();
+                let shaft: f64 =
+                    (1..=100).filter(|o| 14 * 6 >= *o || o % 14 != 0).map(|o| 0.05 * (o as f64 * th).cos()).sum();
+                mesh + shaft + 0.01 * noise()
+            })
+            .collect();
+        for nominal in [true_period * 1.03, true_period / 1.03] {
+            let (p, db) = mesh_comb_period(&mut Fft::new(), &x, nominal, 14, 0.05).unwrap();
+            assert!((p / true_period - 1.0).abs() < 1e-3, "nominal {nominal}: found {p}");
+            assert!(db > 20.0, "{db}");
         }
     }
 }

@@ -190,10 +190,16 @@ def main():
     ap.add_argument("--bin", default=DEFAULT_BIN)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--reuse", action="store_true", help="keep results already on disk")
+    ap.add_argument("--speeds", default=",".join(SPEEDS), help="speed sources scored: rpm,tacho,teeth")
+    ap.add_argument("--machines", default="", help="machines scored, e.g. m1,m3 (default: every one)")
     a = ap.parse_args()
+    SPEEDS[:] = [m for m in a.speeds.split(",") if m in SPEEDS]
     binary = os.path.abspath(a.bin)
     results = os.path.join(a.data, "results")
     mdirs = sorted(d for d in glob.glob(os.path.join(a.data, "m[0-9]*")) if os.path.isdir(d))
+    if a.machines:
+        keep = a.machines.split(",")
+        mdirs = [d for d in mdirs if os.path.basename(d).split("-")[0] in keep]
     jobs = []
     for m in mdirs:
         jobs += machine_jobs(m, binary, results, a.reuse, a.data)

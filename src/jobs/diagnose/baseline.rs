@@ -13,7 +13,7 @@
 
 use super::{Given, JobError};
 use crate::Error;
-use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft};
+use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft, Tracking};
 use crate::signal::spectrum::Fft;
 use crate::signal::tsa_change::{self, OrderSpectrum};
 use serde::{Deserialize, Serialize};
@@ -185,6 +185,9 @@ pub struct Reference {
     gears: BTreeMap<(Shaft, usize), GearReference>,
     /// Files pooled.
     pub files: usize,
+    /// The weakest mesh line the baseline files' angles were followed on (dB over its band), when every
+    /// file was tracked on its mesh phase: how clean an angle the baseline's averages rest on.
+    pub tracked_line_db: Option<f64>,
 }
 
 /// A [`Reference`] as stored in a profile: one entry per gear and channel (JSON has no tuple keys).
@@ -193,6 +196,10 @@ pub struct Reference {
 struct ReferenceFile {
     files: usize,
     gears: Vec<GearEntry>,
+    /// [`Reference::tracked_line_db`] (absent in profiles written before it, and when the baseline was
+    /// not tracked on its mesh phase).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tracked_line_db: Option<f64>,
 }
 
 /// One gear and channel of a stored reference.
@@ -216,7 +223,7 @@ impl From<Reference> for ReferenceFile {
                 GearEntry { gear, channel, reference }
             })
             .collect();
-        Self { files: r.files, gears }
+        Self { files: r.files, gears, tracked_line_db: r.tracked_line_db.filter(|v| v.is_finite()) }
     }
 }
 
@@ -243,7 +250,7 @@ impl TryFrom<ReferenceFile> for Reference {
         if gears.is_empty() {
             return Err("no gear".into());
         }
-        Ok(Self { gears, files: f.files })
+        Ok(Self { gears, files: f.files, tracked_line_db: f.tracked_line_db })
     }
 }
 
@@ -348,7 +355,13 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
             },
         );
     }
-    Ok(Reference { gears, files: baselines.len() })
+    let lines: Vec<Option<f64>> = baselines
+        .iter()
+        .map(|d| d.speed_profile.line_snr_db.filter(|_| d.speed_profile.tracking == Tracking::MeshPhase))
+        .collect();
+    let tracked_line_db =
+        lines.iter().copied().collect::<Option<Vec<f64>>>().and_then(|v| v.into_iter().reduce(f64::min));
+    Ok(Reference { gears, files: baselines.len(), tracked_line_db })
 }
 
 fn slices(v: &[OrderSpectrum]) -> Vec<&[(f64, f64)]> {

