@@ -136,7 +136,31 @@ fn follow_shaft(
     let nominal = nominal_speed(path, rec, channels, o, fs, geometry, fft, warnings)?;
     let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
     let mesh_from_lag = nominal.mesh_order.is_some();
-    let (map, tracking, line_snr_db, tracked_z) = track(path, rec, channels, o, known_z, nominal.map, warnings)?;
+    let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
+        None => track(path, rec, channels, o, known_z, nominal.map, warnings)?,
+        Some(alt) => {
+            // two starts (the given speed, the weak comb's best): the one whose followed line stands higher
+            let mut given_warnings = Vec::new();
+            let first = track(path, rec, channels, o, known_z, nominal.map, &mut given_warnings)?;
+            let mut alt_warnings = Vec::new();
+            let second = track(path, rec, channels, o, known_z, alt, &mut alt_warnings)?;
+            let line = |t: &(AngleMap, Tracking, Option<f64>, Option<usize>)| {
+                t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY)
+            };
+            if line(&second) > line(&first) {
+                warnings.extend(alt_warnings);
+                warnings.push(format!(
+                    "the tracking from the comb's best speed followed a line {:.1} dB over its band, the one from the given speed {}: the comb's start is kept",
+                    line(&second),
+                    if line(&first).is_finite() { format!("{:.1} dB", line(&first)) } else { "none".into() }
+                ));
+                second
+            } else {
+                warnings.extend(given_warnings);
+                first
+            }
+        }
+    };
     // the tachometer's pulses are in the angle map now and are never analysed: free them
     if let Some(t) = tacho {
         rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);

@@ -103,6 +103,7 @@ impl MeshShaft {
                 )
             }),
             unconfirmed_comb_db: None,
+            alternative: None,
         }
     }
 }

@@ -23,6 +23,9 @@ pub(super) struct Nominal {
     /// A given speed whose mesh comb was sought and not found (its height over the spectrum, dB): unless the
     /// tracking then follows the mesh line, the averages rest on the nameplate speed as it is.
     pub(super) unconfirmed_comb_db: Option<f64>,
+    /// A second start for the tracking: the best speed of a mesh comb that stands too low to confirm the
+    /// given speed ([`START_COMB_DB`] to [`MIN_COMB_DB`]); the start whose followed line stands higher is kept.
+    pub(super) alternative: Option<AngleMap>,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -48,15 +51,16 @@ pub(super) fn nominal_speed(
             mesh_order: None,
             doubt: None,
             unconfirmed_comb_db: None,
+            alternative: None,
         });
     }
     if let Some(hz) = o.shaft_hz {
         let fs = fs
             .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
         check_given_speed(path, hz, fs, n, o.min_revolutions)?;
-        let (period, unconfirmed_comb_db) = match o.teeth {
+        let (period, unconfirmed_comb_db, alternative) = match o.teeth {
             Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
-            None => (fs / hz, None),
+            None => (fs / hz, None, None),
         };
         return Ok(Nominal {
             map: AngleMap::constant(period, 0.0, n),
@@ -65,6 +69,7 @@ pub(super) fn nominal_speed(
             mesh_order: None,
             doubt: None,
             unconfirmed_comb_db,
+            alternative: alternative.map(|p| AngleMap::constant(p, 0.0, n)),
         });
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
@@ -155,6 +160,7 @@ pub(super) fn nominal_speed(
                 mesh_order: None,
                 doubt: None,
                 unconfirmed_comb_db: None,
+                alternative: None,
             });
         }
     }
@@ -174,6 +180,7 @@ pub(super) fn nominal_speed(
             )
         }),
         unconfirmed_comb_db: None,
+            alternative: None,
     })
 }
 
@@ -183,6 +190,13 @@ pub(super) fn nominal_speed(
 /// hold-out machines' meshes stand 8-15 dB at their resonance-lifted harmonics.
 const MIN_COMB_DB: f64 = 8.0;
 
+/// Comb height (as [`MIN_COMB_DB`]) from which the comb's best speed, though not a confirmation, is where
+/// the tracking starts instead of the given speed: 2 dB over what noise alone reaches. A high harmonic's
+/// ridge is sought within +-0.45 orders of its start, which a given speed 1.5 % off misses at order 78
+/// (a 13-tooth pinion's sixth mesh harmonic, where the hold-out's m2 has its strongest lines; the tracking
+/// then followed the wheel's sideband, 2.6 % off).
+const START_COMB_DB: f64 = 5.0;
+
 /// Mesh comb height over the spectrum's median from which the first channel's comb is taken without
 /// looking at the others, dB: the period the comb gives is only the tracking's start (the tracking follows
 /// the mesh line's phase from there), and a comb 20 dB over the floor puts it within a fraction of a bin.
@@ -191,7 +205,8 @@ const CLEAR_COMB_DB: f64 = 20.0;
 /// The pinion period (samples) of a given nominal speed (period `nominal`), searched on the mesh comb of
 /// `zp` teeth within the tolerance on the analysed channels (the one where the comb stands highest); the
 /// nominal period when no comb stands [`MIN_COMB_DB`] over the floor, with a warning and the comb's height
-/// (dB; `None` when the comb confirmed the speed).
+/// (dB; `None` when the comb confirmed the speed), and the comb's best period as a second start for the
+/// tracking when the comb stands between [`START_COMB_DB`] and [`MIN_COMB_DB`].
 fn given_on_mesh_comb(
     rec: &Recording,
     channels: &[usize],
@@ -200,7 +215,7 @@ fn given_on_mesh_comb(
     o: &Options,
     fft: &mut Fft,
     warnings: &mut Vec<String>,
-) -> (f64, Option<f64>) {
+) -> (f64, Option<f64>, Option<f64>) {
     let comb = |fft: &mut Fft, c: usize| {
         let x = &rec.channels[c - 1];
         speed::mesh_comb_period(fft, &x[..x.len().min(1 << 21)], nominal, zp, o.speed_tolerance).ok()
@@ -216,15 +231,23 @@ fn given_on_mesh_comb(
         }
     };
     match best {
-        Some((p, db)) if db >= MIN_COMB_DB => (p, None),
+        Some((p, db)) if db >= MIN_COMB_DB => (p, None, None),
+        Some((p, db)) if db >= START_COMB_DB => {
+            warnings.push(format!(
+                "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: not a confirmation; the tracking is started from the given speed and from the comb's best ({:+.2} % from it), and the start whose line stands higher is kept",
+                100.0 * o.speed_tolerance,
+                100.0 * (nominal / p - 1.0)
+            ));
+            (nominal, Some(db), Some(p))
+        }
         Some((_, db)) => {
             warnings.push(format!(
                 "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: the given speed is used as it is",
                 100.0 * o.speed_tolerance
             ));
-            (nominal, Some(db))
+            (nominal, Some(db), None)
         }
-        None => (nominal, Some(f64::NEG_INFINITY)),
+        None => (nominal, Some(f64::NEG_INFINITY), None),
     }
 }
 
