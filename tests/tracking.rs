@@ -406,3 +406,49 @@ fn a_run_up_is_quasi_static_and_its_order_map_follows_the_steady_state_at_each_s
     let (a, b) = (steady_amplitude(&dir, 1530.0, 42.0), steady_amplitude(&dir, 2070.0, 42.0));
     assert!((a / b - 1.0).abs() > 0.2, "{a} {b}");
 }
+
+/// A nominal speed 2.5 % off on a machine whose first four mesh harmonics lie under the noise while a
+/// resonance lifts harmonics 6-8 (as on the hold-out generator's machines): the speed is measured on the
+/// lifted harmonics and followed, within 0.2 % of the true mean. The truth is the signal's own angle,
+/// integrated from a speed fluctuating 1.2 % and 0.5 % at 0.4 and 1.3 Hz (a line's place in an averaged
+/// spectrum of 8-revolution segments is good to a fraction of a bin, 0.1 %, and the tracked mean to far
+/// less; 0.2 % is under the 0.31 % off at which the wheel's sideband of harmonic 6, 0.36 pinion orders from
+/// its order 114, would put a tracking that followed it). The previous comb of harmonics 1-4 left this
+/// recording on the given speed, not judged.
+#[test]
+fn a_nominal_speed_is_measured_on_resonance_lifted_mesh_harmonics() {
+    let dir = temp_dir("tracking-lifted");
+    let (fs, f0, z, seconds) = (20_000.0, 22.0, 19.0, 8.0);
+    let mut rng = Rng::new(2024);
+    let mut theta = 0.0f64;
+    let mut x = Vec::new();
+    for i in 0..(fs * seconds) as usize {
+        let t = i as f64 / fs;
+        let f = f0
+            * (1.0 + 0.012 * (std::f64::consts::TAU * 0.4 * t).sin() + 0.005 * (std::f64::consts::TAU * 1.3 * t).sin());
+        let th = std::f64::consts::TAU * theta;
+        let mut v = 2.0 * rng.centered();
+        for k in 1..=8 {
+            let m = k as f64 * z;
+            let (a, sb) = if k >= 6 { (0.3, 0.1) } else { (0.005, 0.002) };
+            v += a * (m * th).sin() + sb * ((m + 1.0) * th).sin() + sb * ((m - 1.0) * th).sin();
+        }
+        x.push(v);
+        theta += f / fs;
+    }
+    let true_mean = theta / seconds;
+    let mut csv = String::from("time [s],accel [m/s^2]\n");
+    for (i, v) in x.iter().enumerate() {
+        csv.push_str(&format!("{},{v}\n", i as f64 / fs));
+    }
+    let path = write(&dir, "lifted.csv", &csv);
+    let rpm = format!("{}", 60.0 * f0 * 1.025);
+    let d = &diagnose(&[path], &["--teeth", "19,53", "--rpm", &rpm])[0];
+    let measured = d["shaft_hz"]["pinion"].as_f64().unwrap();
+    assert!(
+        rel(measured, true_mean) < 2e-3,
+        "measured {measured} Hz against the true mean {true_mean} Hz: {}",
+        d["warnings"]
+    );
+    assert_eq!(d["speed_profile"]["tracking"], "mesh phase", "{}", d["warnings"]);
+}

@@ -673,17 +673,22 @@ mod tests {
         assert!(e.confidence > 0.9);
     }
 
+    /// Uniform noise on [-0.5, 0.5) from a linear congruential generator seeded with `seed`.
+    fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+
     #[test]
     fn mesh_comb_finds_the_true_speed_within_the_tolerance() {
         // 23 teeth at a true period of 400 samples, the mesh's harmonics 1..3, sidebands at +-1 and +-2 shaft
         // orders a third of the mesh's, noise; a nominal 3 % off (motor slip): the comb must come back to the
         // true period within a fraction of a bin (the refinement's centre of mass: 0.1 % is a tenth of a bin)
         let true_period = 400.0;
-        let mut state = 12345u64;
-        let mut noise = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut noise = uniform_noise(12345);
         let x: Vec<f64> = (0..200_000)
             .map(|i| {
                 let th = 2.0 * PI * i as f64 / true_period;
@@ -712,11 +717,7 @@ mod tests {
         // little noise: every candidate comb f m / 14 lines up with shaft orders, and only the true one
         // with the mesh lines, 26 dB higher; nominal 3 % low and high
         let true_period = 1000.0 / 3.0;
-        let mut state = 99u64;
-        let mut noise = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut noise = uniform_noise(99);
         let x: Vec<f64> = (0..300_000)
             .map(|i| {
                 let th = 2.0 * PI * i as f64 / true_period;
