@@ -258,6 +258,15 @@ const MAINS_MATCH: f64 = 1e-3;
 /// generated machines of another physics fluctuated 0.01-0.08 %).
 const MAINS_STEADY: f64 = 1e-3;
 
+/// The mains frequency (50 or 60 Hz) whose first or second harmonic `mesh_hz` lies on within
+/// [`MAINS_MATCH`], the strongest hum lines (see [`on_mains`] for why only those two).
+pub(in crate::jobs::diagnose) fn mains_of(mesh_hz: f64) -> Option<f64> {
+    [50.0, 60.0].into_iter().find(|&f: &f64| {
+        let k = (mesh_hz / f).round();
+        (1.0..=2.0).contains(&k) && (mesh_hz / (k * f) - 1.0).abs() <= MAINS_MATCH
+    })
+}
+
 /// Why a speed estimated from the teeth may be hum: the pinion's mesh (`zp` times the shaft's `shaft_hz`)
 /// lies on 50 or 60 Hz or its second harmonic (the strongest hum lines) and is as steady as the grid. Only
 /// those two: a machine at a synchronous speed (1500 or 1800 rpm, a drive set to 25 or 30 Hz) puts its mesh
@@ -265,10 +274,7 @@ const MAINS_STEADY: f64 = 1e-3;
 /// at 30 Hz meshes at 420 Hz, 7 x 60), while a mesh at 50-120 Hz needs a pinion under 10 Hz.
 fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<String> {
     let mesh = zp as f64 * shaft_hz;
-    let mains = [50.0, 60.0].into_iter().find(|&f: &f64| {
-        let k = (mesh / f).round();
-        (1.0..=2.0).contains(&k) && (mesh / (k * f) - 1.0).abs() <= MAINS_MATCH
-    })?;
+    let mains = mains_of(mesh)?;
     (speeds.wander <= MAINS_STEADY).then(|| {
         format!(
             "the mesh found ({mesh:.2} Hz, {zp} x {shaft_hz:.3} Hz) lies on a harmonic of the {mains:.0} Hz mains and is as steady as the grid: it may be hum taken for the mesh, so averages on that speed cannot clear the machine; give the shaft speed or a tachometer channel"
