@@ -281,7 +281,11 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
             let mut own: Vec<&Trigger> = per_gear.iter().filter(|g| g.0 == *gear).flat_map(|g| &g.2).collect();
             own.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
             reasons.extend(own.iter().take(t.max_reasons).map(|t| t.text.clone()));
-            reasons.extend(not_judged.iter().map(|w| format!("not judged: {w}")));
+            // a gear that could not be scored is not judged; a doubt on the speed qualifies the verdict
+            reasons.extend(not_judged.iter().map(|w| match &d.speed_doubt {
+                Some(doubt) if doubt == w => format!("with a doubt on the speed: {w}"),
+                _ => format!("not judged: {w}"),
+            }));
             let unit = if reference.is_some() { "spreads" } else { "times its healthy value" };
             let (own_local, own_max) = weight(trig);
             for (other, _, trig) in per_gear.iter().filter(|g| g.0 != *gear && !g.2.is_empty()) {
