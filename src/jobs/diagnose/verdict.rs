@@ -377,8 +377,9 @@ const SLIP_FREE_LINE_DB: f64 = 14.0;
 /// Why a faulty verdict against `reference` is only suspect: the recording's angle was followed on a mesh
 /// line [`WEAKER_LINE_DB`] weaker than the baseline files' weakest and under [`SLIP_FREE_LINE_DB`], so its
 /// averages may be smeared where the baseline's are not; or its angle was not followed at all (a constant
-/// speed). A fault that weakens the mesh line (a broken tooth) is then suspect, not
-/// faulty, until a tachometer's angle confirms it.
+/// speed). The caller keeps a faulty verdict whose own gear's FM4 or M6A is faulty (an impulse, which a
+/// smeared average never shows); a distributed change on such an angle is suspect until a tachometer's
+/// angle confirms it.
 fn weaker_angle(d: &Diagnosis, reference: &Reference) -> Option<String> {
     use crate::report::summary::Tracking;
     if d.speed_profile.tracking == Tracking::Constant {
@@ -389,10 +390,7 @@ fn weaker_angle(d: &Diagnosis, reference: &Reference) -> Option<String> {
         );
     }
     let base = reference.tracked_line_db?;
-    let own = d
-        .speed_profile
-        .line_snr_db
-        .filter(|_| d.speed_profile.tracking == crate::report::summary::Tracking::MeshPhase)?;
+    let own = d.speed_profile.line_snr_db.filter(|_| d.speed_profile.tracking == Tracking::MeshPhase)?;
     (own < base - WEAKER_LINE_DB && own < SLIP_FREE_LINE_DB).then(|| {
         format!(
             "at most suspect: the angle was followed on a mesh line {own:.1} dB over its band against {base:.1} dB in the baseline, so the averages may be smeared by a slipping angle, which mimics a distributed fault; a tachometer channel would decide"

@@ -24,7 +24,8 @@ pub(super) struct Nominal {
     /// tracking then follows the mesh line, the averages rest on the nameplate speed as it is.
     pub(super) unconfirmed_comb_db: Option<f64>,
     /// A second start for the tracking: the best speed of a mesh comb that stands too low to confirm the
-    /// given speed ([`START_COMB_DB`] to [`MIN_COMB_DB`]); the start whose followed line stands higher is kept.
+    /// given speed ([`START_COMB_DB`] to [`MIN_COMB_DB`]); kept when the line followed from it stands
+    /// clearly higher than the one followed from the given speed (the analysis stage decides).
     pub(super) alternative: Option<AngleMap>,
 }
 
@@ -180,7 +181,7 @@ pub(super) fn nominal_speed(
             )
         }),
         unconfirmed_comb_db: None,
-            alternative: None,
+        alternative: None,
     })
 }
 
@@ -190,8 +191,8 @@ pub(super) fn nominal_speed(
 /// hold-out machines' meshes stand 8-15 dB at their resonance-lifted harmonics.
 const MIN_COMB_DB: f64 = 8.0;
 
-/// Comb height (as [`MIN_COMB_DB`]) from which the comb's best speed, though not a confirmation, is where
-/// the tracking starts instead of the given speed: 2 dB over what noise alone reaches. A high harmonic's
+/// Comb height (as [`MIN_COMB_DB`]) from which the comb's best speed, though not a confirmation, is a second
+/// start for the tracking beside the given speed: 2 dB over what noise alone reaches. A high harmonic's
 /// ridge is sought within +-0.45 orders of its start, which a given speed 1.5 % off misses at order 78
 /// (a 13-tooth pinion's sixth mesh harmonic, where the hold-out's m2 has its strongest lines; the tracking
 /// then followed the wheel's sideband, 2.6 % off).
@@ -234,7 +235,7 @@ fn given_on_mesh_comb(
         Some((p, db)) if db >= MIN_COMB_DB => (p, None, None),
         Some((p, db)) if db >= START_COMB_DB => {
             warnings.push(format!(
-                "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: not a confirmation; the tracking is started from the given speed and from the comb's best ({:+.2} % from it), and the start whose line stands higher is kept",
+                "the mesh comb of {zp} teeth stands only {db:.1} dB over the spectrum within +-{:.1} % of the given speed: not a confirmation; the tracking is started from the given speed and from the comb's best ({:+.2} % from it), and the comb's start is kept only when its line stands clearly higher",
                 100.0 * o.speed_tolerance,
                 100.0 * (nominal / p - 1.0)
             ));
