@@ -60,9 +60,30 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
             }
         }
         _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
+        // on a doubtful speed the averages may be smeared over the wrong gear's revolutions, while an
+        // envelope line at one order stays where it is for a speed a few percent off
+        _ if d.speed_doubt.is_some() && rise_db >= ENVELOPE_MOVE_DB && !matches!(line.shaft, Shaft::Named(_)) => {
+            let was = d.verdict.gear;
+            d.verdict.gear = gear;
+            d.verdict.deciding = Some(line.shaft);
+            (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+            d.verdict.cross_talk.clear();
+            d.verdict.reasons.insert(0, reason);
+            d.verdict.reasons.insert(
+                1,
+                format!(
+                    "the verdict is put on the {gear}, not the {was} whose averages moved: on a doubtful speed the averages can be smeared over the other gear's revolutions, while the envelope's once-per-revolution line rose by {rise_db:.1} dB"
+                ),
+            );
+        }
         _ => d.verdict.reasons.push(reason),
     }
 }
+
+/// Rise of a shaft's first envelope order over the baseline's (dB) that moves a verdict to that shaft's gear
+/// when the speed is doubtful: twice [`ENVELOPE_RISE_DB`]. A 31/47 broken pinion tooth on a speed tracked
+/// 1.5 % off rose 40 dB in the pinion's envelope order while the wheel's averages took the verdict.
+pub const ENVELOPE_MOVE_DB: f64 = 20.0;
 
 /// Puts a verdict that rests on the indicators both gears' averages share on the gear whose own teeth changed.
 ///
