@@ -812,3 +812,25 @@ fn tracking_error() {
         }
     }
 }
+
+/// On a doubtful speed the verdict goes to the gear whose first envelope order rose: the 31/47 broken
+/// pinion tooth with the nominal speed and two siblings is followed on a 7 dB line 1.5 % off the true
+/// speed, its wheel averages move most (smeared impacts), and its pinion envelope order rises 40 dB; it must
+/// be put on the pinion, saying why. (The envelope line at order 1 moves by 1.5 % of an order for that speed
+/// error, well inside its search; the 31-tooth average's mesh lines move by half an order.)
+#[test]
+fn on_a_doubtful_speed_the_envelope_names_the_gear() {
+    let m = machine("z31z47-12Hz-fs51k2");
+    let (healthy, faults) = test_set(&m);
+    let fault = faults.into_iter().find(|c| c.label() == "pinion-broken-t1").unwrap();
+    ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+    let o = diagnose(&fault, Mode::Speed, &[&healthy[0], &healthy[1]]);
+    assert_eq!(o.gear, "pinion", "{}", o.json["verdict"]);
+    assert!(o.state == "suspect" || o.state == "faulty", "{}", o.json["verdict"]);
+    let reasons = o.json["verdict"]["reasons"].to_string();
+    assert!(
+        o.json["speed_doubt"].is_string() == reasons.contains("the verdict is put on the pinion"),
+        "the move is said exactly when the speed is doubted: {}",
+        o.json["verdict"]
+    );
+}
