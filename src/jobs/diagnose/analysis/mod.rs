@@ -192,10 +192,14 @@ fn follow_shaft(
         fluctuation_percent: 100.0 * speeds.wander,
         line_snr_db,
     };
-    let doubt = nominal.doubt.or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o)).or_else(|| {
-        let zp = o.teeth.map(|t| t.0).filter(|_| nominal.source == SpeedSource::Estimated)?;
-        on_mains(zp, profile.mean_hz?, &speeds)
-    });
+    let doubt = nominal
+        .doubt
+        .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o))
+        .or_else(|| unfollowed_estimate(nominal.source, &profile))
+        .or_else(|| {
+            let zp = o.teeth.map(|t| t.0).filter(|_| nominal.source == SpeedSource::Estimated)?;
+            on_mains(zp, profile.mean_hz?, &speeds)
+        });
     Ok(ShaftAngle {
         period: map.mean_period_samples(),
         map,
@@ -215,6 +219,16 @@ fn follow_shaft(
 /// starts on the same line (a 31/47 pinion spall's 6.1 and 6.8 dB, where the comb's start smeared the
 /// pinion's FM4 from 22.8 to 3.7), while a line and its neighbour differ by several.
 const CLEARER_START_DB: f64 = 3.0;
+
+/// Why averages on an estimated speed that could not be followed cannot clear the machine: the estimate is
+/// the mean speed of a shaft that may wander by 0.5-2 %, and a constant-speed average on it smears a fault
+/// over the revolution (hold-out machines, teeth only: a spall and worn pinion averaged on a constant speed
+/// 0.95-1.34 % off the true mean were called healthy).
+fn unfollowed_estimate(source: SpeedSource, profile: &SpeedProfile) -> Option<String> {
+    (source == SpeedSource::Estimated && profile.tracking == Tracking::Constant).then(|| {
+        "the estimated speed could not be followed, so the averages assume a constant speed on a shaft that may wander by a percent or two, which smears a fault over the revolution: they cannot clear the machine; give the shaft speed or a tachometer channel".to_string()
+    })
+}
 
 /// Height over its band (dB) of a tracked mesh line under which it does not confirm a given speed that the
 /// mesh comb did not confirm: the phase-locked tracking held the true line on every generated recording
