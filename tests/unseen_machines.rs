@@ -367,6 +367,14 @@ fn machine(name: &str) -> Machine {
     machines().into_iter().find(|m| m.name == name).unwrap()
 }
 
+/// The healthy siblings of machine `name` and its fault `label`, their recordings made when missing.
+fn healthy_and_fault(name: &str, label: &str) -> (Vec<Case>, Case) {
+    let (healthy, faults) = test_set(&machine(name));
+    let fault = faults.into_iter().find(|c| c.label() == label).unwrap();
+    ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+    (healthy, fault)
+}
+
 macro_rules! machine_tests {
     ($($speed:ident, $tacho:ident, $healthy:ident, $name:literal, $speed_ignored:meta;)*) => {$(
         #[test]
@@ -492,14 +500,11 @@ fn a_ten_percent_crack_changes_the_average_at_its_tooth() {
 /// files (a JSON round trip of f64 is exact; the values agree to rounding) and the same verdict.
 #[test]
 fn a_profile_keeps_the_local_change() {
-    let m = machine("z23z41-18Hz-fs25k6");
-    let (healthy, faults) = test_set(&m);
-    let crack = faults.into_iter().find(|c| c.label() == "wheel-crack10-t12").unwrap();
-    ensure(&healthy.iter().chain([&crack]).cloned().collect::<Vec<_>>());
+    let (healthy, crack) = healthy_and_fault("z23z41-18Hz-fs25k6", "wheel-crack10-t12");
     let dir = temp_dir("unseen-profile");
     let profile = dir.join("z23z41.json").to_string_lossy().into_owned();
     let (h1, h2) = (healthy[0].path().to_string_lossy().into_owned(), healthy[1].path().to_string_lossy().into_owned());
-    let teeth = format!("{},{}", m.zp, m.zw);
+    let teeth = format!("{},{}", crack.machine.zp, crack.machine.zw);
     let common = ["--channel", "1", "--teeth", teeth.as_str(), "--tacho-channel", "2"];
     let mut learn = vec!["learn", h1.as_str(), h2.as_str(), "-o", profile.as_str()];
     learn.extend(common);
@@ -548,9 +553,7 @@ fn a_profile_keeps_the_local_change() {
 fn without_a_baseline_the_envelope_raises_impacts_on_their_gear() {
     let mut wrong = vec![];
     for (name, label) in [("z31z47-12Hz-fs51k2", "pinion-spall-t25"), ("z17z29-25Hz-fs20k", "wheel-broken-t23")] {
-        let (healthy, faults) = test_set(&machine(name));
-        let fault = faults.into_iter().find(|c| c.label() == label).unwrap();
-        ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+        let (healthy, fault) = healthy_and_fault(name, label);
         let over = |o: &Outcome| o.json["verdict"]["reasons"].to_string().contains("over the 30 dB absolute limit");
         let o = diagnose(&fault, Mode::Speed, &[]);
         let truth = fault.fault.unwrap().gear.name();
@@ -820,10 +823,7 @@ fn tracking_error() {
 /// error, well inside its search; the 31-tooth average's mesh lines move by half an order.)
 #[test]
 fn on_a_doubtful_speed_the_envelope_names_the_gear() {
-    let m = machine("z31z47-12Hz-fs51k2");
-    let (healthy, faults) = test_set(&m);
-    let fault = faults.into_iter().find(|c| c.label() == "pinion-broken-t1").unwrap();
-    ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
+    let (healthy, fault) = healthy_and_fault("z31z47-12Hz-fs51k2", "pinion-broken-t1");
     let o = diagnose(&fault, Mode::Speed, &[&healthy[0], &healthy[1]]);
     assert_eq!(o.gear, "pinion", "{}", o.json["verdict"]);
     assert!(o.state == "suspect" || o.state == "faulty", "{}", o.json["verdict"]);

@@ -363,11 +363,18 @@ impl LineSpectrum {
     }
 }
 
+/// Segment length (samples) of a spectrum read for mesh lines on a shaft of `period` samples: about 8
+/// revolutions (bins of an eighth of the shaft frequency resolve the sidebands; longer segments smear
+/// under a fluctuating speed), a power of two of at least 256.
+fn line_segment(period: f64) -> usize {
+    ((8.0 * period).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256)
+}
+
 /// A nominal shaft period checked on the mesh comb: the shaft period (samples) within +-`tolerance`
 /// (relative) of `nominal` at which the mesh harmonics k z f (k = 1..=[`COMB_HARMONICS`], below 0.45 cycles
 /// per sample) of a gear of `z` teeth stand highest over their local floor, and that comb's height: the
 /// geometric mean of its three highest harmonics' amplitude over their floor, dB. The score of a candidate
-/// speed is sum_k ln(clamp(h_k, 1, 10)) with h_k harmonic k's height: noise adds about the same to every
+/// speed is sum_k ln(clamp(h_k, 1, 1000)) (60 dB, the cap) with h_k harmonic k's height: noise adds about the same to every
 /// candidate, the mesh's harmonics only where they line up. A nameplate speed off by the motor's slip puts
 /// the comb 1-4 % away; a sideband family kz + j (j shaft orders) lines up with the comb of speed
 /// f (1 + j / (k z)) for one harmonic k only, so the sum over many harmonics peaks at the true speed.
@@ -381,10 +388,7 @@ pub fn mesh_comb_period<T: Sample>(
     z: usize,
     tolerance: f64,
 ) -> Result<(f64, f64), SignalError> {
-    // bins of an eighth of the shaft frequency resolve the sidebands; longer segments smear under a
-    // fluctuating speed
-    let segment = ((8.0 * nominal).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256);
-    let s = LineSpectrum::new(fft, x, segment, "mesh comb spectrum")?;
+    let s = LineSpectrum::new(fft, x, line_segment(nominal), "mesh comb spectrum")?;
     let n = s.segment();
     // the uncapped heights break ties among candidates whose harmonics all reach the cap (a clean recording)
     let score = |f: f64| -> f64 {
@@ -422,8 +426,8 @@ pub fn mesh_comb_period<T: Sample>(
 /// order k z, its height in dB). The spectrum is averaged over segments of about 8 revolutions of the
 /// first 2^21 samples. `None` when the record is too short.
 pub fn strongest_mesh_harmonic<T: Sample>(x: &[T], period: f64, z: usize, limit: f64) -> Option<(f64, f64)> {
-    let segment = ((8.0 * period).ceil().min((1u64 << 24) as f64) as usize).next_power_of_two().max(256);
-    let s = LineSpectrum::new(&mut Fft::new(), &x[..x.len().min(1 << 21)], segment, "mesh harmonics").ok()?;
+    let s =
+        LineSpectrum::new(&mut Fft::new(), &x[..x.len().min(1 << 21)], line_segment(period), "mesh harmonics").ok()?;
     s.harmonics(1.0 / period, z, limit)
         .into_iter()
         .max_by(|a, b| a.1.total_cmp(&b.1))
