@@ -402,8 +402,8 @@ fn trend_over_a_directory_marks_the_first_recording_outside_the_band() {
     let csv = std::fs::read_to_string(out.join("trend.csv")).unwrap();
     let jsonl = std::fs::read_to_string(out.join("trend.jsonl")).unwrap();
     assert_eq!(csv.lines().count() - 1, jsonl.lines().count(), "one JSON line per CSV row");
-    // 3 recordings x 2 gears x 8 indicators
-    assert_eq!(jsonl.lines().count(), 48);
+    // 3 recordings x 2 gears x 9 deciding indicators
+    assert_eq!(jsonl.lines().count(), 54);
     let first_outside = jsonl
         .lines()
         .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())

@@ -176,8 +176,9 @@ fn two_stage_healthy_is_never_faulty() {
         let j = run_machine(&rec, &m, &args);
         assert_ne!(j["verdict"]["state"], "faulty", "seed {seed}: {}", j["verdict"]);
         assert_ne!(j["verdict"]["state"], "not_judged", "seed {seed}: {}", j["verdict"]);
-        // a suspect verdict (seed 8: the envelope's output order 1 alone) names the shaft and its gear, and
-        // no tooth since no average moved
+        // a suspect verdict (seed 8: its output shaft modulated once per revolution, the envelope's output
+        // order 1 and SBR, both at most suspect alone) names the shaft and its gear, and no tooth since no
+        // average moved as a tooth's fault moves it
         if j["verdict"]["state"] == "suspect" {
             assert!(j["verdict"]["shaft"].is_string() && j["verdict"]["stage"].is_number(), "{}", j["verdict"]);
             assert!(j["verdict"]["tooth"].is_null(), "{}", j["verdict"]);

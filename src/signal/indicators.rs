@@ -241,6 +241,41 @@ pub fn energy_ratio(difference: &[f64], regular: &[f64]) -> f64 {
     (sum_sq_dev(difference) / sum_sq_dev(regular)).sqrt()
 }
 
+/// SBR: the first-order sidebands' energy over the other orders of their band, against the mesh lines'
+/// energy, summed over every mesh harmonic that the amplitude spectrum holds with both its sidebands:
+/// SBR = sum_k max(A(k z - 1)^2 + A(k z + 1)^2 - 2 F_k, 0) / sum_k A(k z)^2, k = 1, 2, ... while
+/// k z + 1 < len, with F_k the median of A(j)^2 over the other orders j of the band |j - k z| <= z / 2
+/// (orders 3 and up). A change once per revolution of the gear (an eccentric gear, wear that differs from
+/// tooth to tooth) modulates every mesh harmonic and raises its first sidebands over the rest of the
+/// gear's pattern; broadband energy (noise, a shock in the block) raises the whole band and is taken out
+/// with F_k. The sum weighs each harmonic by its own energy, so the harmonics a housing resonance lifts out
+/// of the noise carry it where the first one is buried (SER and SI read the first harmonic only). A
+/// harmonic whose mesh or sideband bin `other(bin)` claims (a line of another shaft or another mesh of the
+/// same shaft, which is not this gear's modulation) is left out, and so are such bins from F_k. NaN when
+/// no harmonic fits or the mesh lines hold no energy.
+pub fn first_sideband_ratio(amplitudes: &[f64], z: usize, other: impl Fn(usize) -> bool) -> f64 {
+    let (mut side, mut mesh) = (0.0, 0.0);
+    for k in (1..).map(|h| h * z).take_while(|&k| z > 1 && k + 1 < amplitudes.len()) {
+        if other(k - 1) || other(k) || other(k + 1) {
+            continue;
+        }
+        let mut band: Vec<f64> = (k.saturating_sub(z / 2).max(3)..=(k + z / 2).min(amplitudes.len() - 1))
+            .filter(|&j| j + 1 < k || j > k + 1)
+            .filter(|&j| !other(j))
+            .map(|j| amplitudes[j].powi(2))
+            .collect();
+        band.sort_by(f64::total_cmp);
+        let floor = match band.len() {
+            0 => 0.0,
+            n if n % 2 == 1 => band[n / 2],
+            n => 0.5 * (band[n / 2 - 1] + band[n / 2]),
+        };
+        side += (amplitudes[k - 1].powi(2) + amplitudes[k + 1].powi(2) - 2.0 * floor).max(0.0);
+        mesh += amplitudes[k].powi(2);
+    }
+    if mesh > 0.0 { side / mesh } else { f64::NAN }
+}
+
 /// SER: six sideband pairs at spacing `spacing` bins around `mesh` in an amplitude spectrum (bins beyond
 /// the spectrum count as zero), divided by the mesh amplitude.
 pub fn sideband_energy_ratio(amplitudes: &[f64], mesh: usize, spacing: usize) -> f64 {
@@ -253,6 +288,32 @@ pub fn sideband_energy_ratio(amplitudes: &[f64], mesh: usize, spacing: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// SBR of lines placed by hand: harmonics 10 and 20 of amplitude 2 and 1 with sidebands 0.2 and 0.3
+    /// over an empty band give (2 * 0.04 + 2 * 0.09) / (4 + 1) = 0.052; a floor of 0.1 under every order
+    /// takes 2 * 0.01 out of each harmonic's sidebands, (0.06 + 0.16) / 5 = 0.044; a spectrum too short for
+    /// one harmonic's sidebands is NaN.
+    #[test]
+    fn first_sideband_ratio_of_placed_lines() {
+        let mut a = vec![0.0; 25];
+        a[10] = 2.0;
+        a[20] = 1.0;
+        for k in [9, 11] {
+            a[k] = 0.2;
+        }
+        for k in [19, 21] {
+            a[k] = 0.3;
+        }
+        a[5] = 7.0; // a shaft order is not a sideband
+        let none = |_| false;
+        assert!((first_sideband_ratio(&a, 10, none) - 0.052).abs() < 1e-15);
+        assert!(first_sideband_ratio(&a[..11], 10, none).is_nan());
+        assert!(first_sideband_ratio(&a, 1, none).is_nan());
+        // a line of another shaft at order 19.4 claims bin 19: harmonic 20 is left out, 0.08 / 4 = 0.02
+        assert!((first_sideband_ratio(&a, 10, |b| b == 19) - 0.02).abs() < 1e-15);
+        let floored: Vec<f64> = a.iter().map(|&v| if v == 0.0 { 0.1 } else { v }).collect();
+        assert!((first_sideband_ratio(&floored, 10, none) - 0.044).abs() < 1e-15);
+    }
 
     /// The sums in lanes equal one running sum (to rounding), whatever the length's remainder.
     #[test]

@@ -134,17 +134,22 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
         let (name, why) = (sc.indicator.label(), sc.indicator.meaning());
         let state = if !sc.decides || sc.spreads < sc.suspect_at {
             continue;
-        } else if sc.spreads >= sc.faulty_at {
+        } else if sc.spreads >= sc.faulty_at && !sc.indicator.supporting() {
             VerdictState::Faulty
         } else {
             VerdictState::Suspect
+        };
+        let cap = if sc.indicator.supporting() && sc.spreads >= sc.faulty_at {
+            " (a load fluctuating near the shaft's rate modulates a healthy gear too: at most suspect on its own)"
+        } else {
+            ""
         };
         out.push(Trigger {
             state,
             local: sc.indicator.local(),
             ratio: sc.spreads,
             text: format!(
-                "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}",
+                "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}{cap}",
                 g.gear,
                 g.channel,
                 num(sc.value),
@@ -417,6 +422,10 @@ pub(super) fn place_tooth(d: &mut Diagnosis) {
         VerdictGear::Wheel => Shaft::Wheel,
         _ => return,
     };
+    // a verdict that rests on a once-per-revolution modulation alone (SBR) is distributed: no tooth
+    if over_suspect(&d.scores, &shaft).next().is_some() && !moved_for_a_tooth(&d.scores, &shaft) {
+        return;
+    }
     let origin =
         if d.speed_profile.tracking.tachometer_origin() { ToothOrigin::Tachometer } else { ToothOrigin::Arbitrary };
     // the local change against the baseline, when it counts, names the tooth where the average changed
@@ -438,6 +447,17 @@ pub(super) fn place_tooth(d: &mut Diagnosis) {
         d.verdict.tooth = Some(tooth);
         d.verdict.tooth_origin = Some(origin);
     }
+}
+
+/// The deciding scores of `gear` over their suspect limit.
+fn over_suspect<'a>(scores: &'a [Score], gear: &'a Shaft) -> impl Iterator<Item = &'a Score> {
+    scores.iter().filter(move |s| s.gear == *gear && s.decides && s.spreads >= s.suspect_at)
+}
+
+/// Whether `gear`'s own indicators moved as a fault of some tooth moves them: a deciding score over its
+/// suspect limit other than a supporting one (SBR, a once-per-revolution modulation, is no tooth's).
+pub(super) fn moved_for_a_tooth(scores: &[Score], gear: &Shaft) -> bool {
+    over_suspect(scores, gear).any(|s| !s.indicator.supporting())
 }
 
 /// The largest energy of `x` over one pitch (of `z` per revolution) against the mean pitch's.

@@ -18,7 +18,10 @@ pub(super) const TREND_FAMILIES: [(&str, &[Indicator]); 3] = [
             Indicator::CrestFactor,
         ],
     ),
-    ("energy around the mesh (ER, SER, SI, SLF)", &[Indicator::Er, Indicator::Ser, Indicator::Si, Indicator::Slf]),
+    (
+        "energy around the mesh (ER, SER, SBR, SI, SLF)",
+        &[Indicator::Er, Indicator::Ser, Indicator::Sbr, Indicator::Si, Indicator::Slf],
+    ),
     ("spectral change from the baseline", &[Indicator::SpectralChange]),
 ];
 

@@ -79,6 +79,7 @@ pub fn diagnosis_section(
             Indicator::Er,
             Indicator::Si,
             Indicator::Ser,
+            Indicator::Sbr,
             Indicator::Kurtosis,
             Indicator::CrestFactor,
         ];

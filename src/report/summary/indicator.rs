@@ -35,6 +35,9 @@ pub enum Indicator {
     Slf,
     /// Sideband energy ratio: sidebands (orders +-1..6) over the mesh line around the first mesh harmonic.
     Ser,
+    /// First-order sideband ratio: the first sidebands' energy over the mesh lines' energy, summed over
+    /// every mesh harmonic.
+    Sbr,
     /// RMS distance of the average's log order spectrum from the baseline's, dB.
     SpectralChange,
     /// Second central moment of the residual signal (unit^2), for NA4*.
@@ -57,11 +60,20 @@ pub enum Scale {
 
 impl Indicator {
     /// The indicators that take part in a verdict against a baseline, in the order they are scored.
-    pub const DECIDING: [Indicator; 8] =
-        [Self::Fm4, Self::M6a, Self::Na4Star, Self::Er, Self::Fm0, Self::Ser, Self::Si, Self::SpectralChange];
+    pub const DECIDING: [Indicator; 9] = [
+        Self::Fm4,
+        Self::M6a,
+        Self::Na4Star,
+        Self::Er,
+        Self::Fm0,
+        Self::Ser,
+        Self::Sbr,
+        Self::Si,
+        Self::SpectralChange,
+    ];
 
     /// The indicators of a gear's average printed in tables and written to the JSON.
-    pub const TABLE: [Indicator; 12] = [
+    pub const TABLE: [Indicator; 13] = [
         Self::Fm0,
         Self::Fm4,
         Self::M6a,
@@ -71,6 +83,7 @@ impl Indicator {
         Self::Si,
         Self::Slf,
         Self::Ser,
+        Self::Sbr,
         Self::Rms,
         Self::Kurtosis,
         Self::CrestFactor,
@@ -92,6 +105,7 @@ impl Indicator {
             Self::Si => "si",
             Self::Slf => "slf",
             Self::Ser => "ser",
+            Self::Sbr => "sbr",
             Self::SpectralChange => "spectral_change",
             Self::ResidualM2 => "residual_m2",
             Self::ResidualM4 => "residual_m4",
@@ -114,6 +128,7 @@ impl Indicator {
             Self::Si => "SI",
             Self::Slf => "SLF",
             Self::Ser => "SER",
+            Self::Sbr => "SBR",
             Self::SpectralChange => "spectral change",
             Self::ResidualM2 => "residual m2",
             Self::ResidualM4 => "residual m4",
@@ -140,6 +155,7 @@ impl Indicator {
             Self::Er => "more energy outside the regular mesh lines",
             Self::Fm0 => "the peak-to-peak of the average grew against the mesh lines",
             Self::Ser => "the sidebands around the mesh line have grown",
+            Self::Sbr => "the first sidebands of every mesh harmonic have grown against the harmonics",
             Self::Si => "the first sidebands of the mesh line have grown",
             Self::Slf => "the first sidebands of the mesh line have grown against the average's RMS",
             Self::SpectralChange => "the order spectrum of the average has changed",
@@ -165,13 +181,21 @@ impl Indicator {
         matches!(self, Self::Na4Star | Self::Si | Self::SpectralChange)
     }
 
+    /// Whether the indicator alone makes a gear at most suspect: SBR reads a once-per-revolution modulation,
+    /// which a load fluctuating near the shaft's rate puts on a healthy gear too (a healthy two-stage
+    /// recording of the test generator, its output shaft modulated so, stood 5-6 spreads over its
+    /// baseline), so with no other indicator beside it, it calls for a look, not a stop.
+    pub fn supporting(self) -> bool {
+        matches!(self, Self::Sbr)
+    }
+
     /// Whether the indicator sees a local fault (one or a few teeth): a peak in the difference signal.
     pub fn local(self) -> bool {
         matches!(self, Self::Fm4 | Self::M6a)
     }
 
     /// Every indicator.
-    pub const ALL: [Indicator; 16] = [
+    pub const ALL: [Indicator; 17] = [
         Self::Rms,
         Self::Kurtosis,
         Self::CrestFactor,
@@ -185,6 +209,7 @@ impl Indicator {
         Self::Si,
         Self::Slf,
         Self::Ser,
+        Self::Sbr,
         Self::SpectralChange,
         Self::ResidualM2,
         Self::ResidualM4,

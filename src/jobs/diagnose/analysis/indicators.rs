@@ -71,6 +71,16 @@ pub(in crate::jobs::diagnose) struct OtherLines {
     pub foreign: Vec<f64>,
 }
 
+impl OtherLines {
+    /// Whether order bin `b` of an average holds one of these lines: a harmonic of another mesh order, or
+    /// the bins within one order of a foreign line (what a finite average leaves of a line that is not
+    /// synchronous with its shaft).
+    pub fn claims(&self, b: usize) -> bool {
+        self.mesh.iter().any(|&z| z > 0 && b > 0 && b.is_multiple_of(z))
+            || self.foreign.iter().any(|&f| (b as f64 - f).abs() < 1.0)
+    }
+}
+
 /// The condition indicators of one TSA of a gear with mesh order `z` (its shaft's other lines `others`),
 /// and its decomposition.
 pub(in crate::jobs::diagnose) fn tsa_indicators(
@@ -112,6 +122,7 @@ pub(in crate::jobs::diagnose) fn tsa_indicators(
         Indicator::Ser,
         if z < amplitudes.len() { ind::sideband_energy_ratio(amplitudes, z, 1) } else { f64::NAN },
     );
+    m.insert(Indicator::Sbr, ind::first_sideband_ratio(amplitudes, z, |b| others.claims(b)));
     (m, d)
 }
 

@@ -18,7 +18,7 @@
 //! ```
 
 use super::analysis::{Analysed, analyse_parts};
-use super::verdict::{concentration, impulse_tooth};
+use super::verdict::{concentration, impulse_tooth, moved_for_a_tooth};
 use super::*;
 use crate::model::kinematics::{Machine, Member, Ratio, Stage};
 use crate::report::summary::{
@@ -456,10 +456,9 @@ pub(super) fn name_verdict(
     if let Some(why) = why {
         d.verdict.reasons.insert(0, why);
     }
-    // a tooth only when the shaft's own indicators moved (a verdict from the envelope alone names the gear;
-    // without a baseline there are no scores and the indicators decided)
-    let moved = d.scores.is_empty()
-        || d.scores.iter().any(|s| s.gear == Shaft::Named(name) && s.decides && s.spreads >= s.suspect_at);
+    // a tooth only when the shaft's own indicators moved as a tooth's fault moves them (a verdict from the
+    // envelope or SBR alone names the gear; without a baseline there are no scores and the indicators decided)
+    let moved = d.scores.is_empty() || moved_for_a_tooth(&d.scores, &Shaft::Named(name));
     let z = chosen.mesh_order.unwrap_or(chosen.teeth as usize);
     let signal = [&g.difference, &g.residual].into_iter().find(|x| moved && concentration(x, z) >= 3.0);
     if let Some(tooth) = signal.and_then(|x| impulse_tooth(x, z)) {
