@@ -371,4 +371,31 @@ mod tests {
         // the grid steps are a quarter bin of 1/16384: the spacing within half a bin of the truth
         assert!((best.frequency - mesh).abs() < 0.5 / 16384.0, "{c:?}");
     }
+
+    /// A mesh whose harmonics 1, 3, 4 and 5 stand and 2, 6, 7, 8 lie under the noise (a housing that
+    /// lifts some harmonics, the hold-out's 29/71 pinion): the comb of a third of its spacing is promoted
+    /// by its multiples of 3 (four of its first eight stand clear over noise beside them; every one of the
+    /// first four, the rule before, failed on the second harmonic), while the mesh comb itself is no
+    /// divisor of anything (its even harmonics do not stand over the odd ones).
+    #[test]
+    fn a_divisor_comb_is_promoted_when_half_its_multiples_stand() {
+        let n = 1 << 18;
+        let mesh = 0.021;
+        let mut state = 99u64;
+        let mut noise = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let x: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64;
+                [1, 3, 4, 5].iter().map(|&k| 0.5 * (2.0 * PI * mesh * k as f64 * t).sin()).sum::<f64>() + noise()
+            })
+            .collect();
+        let e = comb_candidates(&mut Fft::new(), &[&x[..]], 0.003, 0.2, 0.002).unwrap();
+        let divisor = e.multiples_stand_out(mesh / 3.0, 3).unwrap();
+        assert!(divisor >= 0.69, "{divisor}");
+        let mesh_itself = e.multiples_stand_out(mesh, 2).unwrap();
+        assert!(mesh_itself < 0.69, "{mesh_itself}");
+    }
 }
