@@ -245,73 +245,30 @@ pub fn judge(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds) {
 pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresholds, levels: bool) {
     let absolute_only = Thresholds { faulty_count: usize::MAX, ..t.clone() };
     let t = if reference.is_none() { &absolute_only } else { t };
-    // (gear, channel, triggers)
-    let mut per_gear: Vec<(Shaft, usize, Vec<Trigger>)> = Vec::new();
-    let mut not_judged = Vec::new();
-    d.scores.clear();
-    let gears = d.gears.clone();
-    for g in &gears {
-        let trig = match reference {
-            Some(r) if r.covers(g) => against_baseline(d, g, r, levels),
-            Some(_) => Vec::new(),
-            None => absolute(g, t),
-        };
-        if let Some(why) = unscored(d, g, reference) {
-            not_judged.push(why);
-        }
-        per_gear.push((g.gear, g.channel, trig));
-    }
-    if let Some(doubt) = &d.speed_doubt {
-        not_judged.push(doubt.clone());
-    }
-    // the gear: the worst state; among equal states the one whose own average holds an impulse (FM4, M6A:
-    // a local fault is whole in its own gear's average, smeared in the other's), then the one whose
-    // strongest indicator moved furthest (spreads against a baseline, times its healthy value without)
-    let weight = |trig: &[Trigger]| -> (f64, f64) {
-        let local = trig.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
-        (local, trig.iter().map(|x| x.ratio).fold(0.0, f64::max))
-    };
-    let key = |g: &(Shaft, usize, Vec<Trigger>)| (gear_state(&g.2, t), weight(&g.2));
-    let worst = per_gear.iter().max_by(|a, b| {
-        let ((sa, (la, xa)), (sb, (lb, xb))) = (key(a), key(b));
-        sa.cmp(&sb).then((la > 0.0).cmp(&(lb > 0.0))).then(xa.total_cmp(&xb))
-    });
+    let (per_gear, not_judged) = gear_triggers(d, reference, t, levels);
+    let worst = worst_gear(&per_gear, t);
     let mut reasons = Vec::new();
     let mut cross_talk = Vec::new();
     let (state, gear) = match worst {
-        Some((gear, channel, trig)) if gear_state(trig, t) > VerdictState::Healthy => {
+        Some(w) if gear_state(&w.triggers, t) > VerdictState::Healthy => {
             // the deciding gear's reasons, strongest first; the other shafts' triggers are its cross-talk
             // (a local fault is synchronous with its own gear, so its own average keeps it whole while the
             // other gear's average holds it smeared)
-            let mut own: Vec<&Trigger> = per_gear.iter().filter(|g| g.0 == *gear).flat_map(|g| &g.2).collect();
+            let mut own: Vec<&Trigger> =
+                per_gear.iter().filter(|g| g.gear == w.gear).flat_map(|g| &g.triggers).collect();
             own.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
             reasons.extend(own.iter().take(t.max_reasons).map(|t| t.text.clone()));
             // a gear that could not be scored is not judged; a doubt on the speed qualifies the verdict
-            reasons.extend(not_judged.iter().map(|w| match &d.speed_doubt {
-                Some(doubt) if doubt == w => format!("with a doubt on the speed: {w}"),
-                _ => format!("not judged: {w}"),
+            reasons.extend(not_judged.iter().map(|why| match &d.speed_doubt {
+                Some(doubt) if doubt == why => format!("with a doubt on the speed: {why}"),
+                _ => format!("not judged: {why}"),
             }));
             let unit = if reference.is_some() { "spreads" } else { "times its healthy value" };
-            let (own_local, own_max) = weight(trig);
-            for (other, _, trig) in per_gear.iter().filter(|g| g.0 != *gear && !g.2.is_empty()) {
-                let strongest = trig.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
-                let (local, max) = weight(trig);
-                let why = if own_local > 0.0 {
-                    format!(
-                        "the {gear}'s own average holds the impulse (FM4/M6A {own_local:.1} {unit}, the {other}'s {local:.1})"
-                    )
-                } else {
-                    format!("the {gear}'s indicators moved further ({own_max:.1} {unit}, the {other}'s {max:.1})")
-                };
-                cross_talk.push(format!(
-                    "the {other}'s indicators moved too ({}): its average holds the {gear}'s fault smeared over its own revolutions, which is cross-talk, not a second fault: {why}",
-                    strongest.map_or(String::new(), |t| t.text.split_once(": ").map_or(t.text.as_str(), |x| x.1).to_string()),
-                ));
-            }
-            if let Some(g) = d.gears.iter().find(|g| g.gear == *gear && g.channel == *channel) {
+            cross_talk = cross_talk_notes(&per_gear, w, unit);
+            if let Some(g) = d.gears.iter().find(|g| g.gear == w.gear && g.channel == w.channel) {
                 d.indicators = g.indicators.clone();
             }
-            (gear_state(trig, t), VerdictGear::from(*gear))
+            (gear_state(&w.triggers, t), VerdictGear::from(w.gear))
         }
         _ if !not_judged.is_empty() || d.gears.is_empty() => {
             if d.gears.is_empty() {
@@ -321,28 +278,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
             (VerdictState::NotJudged, VerdictGear::None)
         }
         _ => {
-            reasons.push(match reference {
-                Some(r) => {
-                    let lo = d.scores.iter().map(|s| s.suspect_at).fold(f64::INFINITY, f64::min);
-                    let hi = d.scores.iter().map(|s| s.suspect_at).fold(0.0, f64::max);
-                    let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
-                    format!(
-                        "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s))",
-                        r.files
-                    )
-                }
-                None => {
-                    format!(
-                        "FM4, M6A and NA4 are under their absolute limits ({} {}, {} {}, {} {}: no baseline given)",
-                        Indicator::Fm4,
-                        num(t.fm4_absolute.suspect),
-                        Indicator::M6a,
-                        num(t.m6a_absolute.suspect),
-                        Indicator::Na4,
-                        num(t.na4_absolute.suspect)
-                    )
-                }
-            });
+            reasons.push(healthy_reason(d, reference, t));
             (VerdictState::Healthy, VerdictGear::None)
         }
     };
@@ -351,19 +287,125 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     }
     // a smeared average mimics a distributed fault, never an impulse: the deciding gear's own faulty
     // FM4/M6A keeps the verdict
-    let impulse = worst.is_some_and(|w| w.2.iter().any(|x| x.local && x.state == VerdictState::Faulty));
-    let (state, reasons) = match reference.and_then(|r| weaker_angle(d, r)) {
+    let impulse = worst.is_some_and(|w| w.triggers.iter().any(|x| x.local && x.state == VerdictState::Faulty));
+    let state = match reference.and_then(|r| weaker_angle(d, r)) {
         Some(why) if state == VerdictState::Faulty && !impulse => {
-            let mut reasons = reasons;
             reasons.push(why);
-            (VerdictState::Suspect, reasons)
+            VerdictState::Suspect
         }
-        _ => (state, reasons),
+        _ => state,
     };
     d.verdict = Verdict::new(state, gear, reasons);
     d.verdict.cross_talk = cross_talk;
-    d.verdict.deciding = worst.filter(|_| state > VerdictState::Healthy).map(|w| w.0);
+    d.verdict.deciding = worst.filter(|_| state > VerdictState::Healthy).map(|w| w.gear);
     place_tooth(d);
+}
+
+/// One gear average's triggers: the indicators over their limits.
+struct GearTriggers {
+    gear: Shaft,
+    channel: usize,
+    triggers: Vec<Trigger>,
+}
+
+/// Every gear average's triggers (against the baseline, or on absolute limits without one; `d.scores` is
+/// filled on the way), and why some could not be judged (a gear the baseline could not score, a doubt on
+/// the speed).
+fn gear_triggers(
+    d: &mut Diagnosis,
+    reference: Option<&Reference>,
+    t: &Thresholds,
+    levels: bool,
+) -> (Vec<GearTriggers>, Vec<String>) {
+    let mut per_gear = Vec::new();
+    let mut not_judged = Vec::new();
+    d.scores.clear();
+    let gears = d.gears.clone();
+    for g in &gears {
+        let triggers = match reference {
+            Some(r) if r.covers(g) => against_baseline(d, g, r, levels),
+            Some(_) => Vec::new(),
+            None => absolute(g, t),
+        };
+        if let Some(why) = unscored(d, g, reference) {
+            not_judged.push(why);
+        }
+        per_gear.push(GearTriggers { gear: g.gear, channel: g.channel, triggers });
+    }
+    if let Some(doubt) = &d.speed_doubt {
+        not_judged.push(doubt.clone());
+    }
+    (per_gear, not_judged)
+}
+
+/// The largest ratio of an impulse measure (FM4, M6A) among `triggers`, and the largest of any (spreads
+/// against a baseline, times its healthy value without).
+fn weight(triggers: &[Trigger]) -> (f64, f64) {
+    let local = triggers.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
+    (local, triggers.iter().map(|x| x.ratio).fold(0.0, f64::max))
+}
+
+/// The gear a verdict goes to: the worst state; among equal states the one whose own average holds an
+/// impulse (FM4, M6A: a local fault is whole in its own gear's average, smeared in the other's), then the
+/// one whose strongest indicator moved furthest.
+fn worst_gear<'a>(per_gear: &'a [GearTriggers], t: &Thresholds) -> Option<&'a GearTriggers> {
+    let key = |g: &GearTriggers| (gear_state(&g.triggers, t), weight(&g.triggers));
+    per_gear.iter().max_by(|a, b| {
+        let ((sa, (la, xa)), (sb, (lb, xb))) = (key(a), key(b));
+        sa.cmp(&sb).then((la > 0.0).cmp(&(lb > 0.0))).then(xa.total_cmp(&xb))
+    })
+}
+
+/// What the other gears' triggers are beside the deciding gear `w`'s: its fault smeared over their
+/// revolutions (cross-talk, not a second fault), with why `w` was chosen (`unit` of the ratios).
+fn cross_talk_notes(per_gear: &[GearTriggers], w: &GearTriggers, unit: &str) -> Vec<String> {
+    let gear = w.gear;
+    let (own_local, own_max) = weight(&w.triggers);
+    per_gear
+        .iter()
+        .filter(|g| g.gear != gear && !g.triggers.is_empty())
+        .map(|g| {
+            let other = g.gear;
+            let strongest = g.triggers.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
+            let (local, max) = weight(&g.triggers);
+            let why = if own_local > 0.0 {
+                format!(
+                    "the {gear}'s own average holds the impulse (FM4/M6A {own_local:.1} {unit}, the {other}'s {local:.1})"
+                )
+            } else {
+                format!("the {gear}'s indicators moved further ({own_max:.1} {unit}, the {other}'s {max:.1})")
+            };
+            format!(
+                "the {other}'s indicators moved too ({}): its average holds the {gear}'s fault smeared over its own revolutions, which is cross-talk, not a second fault: {why}",
+                strongest.map_or(String::new(), |t| t.text.split_once(": ").map_or(t.text.as_str(), |x| x.1).to_string()),
+            )
+        })
+        .collect()
+}
+
+/// Why a recording whose every gear was judged is healthy: the suspect limits against the baseline, or
+/// the absolute limits without one.
+fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) -> String {
+    match reference {
+        Some(r) => {
+            let lo = d.scores.iter().map(|s| s.suspect_at).fold(f64::INFINITY, f64::min);
+            let hi = d.scores.iter().map(|s| s.suspect_at).fold(0.0, f64::max);
+            let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
+            format!(
+                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s))",
+                r.files
+            )
+        }
+        None => format!(
+            "FM4, M6A and NA4 are under their absolute limits ({} {}, {} {}, {} {}: no baseline given)",
+            Indicator::Fm4,
+            num(t.fm4_absolute.suspect),
+            Indicator::M6a,
+            num(t.m6a_absolute.suspect),
+            Indicator::Na4,
+            num(t.na4_absolute.suspect)
+        ),
+    }
 }
 
 /// How much weaker (dB) than the baseline's weakest the mesh line a recording's angle was followed on may be
