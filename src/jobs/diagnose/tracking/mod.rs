@@ -29,6 +29,17 @@ pub(super) struct Nominal {
     pub(super) alternative: Option<AngleMap>,
 }
 
+impl Nominal {
+    /// An angle at a constant speed or from pulses with nothing more to say (no mesh order, no doubt, no
+    /// comb to weigh, no second start).
+    fn plain(map: AngleMap, source: SpeedSource, confidence: f64) -> Self {
+        Nominal { map, source, confidence, mesh_order: None, doubt: None, unconfirmed_comb_db: None, alternative: None }
+    }
+}
+
+/// The nominal speed of a recording: from the tachometer channel, the given speed (checked on the mesh
+/// comb when the teeth are given), or estimated from the signal (the mesh comb with the teeth, the mesh
+/// line's angle, the repetition period).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn nominal_speed(
     path: &Path,
@@ -45,67 +56,22 @@ pub(super) fn nominal_speed(
         let pulses = speed::tacho_pulses(&rec.channels[t - 1])
             .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
             .map_err(|e| bad(path, format!("tachometer channel {t}: {e}")))?;
-        return Ok(Nominal {
-            map: pulses,
-            source: SpeedSource::Tachometer,
-            confidence: 1.0,
-            mesh_order: None,
-            doubt: None,
-            unconfirmed_comb_db: None,
-            alternative: None,
-        });
+        return Ok(Nominal::plain(pulses, SpeedSource::Tachometer, 1.0));
     }
     if let Some(hz) = o.shaft_hz {
-        let fs = fs
-            .ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
-        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
-        let (period, unconfirmed_comb_db, alternative) = match o.teeth {
-            Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
-            None => (fs / hz, None, None),
-        };
-        return Ok(Nominal {
-            map: AngleMap::constant(period, 0.0, n),
-            source: SpeedSource::Given,
-            confidence: 1.0,
-            mesh_order: None,
-            doubt: None,
-            unconfirmed_comb_db,
-            alternative: alternative.map(|p| AngleMap::constant(p, 0.0, n)),
-        });
+        return given_speed(path, rec, channels, o, (hz, fs), fft, warnings);
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
     let full: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 21)]).collect();
-    let pinion_teeth = o.teeth.map(|t| t.0);
-    let est = match geometry.and_then(|g| g.period_samples) {
-        Some(p) => {
-            // the baseline's period: a mesh-dominated recording is followed on its mesh line as the
-            // baseline was (a 1 % speed fluctuation smears the raw repetition of a whole revolution), and
-            // the shaft found there is kept when it is the baseline's within the accepted speed change
-            // with the teeth, the mesh comb as the baseline's own speed was found (one pipeline), kept when it
-            // is the baseline's within the accepted speed change
-            let comb = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs));
-            if let Some(found) = comb.filter(|f| (f.period_samples / p - 1.0).abs() <= MAX_SPEED_DIFFERENCE) {
-                return Ok(found.nominal(n, warnings));
-            }
-            let mesh_order = geometry.and_then(|g| g.mesh_order).or(pinion_teeth);
-            if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, &views, &full, p, z, o.min_revolutions)) {
-                return Ok(found.nominal(n, warnings));
-            }
-            speed::period_near(fft, &views, p, 0.03)
-        }
-        None => {
-            if let Some(found) = o.teeth.and_then(|t| shaft_from_comb(fft, &views, &full, t, o.min_revolutions, fs)) {
-                return Ok(found.nominal(n, warnings));
-            }
-            speed::estimate_period(fft, &views, 16, n / o.min_revolutions.max(2))
-        }
-    }
-    .map_err(|e| bad(path, e))?;
+    let est = match estimated_on_lines(path, (&views, &full, n), o, fs, geometry, fft)? {
+        Ok(found) => return Ok(found.nominal(n, warnings)),
+        Err(est) => est,
+    };
     // a mesh-dominated signal (its shortest strong repetition is a tooth mesh): the shaft is sought on the
     // mesh line's own angle, which holds under speed fluctuation where the raw autocorrelation smears
     let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
     if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
-        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion_teeth, o.teeth.map(|t| t.1)) {
+        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, o.teeth.map(|t| t.0), o.teeth.map(|t| t.1)) {
             Ok(Some(found)) => return Ok(found.nominal(n, warnings)),
             Ok(None) => {
                 return Err(missing_speed(
@@ -133,13 +99,87 @@ pub(super) fn nominal_speed(
         "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
         est.period_samples, est.confidence
     ));
-    // a period found near the baseline's is the baseline's shaft revolution (whose own estimate already told a
-    // revolution from a hunting period), never a multiple of it: the fraction below is for a repetition found
-    // without one (a cracked pinion's strong fourth mesh harmonic would otherwise cut the baseline's
-    // revolution into four)
+    Ok(from_repetition(&est, &views, o, geometry, n, warnings))
+}
+
+/// A given speed `hz` (with the sample rate `fs`): checked against the record, and on the mesh comb when the
+/// teeth are given (the comb's speed, or a second start for the tracking).
+fn given_speed(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    (hz, fs): (f64, Option<f64>),
+    fft: &mut Fft,
+    warnings: &mut Vec<String>,
+) -> Result<Nominal, Error> {
+    let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
+    let fs =
+        fs.ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
+    check_given_speed(path, hz, fs, n, o.min_revolutions)?;
+    let (period, unconfirmed_comb_db, alternative) = match o.teeth {
+        Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
+        None => (fs / hz, None, None),
+    };
+    Ok(Nominal {
+        unconfirmed_comb_db,
+        alternative: alternative.map(|p| AngleMap::constant(p, 0.0, n)),
+        ..Nominal::plain(AngleMap::constant(period, 0.0, n), SpeedSource::Given, 1.0)
+    })
+}
+
+/// Without a speed: the shaft found on lines (the mesh comb of the given teeth; near a baseline's period, the
+/// mesh line's angle), or else the signal's repetition period (near the baseline's, or anywhere, of at most
+/// `n` samples over the least revolutions).
+fn estimated_on_lines(
+    path: &Path,
+    (views, full, n): (&[&[f32]], &[&[f32]], usize),
+    o: &Options,
+    fs: Option<f64>,
+    geometry: Option<&Geometry>,
+    fft: &mut Fft,
+) -> Result<Result<MeshShaft, speed::PeriodEstimate>, Error> {
+    let comb = |fft: &mut Fft| o.teeth.and_then(|t| shaft_from_comb(fft, views, full, t, o.min_revolutions, fs));
+    let est = match geometry.and_then(|g| g.period_samples) {
+        Some(p) => {
+            // the baseline's period: with the teeth, the mesh comb as the baseline's own speed was found (one
+            // pipeline), kept when it is the baseline's within the accepted speed change; then a
+            // mesh-dominated recording is followed on its mesh line as the baseline was (a 1 % speed
+            // fluctuation smears the raw repetition of a whole revolution), the shaft found there kept on the
+            // same condition
+            if let Some(found) = comb(fft).filter(|f| (f.period_samples / p - 1.0).abs() <= MAX_SPEED_DIFFERENCE) {
+                return Ok(Ok(found));
+            }
+            let mesh_order = geometry.and_then(|g| g.mesh_order).or(o.teeth.map(|t| t.0));
+            if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, views, full, p, z, o.min_revolutions)) {
+                return Ok(Ok(found));
+            }
+            speed::period_near(fft, views, p, 0.03)
+        }
+        None => {
+            if let Some(found) = comb(fft) {
+                return Ok(Ok(found));
+            }
+            speed::estimate_period(fft, views, 16, n / o.min_revolutions.max(2))
+        }
+    };
+    est.map(Err).map_err(|e| bad(path, e))
+}
+
+/// The nominal angle on a repetition period `est`: with the teeth and no baseline, the pinion revolution
+/// is the fraction of a repetition over several revolutions (a hunting period) where the given mesh order
+/// has its line; a period found near the baseline's is the baseline's shaft revolution (whose own estimate
+/// already told a revolution from a hunting period), never a multiple of it (a cracked pinion's strong fourth
+/// mesh harmonic would otherwise cut the baseline's revolution into four).
+fn from_repetition(
+    est: &speed::PeriodEstimate,
+    views: &[&[f32]],
+    o: &Options,
+    geometry: Option<&Geometry>,
+    n: usize,
+    warnings: &mut Vec<String>,
+) -> Nominal {
     if let (Some((zp, _)), None) = (o.teeth, geometry.and_then(|g| g.period_samples)) {
-        // the signal may repeat over several pinion revolutions (a hunting period): the pinion revolution
-        // is the fraction of the period where the given mesh order has its strongest line
         let line = |k: usize| -> f64 {
             let f = zp as f64 * k as f64 / est.period_samples;
             if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.3 / est.period_samples)).sum() }
@@ -154,25 +194,18 @@ pub(super) fn nominal_speed(
                 "the signal repeats every {k} pinion revolutions (the given mesh order {zp} fits a period of {:.3} samples): the pinion period is taken as that",
                 est.period_samples / k as f64
             ));
-            return Ok(Nominal {
-                map: AngleMap::constant(est.period_samples / k as f64, 0.0, n),
-                source: SpeedSource::Estimated,
-                confidence: est.confidence,
-                mesh_order: None,
-                doubt: None,
-                unconfirmed_comb_db: None,
-                alternative: None,
-            });
+            return Nominal::plain(
+                AngleMap::constant(est.period_samples / k as f64, 0.0, n),
+                SpeedSource::Estimated,
+                est.confidence,
+            );
         }
     }
-    Ok(Nominal {
-        map: AngleMap::constant(est.period_samples, 0.0, n),
-        source: SpeedSource::Estimated,
-        confidence: est.confidence,
+    Nominal {
         mesh_order: est
             .mesh_lag
             .map(|m| (est.period_samples / m).round() as usize)
-            .map(|z| fundamental_mesh(&views, est.period_samples, z))
+            .map(|z| fundamental_mesh(views, est.period_samples, z))
             .filter(|&z| z >= 8),
         doubt: (est.confidence < UNSURE_REPETITION).then(|| {
             format!(
@@ -180,9 +213,8 @@ pub(super) fn nominal_speed(
                 est.confidence
             )
         }),
-        unconfirmed_comb_db: None,
-        alternative: None,
-    })
+        ..Nominal::plain(AngleMap::constant(est.period_samples, 0.0, n), SpeedSource::Estimated, est.confidence)
+    }
 }
 
 /// Comb height (the geometric mean of its three highest harmonics over their local floor, dB) from which the
