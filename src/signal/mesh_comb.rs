@@ -340,6 +340,15 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
+    /// Uniform noise on [-0.5, 0.5) from a seeded linear congruential generator (Knuth's MMIX constants).
+    fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+
     /// A comb whose odd harmonics are weak (a strong second mesh harmonic) and whose fundamental sits among
     /// a louder foreign harmonic series (mains hum): the mesh spacing wins, neither its half nor its double.
     #[test]
@@ -347,11 +356,7 @@ mod tests {
         let n = 1 << 18;
         let mesh = 0.0213; // cycles per sample
         let hum = 0.00491;
-        let mut state = 12345u64;
-        let mut noise = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut noise = uniform_noise(12345);
         let x: Vec<f64> = (0..n)
             .map(|i| {
                 let t = i as f64;
@@ -381,11 +386,7 @@ mod tests {
     fn a_divisor_comb_is_promoted_when_half_its_multiples_stand() {
         let n = 1 << 18;
         let mesh = 0.021;
-        let mut state = 99u64;
-        let mut noise = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut noise = uniform_noise(99);
         let x: Vec<f64> = (0..n)
             .map(|i| {
                 let t = i as f64;
