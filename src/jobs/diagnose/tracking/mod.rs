@@ -385,57 +385,119 @@ pub(super) fn track(
     known_z: Option<usize>,
     nominal: AngleMap,
     warnings: &mut Vec<String>,
-) -> Result<(AngleMap, Tracking, Option<f64>, Option<usize>), Error> {
+) -> Result<Tracked, Error> {
     if o.tacho_channel.is_some() {
-        // one angle source for every recording of a machine: the mesh line's phase when the teeth are known
-        // and the line can be followed (it follows the speed within a revolution, where a once-per-revolution
-        // pulse train only interpolates), the tachometer fixing its origin; the tachometer's own angle
-        // otherwise
-        let Some(z) = known_z else { return Ok((nominal, Tracking::Tachometer, None, None)) };
-        let mut quiet = Vec::new();
-        let tracked = track(
-            path,
-            rec,
-            channels,
-            &Options { tacho_channel: None, ..o.clone() },
-            Some(z),
-            nominal.clone(),
-            &mut quiet,
-        )?;
-        return Ok(match tracked {
-            // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip
-            // a cycle in noise, which a pulse train never does)
-            (map, Tracking::MeshPhase, snr @ Some(db), z)
-                if db >= CLEAR_LINE_DB && map.revolutions() >= nominal.revolutions().saturating_sub(2) =>
-            {
-                (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
-            }
-            _ => {
-                warnings.extend(quiet.into_iter().map(|w| format!("the tachometer's angle is used: {w}")));
-                (nominal, Tracking::Tachometer, None, None)
-            }
-        });
+        return track_with_tachometer(path, rec, channels, o, known_z, nominal, warnings);
     }
     let period = nominal.mean_period_samples();
-    // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
-    let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
     let z = match known_z {
         Some(z) => z,
-        None => {
-            let tsas = channels
-                .par_iter()
-                .map(|&c| tsa::tsa(&rec.channels[c - 1], &nominal, 1.0, tsa_points(period), o.min_revolutions))
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| bad(path, e))?;
-            let z = mesh_family(&mut Fft::new(), tsas.iter().map(|t| t.samples.as_slice()));
-            let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
-            fundamental_mesh(&views, period, z)
-        }
+        None => mesh_order_on(path, rec, channels, o, &nominal)?,
     };
-    // the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
-    // second ten times the first) on each channel, relative to the channel's RMS; the channel where it
-    // stands out most is tracked (with the second, when its line is weak, and the one whose tracked line
-    // has the better SNR is used)
+    let ridges = ridges_to_follow(rec, channels, period, z);
+    let mut best = None;
+    for (c, r) in ridges {
+        let t = r.and_then(|r| angle::follow_ridge(&rec.channels[c - 1], r));
+        let done = t.is_ok();
+        best = Some(t);
+        if done {
+            break;
+        }
+    }
+    // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
+    let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
+    Ok(match best {
+        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
+            warnings.push(format!(
+                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
+                100.0 * (period / t.map.mean_period_samples() - 1.0)
+            ));
+            (nominal, Tracking::Constant, None, Some(z))
+        }
+        Some(Ok(t)) if t.line_snr_db >= MIN_TRACKING_SNR_DB => {
+            (t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z))
+        }
+        Some(Ok(t)) => {
+            warnings.push(format!(
+                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed; the TSA assumes a constant speed",
+                t.line_snr_db
+            ));
+            (nominal, Tracking::Constant, None, Some(z))
+        }
+        Some(Err(e)) => {
+            warnings.push(format!("mesh-phase tracking not possible ({e}); the TSA assumes a constant speed"));
+            (nominal, Tracking::Constant, None, Some(z))
+        }
+        None => (nominal, Tracking::Constant, None, Some(z)),
+    })
+}
+
+/// What [`track`] gives: the angle, how it was found, the followed line's height over its band (dB) and
+/// the mesh order it was followed for.
+pub(super) type Tracked = (AngleMap, Tracking, Option<f64>, Option<usize>);
+
+/// With a tachometer: one angle source for every recording of a machine, the mesh line's phase when the
+/// teeth are known and the line can be followed (it follows the speed within a revolution, where a
+/// once-per-revolution pulse train only interpolates), the tachometer fixing its origin; the
+/// tachometer's own angle `nominal` otherwise.
+fn track_with_tachometer(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    known_z: Option<usize>,
+    nominal: AngleMap,
+    warnings: &mut Vec<String>,
+) -> Result<Tracked, Error> {
+    let Some(z) = known_z else { return Ok((nominal, Tracking::Tachometer, None, None)) };
+    let mut quiet = Vec::new();
+    let without = Options { tacho_channel: None, ..o.clone() };
+    let tracked = track(path, rec, channels, &without, Some(z), nominal.clone(), &mut quiet)?;
+    Ok(match tracked {
+        // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip a
+        // cycle in noise, which a pulse train never does)
+        (map, Tracking::MeshPhase, snr @ Some(db), z)
+            if db >= CLEAR_LINE_DB && map.revolutions() >= nominal.revolutions().saturating_sub(2) =>
+        {
+            (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
+        }
+        _ => {
+            warnings.extend(quiet.into_iter().map(|w| format!("the tachometer's angle is used: {w}")));
+            (nominal, Tracking::Tachometer, None, None)
+        }
+    })
+}
+
+/// The mesh order of a recording whose teeth are not known: the harmonic family of its constant-speed
+/// TSA on `nominal`, brought down to the fundamental whose line stands.
+fn mesh_order_on(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    nominal: &AngleMap,
+) -> Result<usize, Error> {
+    let period = nominal.mean_period_samples();
+    let tsas = channels
+        .par_iter()
+        .map(|&c| tsa::tsa(&rec.channels[c - 1], nominal, 1.0, tsa_points(period), o.min_revolutions))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| bad(path, e))?;
+    let z = mesh_family(&mut Fft::new(), tsas.iter().map(|t| t.samples.as_slice()));
+    let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
+    Ok(fundamental_mesh(&views, period, z))
+}
+
+/// A channel and the mesh ridge found on it (or why none was).
+type ChannelRidge = (usize, Result<angle::MeshRidge, crate::signal::SignalError>);
+
+/// The mesh ridges worth following on a shaft of `period` samples with mesh order `z`, best line first:
+/// the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
+/// second ten times the first) on the channel where it stands out most against the channel's RMS; the
+/// second channel's too unless the first's line stands clear of its band; and, when neither does, the
+/// harmonic standing highest over its local floor (up to the 16th) on the channel where it stands highest
+/// (the first four can lie under the sensor noise while a resonance lifts a higher one 10-15 dB).
+fn ridges_to_follow(rec: &Recording, channels: &[usize], period: f64, z: usize) -> Vec<ChannelRidge> {
     let mut candidates: Vec<(usize, f64, f64)> = channels
         .par_iter()
         .map(|&c| {
@@ -450,17 +512,13 @@ pub(super) fn track(
         })
         .collect();
     candidates.sort_by(|a, b| b.2.total_cmp(&a.2));
-    // the ridge of the best channel, and of the second unless the first's line stands clear of its band;
-    // the demodulation (which keeps the ridge's line height) follows the higher one, and the other when
-    // that one fails
     let ridge_of = |&(c, order, _): &(usize, f64, f64)| (c, angle::mesh_ridge(&rec.channels[c - 1], period, order));
-    let mut ridges: Vec<(usize, Result<angle::MeshRidge, _>)> = candidates.iter().take(1).map(ridge_of).collect();
-    if !ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB)) {
+    let clear =
+        |ridges: &[ChannelRidge]| ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB));
+    let mut ridges: Vec<_> = candidates.iter().take(1).map(ridge_of).collect();
+    if !clear(&ridges) {
         ridges.extend(candidates.iter().skip(1).take(1).map(ridge_of));
-        // the first four harmonics can lie under the sensor noise while a resonance lifts a higher one
-        // 10-15 dB over its band: the harmonic standing highest over its local floor (up to the 16th) on
-        // the channel where it stands highest is followed too, when the lines above are not clear
-        if !ridges.iter().any(|r| r.1.as_ref().is_ok_and(|r| r.line_snr_db >= CLEAR_LINE_DB)) {
+        if !clear(&ridges) {
             let high = channels
                 .par_iter()
                 .filter_map(|&c| {
@@ -475,45 +533,15 @@ pub(super) fn track(
             }
         }
     }
+    // the demodulation (which keeps the ridge's line height) follows the higher one, and the other when
+    // that one fails
     ridges.sort_by(|a, b| match (&a.1, &b.1) {
         (Ok(x), Ok(y)) => y.line_snr_db.total_cmp(&x.line_snr_db),
         (Ok(_), Err(_)) => std::cmp::Ordering::Less,
         (Err(_), Ok(_)) => std::cmp::Ordering::Greater,
         _ => std::cmp::Ordering::Equal,
     });
-    let mut best = None;
-    for (c, r) in ridges {
-        let t = r.and_then(|r| angle::follow_ridge(&rec.channels[c - 1], r));
-        let done = t.is_ok();
-        best = Some(t);
-        if done {
-            break;
-        }
-    }
-    match best {
-        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
-            warnings.push(format!(
-                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
-                100.0 * (period / t.map.mean_period_samples() - 1.0)
-            ));
-            Ok((nominal, Tracking::Constant, None, Some(z)))
-        }
-        Some(Ok(t)) if t.line_snr_db >= MIN_TRACKING_SNR_DB => {
-            Ok((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)))
-        }
-        Some(Ok(t)) => {
-            warnings.push(format!(
-                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed; the TSA assumes a constant speed",
-                t.line_snr_db
-            ));
-            Ok((nominal, Tracking::Constant, None, Some(z)))
-        }
-        Some(Err(e)) => {
-            warnings.push(format!("mesh-phase tracking not possible ({e}); the TSA assumes a constant speed"));
-            Ok((nominal, Tracking::Constant, None, Some(z)))
-        }
-        None => Ok((nominal, Tracking::Constant, None, Some(z))),
-    }
+    ridges
 }
 
 /// The error of a recording whose shaft speed could not be found: the speed must be given.
