@@ -255,15 +255,17 @@ pub fn energy_ratio(difference: &[f64], regular: &[f64]) -> f64 {
 /// no harmonic fits or the mesh lines hold no energy.
 pub fn first_sideband_ratio(amplitudes: &[f64], z: usize, other: impl Fn(usize) -> bool) -> f64 {
     let (mut side, mut mesh) = (0.0, 0.0);
+    let mut band = Vec::with_capacity(z + 1);
     for k in (1..).map(|h| h * z).take_while(|&k| z > 1 && k + 1 < amplitudes.len()) {
         if other(k - 1) || other(k) || other(k + 1) {
             continue;
         }
-        let mut band: Vec<f64> = (k.saturating_sub(z / 2).max(3)..=(k + z / 2).min(amplitudes.len() - 1))
-            .filter(|&j| j + 1 < k || j > k + 1)
-            .filter(|&j| !other(j))
-            .map(|j| amplitudes[j].powi(2))
-            .collect();
+        band.clear();
+        band.extend(
+            (k.saturating_sub(z / 2).max(3)..=(k + z / 2).min(amplitudes.len() - 1))
+                .filter(|&j| (j + 1 < k || j > k + 1) && !other(j))
+                .map(|j| amplitudes[j].powi(2)),
+        );
         band.sort_by(f64::total_cmp);
         let floor = match band.len() {
             0 => 0.0,

@@ -338,16 +338,8 @@ fn score(spectra: &[Lines], f: f64, top: f64) -> CombCandidate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signal::test_noise::uniform_noise;
     use std::f64::consts::PI;
-
-    /// Uniform noise on [-0.5, 0.5) from a seeded linear congruential generator (Knuth's MMIX constants).
-    fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        }
-    }
 
     /// A comb whose odd harmonics are weak (a strong second mesh harmonic) and whose fundamental sits among
     /// a louder foreign harmonic series (mains hum): the mesh spacing wins, neither its half nor its double.

@@ -14,6 +14,20 @@ pub mod tsa;
 pub mod tsa_change;
 pub mod velocity;
 
+#[cfg(test)]
+pub(crate) mod test_noise {
+    //! Seeded noise for the signal layer's unit tests.
+
+    /// Uniform noise on [-0.5, 0.5) from a seeded linear congruential generator (Knuth's MMIX constants).
+    pub(crate) fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+}
+
 /// Errors of the signal layer.
 #[derive(Debug, thiserror::Error)]
 pub enum SignalError {

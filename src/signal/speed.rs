@@ -563,6 +563,7 @@ pub fn teeth_candidates<T: Sample>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signal::test_noise::uniform_noise;
     use std::f64::consts::PI;
 
     #[test]
@@ -635,11 +636,7 @@ mod tests {
     #[test]
     fn estimate_period_takes_the_revolution_inside_a_hunting_period() {
         let (p, n) = (431.0, 100_000);
-        let mut seed = 7u64;
-        let mut noise = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut noise = uniform_noise(7);
         // orders k / 5 of the shaft (k = 1..30, phases spread by the golden angle) for the five-revolution
         // pattern, orders 1..3 for the revolution's own
         let pattern =
@@ -675,15 +672,6 @@ mod tests {
         // refined from the peak near lag 128 p: error ~ 1 / 128 sample
         assert!((e.period_samples - period).abs() < 0.02, "{}", e.period_samples);
         assert!(e.confidence > 0.9);
-    }
-
-    /// Uniform noise on [-0.5, 0.5) from a linear congruential generator seeded with `seed`.
-    fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        }
     }
 
     #[test]

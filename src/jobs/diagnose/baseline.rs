@@ -456,7 +456,7 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
     let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
     let n = tsa_change::points(mean.len().min(reference.len()), z);
-    let tooth = tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::verdict::impulse_tooth(&d, z));
+    let tooth = tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::tooth::impulse_tooth(&d, z));
     Some(LocalChange {
         gear: g.gear,
         channel: g.channel,

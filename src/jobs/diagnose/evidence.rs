@@ -6,7 +6,7 @@
 use super::*;
 use crate::report::format::num;
 use crate::report::summary::{Envelope, EnvelopeLine};
-use verdict::place_tooth;
+use tooth::place_tooth;
 
 /// Rise of a shaft's first envelope order over the baseline's that counts as evidence, dB (an engineering
 /// choice: 10 dB is a tripling of the line against its neighbourhood).

@@ -18,6 +18,7 @@ mod machine;
 pub mod profile;
 mod recording;
 mod teeth;
+mod tooth;
 mod tracking;
 pub mod trend;
 mod verdict;
@@ -33,7 +34,7 @@ pub use compat::{
 use recording::*;
 pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, diagnose, diagnose_in_memory};
 use teeth::{MIN_OTHER_GEAR_CONFIDENCE, mesh_family, other_gear_teeth, teeth_misfit, wheel_teeth};
-use tracking::{nominal_speed, track};
+use tracking::{Tracked, nominal_speed, track};
 
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};

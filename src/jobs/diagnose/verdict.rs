@@ -4,7 +4,7 @@
 
 use super::baseline::{self, Reference};
 use crate::report::summary::{
-    Diagnosis, GearIndicators, Indicator, Indicators, Score, Shaft, ToothOrigin, Verdict, VerdictGear, VerdictState,
+    Diagnosis, GearIndicators, Indicator, Indicators, Score, Shaft, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
@@ -132,17 +132,16 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
     let mut out = Vec::new();
     for sc in &scores {
         let (name, why) = (sc.indicator.label(), sc.indicator.meaning());
-        let state = if !sc.decides || sc.spreads < sc.suspect_at {
+        if !sc.decides || sc.spreads < sc.suspect_at {
             continue;
-        } else if sc.spreads >= sc.faulty_at && !sc.indicator.supporting() {
-            VerdictState::Faulty
-        } else {
-            VerdictState::Suspect
-        };
-        let cap = if sc.indicator.supporting() && sc.spreads >= sc.faulty_at {
-            " (a load fluctuating near the shaft's rate modulates a healthy gear too: at most suspect on its own)"
-        } else {
-            ""
+        }
+        let (state, cap) = match (sc.spreads >= sc.faulty_at, sc.indicator.supporting()) {
+            (true, false) => (VerdictState::Faulty, ""),
+            (true, true) => (
+                VerdictState::Suspect,
+                " (a load fluctuating near the shaft's rate modulates a healthy gear too: at most suspect on its own)",
+            ),
+            (false, _) => (VerdictState::Suspect, ""),
         };
         out.push(Trigger {
             state,
@@ -298,7 +297,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     d.verdict = Verdict::new(state, gear, reasons);
     d.verdict.cross_talk = cross_talk;
     d.verdict.deciding = worst.filter(|_| state > VerdictState::Healthy).map(|w| w.gear);
-    place_tooth(d);
+    super::tooth::place_tooth(d);
 }
 
 /// One gear average's triggers: the indicators over their limits.
@@ -445,113 +444,6 @@ fn weaker_angle(d: &Diagnosis, reference: &Reference) -> Option<String> {
     })
 }
 
-/// How many times its share of the revolution's energy one pitch of the difference signal must hold for
-/// the fault to be local and placed on a tooth: over z pitches of Gaussian noise the largest pitch holds
-/// about 1.5-2 times its share (the maximum of z chi-square sums), a crack or a spall 4-10 times; a
-/// distributed fault (wear, eccentricity) spreads over every tooth and is not placed.
-const LOCAL_CONCENTRATION: f64 = 3.0;
-
-/// Puts a local fault on its tooth: the deciding gear's difference signal (its average less the mesh
-/// lines) holds one impulse per revolution for a crack, a spall or a broken tooth. Counted from the
-/// tachometer's pulse when the angle came from one, else from the arbitrary start of the tracked angle
-/// (said so).
-pub(super) fn place_tooth(d: &mut Diagnosis) {
-    if d.verdict.state < VerdictState::Suspect {
-        return;
-    }
-    let shaft = match d.verdict.gear {
-        VerdictGear::Pinion => Shaft::Pinion,
-        VerdictGear::Wheel => Shaft::Wheel,
-        _ => return,
-    };
-    // a verdict that rests on a once-per-revolution modulation alone (SBR) is distributed: no tooth
-    if over_suspect(&d.scores, &shaft).next().is_some() && !moved_for_a_tooth(&d.scores, &shaft) {
-        return;
-    }
-    let origin =
-        if d.speed_profile.tracking.tachometer_origin() { ToothOrigin::Tachometer } else { ToothOrigin::Arbitrary };
-    // the local change against the baseline, when it counts, names the tooth where the average changed
-    let changed = d.local_change.iter().find(|c| c.gear == shaft && c.value >= c.limit);
-    if let Some(tooth) = changed.and_then(|c| c.tooth) {
-        d.verdict.tooth = Some(tooth);
-        d.verdict.tooth_origin = Some(origin);
-        return;
-    }
-    let Some(g) = d.gears.iter().find(|g| g.gear == shaft) else { return };
-    // the difference signal (first-order sidebands removed too) for an impulse; the residual (mesh lines
-    // alone removed) for a smoother local fault such as a pit, whose sidebands carry it
-    let Some(signal) =
-        [&g.difference, &g.residual].into_iter().find(|x| concentration(x, g.mesh_order) >= LOCAL_CONCENTRATION)
-    else {
-        return;
-    };
-    if let Some(tooth) = impulse_tooth(signal, g.mesh_order) {
-        d.verdict.tooth = Some(tooth);
-        d.verdict.tooth_origin = Some(origin);
-    }
-}
-
-/// The deciding scores of `gear` over their suspect limit.
-fn over_suspect<'a>(scores: &'a [Score], gear: &'a Shaft) -> impl Iterator<Item = &'a Score> {
-    scores.iter().filter(move |s| s.gear == *gear && s.decides && s.spreads >= s.suspect_at)
-}
-
-/// Whether `gear`'s own indicators moved as a fault of some tooth moves them: a deciding score over its
-/// suspect limit other than a supporting one (SBR, a once-per-revolution modulation, is no tooth's).
-pub(super) fn moved_for_a_tooth(scores: &[Score], gear: &Shaft) -> bool {
-    over_suspect(scores, gear).any(|s| !s.indicator.supporting())
-}
-
-/// The largest energy of `x` over one pitch (of `z` per revolution) against the mean pitch's.
-pub fn concentration(x: &[f64], z: usize) -> f64 {
-    let n = x.len();
-    if z == 0 || n < z {
-        return 0.0;
-    }
-    let w = (n / z).max(1);
-    let e: Vec<f64> = x.iter().map(|v| v * v).collect();
-    let total: f64 = e.iter().sum();
-    if total <= 0.0 {
-        return 0.0;
-    }
-    let mut sum: f64 = e[..w].iter().sum();
-    let mut best = sum;
-    for i in 0..n {
-        sum += e[(i + w) % n] - e[i];
-        best = best.max(sum);
-    }
-    best / (total * w as f64 / n as f64)
-}
-
-/// The tooth (1-based, of `z`) whose mesh holds the impulse of `x` (one revolution of the gear's difference
-/// signal, sample 0 at angle 0). The energy, smoothed over a quarter pitch (centred), peaks inside the
-/// impulse; a crack's or a spall's response builds up over the tooth's mesh and rings on after it, while the
-/// separation of the mesh lines leaves a little pre-echo before it, so the impulse is taken to begin where,
-/// going back from the peak, the energy last rose through half of it, and the tooth is the one meshing
-/// halfway between that onset and the peak. `None` when the revolution is too short to tell teeth apart.
-pub fn impulse_tooth(x: &[f64], z: usize) -> Option<usize> {
-    let n = x.len();
-    if z == 0 || n < 4 * z {
-        return None;
-    }
-    let w = (n / (4 * z)).max(1);
-    let e: Vec<f64> = x.iter().map(|v| v * v).collect();
-    let smooth: Vec<f64> = (0..n).map(|i| (0..w).map(|k| e[(i + n + k - w / 2) % n]).sum::<f64>()).collect();
-    let (peak_at, peak) =
-        smooth.iter().enumerate().fold((0, f64::NEG_INFINITY), |a, (i, &v)| if v > a.1 { (i, v) } else { a });
-    // back from the peak while the energy stays above half of it, at most one pitch
-    let pitch = n / z;
-    let mut back = 0;
-    for k in 1..=pitch {
-        if smooth[(peak_at + n - k) % n] < 0.5 * peak {
-            break;
-        }
-        back = k;
-    }
-    let centre = (peak_at + n - back / 2) % n;
-    Some(centre * z / n + 1)
-}
-
 /// Lowers a faulty verdict to suspect when the recording's operating point differs from the baseline's,
 /// with `why` as the first reason (a change of load is not a fault, and the baseline cannot tell them
 /// apart).
@@ -563,45 +455,5 @@ pub fn cap_at_suspect(d: &mut Diagnosis, why: String) {
         d.verdict.reasons.insert(0, why);
     } else {
         d.warnings.push(why);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A decaying ring starting at the start of tooth `k`'s pitch of `z` (what a crack's stiffness drop
-    /// excites) on a revolution of `n` samples, plus a small even ripple over every tooth.
-    fn ring(n: usize, z: usize, k: usize) -> Vec<f64> {
-        let start = (k - 1) * n / z;
-        (0..n)
-            .map(|i| {
-                let t = ((i + n - start) % n) as f64 / (n / z) as f64; // in pitches after the onset
-                let ripple = 0.05 * (2.0 * std::f64::consts::PI * (z * i) as f64 / n as f64 * 3.0).sin();
-                ripple + if t < 3.0 { (-1.2 * t).exp() * (2.0 * std::f64::consts::PI * 2.1 * t).sin() } else { 0.0 }
-            })
-            .collect()
-    }
-
-    #[test]
-    fn an_impulse_is_placed_on_the_tooth_where_it_starts() {
-        // the tooth under the first pitch of the ring: its energy peaks within the first pitch and decays
-        // over the next two, so the half-way point between onset and peak lies in tooth k's pitch
-        for (n, z, k) in [(512, 14, 3), (1024, 23, 17), (2048, 47, 1), (1024, 29, 29)] {
-            let x = ring(n, z, k);
-            assert_eq!(impulse_tooth(&x, z), Some(k), "n {n} z {z} k {k}");
-            assert!(concentration(&x, z) > LOCAL_CONCENTRATION, "{}", concentration(&x, z));
-        }
-    }
-
-    #[test]
-    fn an_even_signal_is_not_local() {
-        // a pure mesh-rate ripple spreads its energy evenly over the teeth: every pitch holds its share
-        let (n, z) = (1024, 23);
-        let x: Vec<f64> =
-            (0..n).map(|i| (2.0 * std::f64::consts::PI * (z * i) as f64 / n as f64 * 2.0).cos()).collect();
-        let c = concentration(&x, z);
-        assert!((c - 1.0).abs() < 0.1, "{c}");
-        assert_eq!(impulse_tooth(&x[..40], z), None, "too short a revolution to place a tooth");
     }
 }

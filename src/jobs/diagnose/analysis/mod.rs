@@ -145,9 +145,7 @@ fn follow_shaft(
             let first = track(path, rec, channels, o, known_z, nominal.map, &mut given_warnings)?;
             let mut alt_warnings = Vec::new();
             let second = track(path, rec, channels, o, known_z, alt, &mut alt_warnings)?;
-            let line = |t: &(AngleMap, Tracking, Option<f64>, Option<usize>)| {
-                t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY)
-            };
+            let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
             if line(&second) >= line(&first) + CLEARER_START_DB {
                 warnings.extend(alt_warnings);
                 warnings.push(format!(

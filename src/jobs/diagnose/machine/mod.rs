@@ -18,7 +18,7 @@
 //! ```
 
 use super::analysis::{Analysed, analyse_parts};
-use super::verdict::{concentration, impulse_tooth, moved_for_a_tooth};
+use super::tooth::{concentration, impulse_tooth, moved_for_a_tooth};
 use super::*;
 use crate::model::kinematics::{Machine, Member, Ratio, Stage};
 use crate::report::summary::{
