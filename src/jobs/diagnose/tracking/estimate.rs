@@ -31,7 +31,8 @@ pub(super) fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, 
         listed[0],
         listed.join(", ")
     );
-    if let Some(second) = best.get(1).filter(|c| c.score > CLOSE_CANDIDATES * top.score) {
+    let second = best.get(1).filter(|c| c.score > CLOSE_CANDIDATES * top.score);
+    if let Some(second) = second {
         note.push_str(&format!(
             "; the second candidate (mesh harmonic {}) is close: a tachometer or the nameplate speed would decide",
             second.harmonic
@@ -43,6 +44,7 @@ pub(super) fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, 
         confidence: top.standing as f64 / top.predicted as f64,
         note,
         from_comb: false,
+        close_second: second.map(|c| c.score / top.score),
     })
 }
 
@@ -75,6 +77,9 @@ pub(super) struct MeshShaft {
     pub(super) note: String,
     /// Whether the speed came from the mesh comb (its confidence is then on [`UNSURE_SPEED`]'s scale).
     pub(super) from_comb: bool,
+    /// The runner-up's evidence as a share of the chosen candidate's, when it stands close enough that
+    /// the speed is undecided ([`CLOSE_COMB`], [`CLOSE_CANDIDATES`]).
+    pub(super) close_second: Option<f64>,
 }
 
 /// Confidence of a speed estimated from the teeth (the mesh comb's) under which no verdict of health rests
@@ -88,20 +93,34 @@ pub(super) const UNSURE_SPEED: f64 = 0.2;
 pub(super) const UNSURE_REPETITION: f64 = 0.1;
 
 impl MeshShaft {
+    /// Why no verdict of health can rest on this speed: a comb confidence under [`UNSURE_SPEED`], or a
+    /// runner-up close enough that the pick between two speeds is undecided (averages on the wrong one hold
+    /// no gear and look healthy).
+    fn doubt(&self) -> Option<String> {
+        if self.confidence < UNSURE_SPEED && self.from_comb {
+            return Some(format!(
+                "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",
+                self.confidence
+            ));
+        }
+        self.close_second.map(|share| {
+            format!(
+                "the shaft speed estimated from the teeth has a second candidate with {:.0} % of its evidence: averages on the wrong one hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",
+                100.0 * share
+            )
+        })
+    }
+
     /// The constant nominal speed over `n` samples, its note added to `warnings`.
     pub(super) fn nominal(self, n: usize, warnings: &mut Vec<String>) -> Nominal {
+        let doubt = self.doubt();
         warnings.push(self.note);
         Nominal {
             map: AngleMap::constant(self.period_samples, 0.0, n),
             source: SpeedSource::Estimated,
             confidence: self.confidence,
             mesh_order: self.mesh_order,
-            doubt: (self.confidence < UNSURE_SPEED && self.from_comb).then(|| {
-                format!(
-                    "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",
-                    self.confidence
-                )
-            }),
+            doubt,
             unconfirmed_comb_db: None,
             alternative: None,
         }
@@ -291,14 +310,15 @@ pub(super) fn shaft_from_comb(
         .filter(|c| on_mains(fp) || !on_mains(mesh_of(c.0)))
         .find(|c| !family(c.0))
         .map_or(0.0, |s| s.1);
-    if second > CLOSE_COMB * best {
+    let close_second = (second > CLOSE_COMB * best).then_some(second / best);
+    if close_second.is_some() {
         note.push_str(&format!(
             "; the second candidate stands close ({:.0} % of the evidence): a tachometer or the nameplate speed would decide",
             100.0 * second / best
         ));
     }
     let confidence = (1.0 - second / best).clamp(0.0, 1.0) * (best / STRONG_COMB).min(1.0);
-    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true })
+    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true, close_second })
 }
 
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
@@ -349,6 +369,7 @@ pub(super) fn shaft_through_mesh(
                 "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
             ),
             from_comb: false,
+            close_second: None,
         }));
     };
     let confidence = c[q];
@@ -382,5 +403,6 @@ pub(super) fn shaft_through_mesh(
             "shaft speed estimated on the mesh line's angle (line tracked, {cycle:.3} samples per cycle on average; {what}; autocorrelation {confidence:.2}); give the speed or a tachometer channel when known"
         ),
         from_comb: false,
+        close_second: None,
     }))
 }
