@@ -92,8 +92,8 @@ pub const PINION_TACHO: &str = "tacho pinion";
 /// True when a channel is a tachometer pulse train, never a vibration signal, judged on its first
 /// [`PULSE_SCAN`] samples: exactly two distinct levels, or (a pulse train recorded through an ADC, with
 /// noise and finite edges) at least [`PULSE_SHARE`] of the samples within [`PULSE_BAND`] of the range
-/// from its least or its largest value, each level held by some and the levels changing at least
-/// [`PULSE_EDGES`] times. A vibration signal spends most of its time around its middle: on the
+/// from its least or its largest value, each level held for [`PULSE_HELD`] samples on average and the
+/// levels changing at least [`PULSE_EDGES`] times. A vibration signal spends most of its time around its middle: on the
 /// hold-out recordings' vibration channels the share was 0.000-0.002, on their tachometer channels
 /// (filtered edges, noise) 0.996-0.997.
 pub(super) fn looks_like_pulses(x: &[f32]) -> bool {
@@ -109,6 +109,8 @@ const PULSE_SHARE: f64 = 0.95;
 const PULSE_BAND: f32 = 0.15;
 /// Changes of level a pulse train shows at least (two pulses).
 const PULSE_EDGES: usize = 4;
+/// Samples a pulse train holds each level for on average, at least.
+const PULSE_HELD: f64 = 3.0;
 
 /// Exactly two distinct values (a synthetic or digital tachometer).
 fn two_levels(x: &[f32]) -> bool {
@@ -125,31 +127,35 @@ fn two_levels(x: &[f32]) -> bool {
     levels.len() == 2
 }
 
-/// Nearly every sample near the least or the largest value, both levels held and left [`PULSE_EDGES`]
-/// times or more.
+/// Nearly every sample near the least or the largest value, both levels held for [`PULSE_HELD`] samples
+/// or more on average and left [`PULSE_EDGES`] times or more. (A shock on quiet noise also sits at two
+/// levels, but for a sample or two, and rings through the middle.)
 fn mostly_at_two_levels(x: &[f32]) -> bool {
     let (lo, hi) = x.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
     let band = PULSE_BAND * (hi - lo);
     if !(band > 0.0 && band.is_finite()) {
         return false;
     }
-    let (mut low, mut high, mut edges, mut last) = (0usize, 0usize, 0usize, 0i8);
+    // samples at each level, and the runs at it (a run is counted when the level is entered)
+    let (mut at, mut runs, mut last) = ([0usize; 2], [0usize; 2], None);
     for &v in x {
         let level = if v - lo <= band {
-            low += 1;
-            -1
+            Some(0)
         } else if hi - v <= band {
-            high += 1;
-            1
+            Some(1)
         } else {
-            0
+            None
         };
-        if level != 0 && level != last {
-            edges += usize::from(last != 0);
-            last = level;
+        if let Some(l) = level {
+            at[l] += 1;
+            if last != Some(l) {
+                runs[l] += 1;
+                last = Some(l);
+            }
         }
     }
-    low > 0 && high > 0 && edges >= PULSE_EDGES && (low + high) as f64 >= PULSE_SHARE * x.len() as f64
+    let held = |l: usize| runs[l] > 0 && at[l] as f64 >= PULSE_HELD * runs[l] as f64;
+    held(0) && held(1) && runs[0] + runs[1] > PULSE_EDGES && (at[0] + at[1]) as f64 >= PULSE_SHARE * x.len() as f64
 }
 
 /// Checks one channel (finite, not constant, clipping warned about) and returns its raw RMS and kurtosis
@@ -365,8 +371,9 @@ mod tests {
     }
     /// A tachometer recorded through an ADC (pulses of 8 % duty, edges through a one-pole low-pass of 4
     /// samples, noise at 1 % of the pulse height, a DC offset) is told as pulses; vibration is not: a
-    /// noisy sine, an impulsive signal (a shock every 500 samples on noise), a sine clipped at half its
-    /// peak (the clipped tops hold 67 % of the samples, short of 95 %), and a constant or NaN channel.
+    /// noisy sine, an impulsive signal (a one-sample shock every 500 samples on quiet noise: two levels,
+    /// neither held), a sine clipped at half its peak (the clipped tops and the band near them hold 77 %
+    /// of the samples, short of 95 %), and a constant or NaN channel.
     #[test]
     fn a_recorded_pulse_train_is_told_from_vibration() {
         let mut noise = crate::signal::test_noise::uniform_noise(7);
