@@ -521,11 +521,16 @@ fn local_faults_are_placed_on_their_tooth_and_cross_talk_is_named() {
     assert!(talk.iter().any(|c| c.as_str().unwrap().starts_with("the wheel's indicators moved too")), "{talk:?}");
     // reasons name the deciding gear only: the wheel's are cross-talk
     assert!(d["verdict"]["reasons"].as_array().unwrap().iter().all(|r| !r.as_str().unwrap().starts_with("wheel")));
-    // without a tachometer (speed given, angle from the mesh phase) the tooth is counted from an arbitrary
-    // origin and said to be
-    let d = diag_json(&[&rec("cracked-pinion-tooth3"), "--teeth", "14,39", "--rpm", "1800"]);
+    // without a tachometer (the WAV copied without its sidecar, speed given, angle from the mesh phase) the
+    // tooth is counted from an arbitrary origin and said to be
+    let bare = temp_dir("tooth-origin").join("cracked-bare.wav");
+    std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
+    let d = diag_json(&[&bare.to_string_lossy(), "--channel", "1", "--teeth", "14,39", "--rpm", "1800"]);
     assert_eq!(d["verdict"]["gear"], "pinion");
     assert_eq!(d["verdict"]["tooth_origin"], "arbitrary (no tachometer)");
+    // with the sidecar, its tachometer gives the speed beside the given one and fixes the origin
+    let d = diag_json(&[&rec("cracked-pinion-tooth3"), "--teeth", "14,39", "--rpm", "1800"]);
+    assert_eq!(d["verdict"]["tooth_origin"], "tachometer pulse");
 }
 
 /// A recording the baseline cannot score is never healthy: a baseline of one channel against a recording
@@ -563,4 +568,27 @@ fn noise_with_a_given_speed_is_not_judged_healthy() {
     assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(reasons.contains("given speed was not confirmed"), "{reasons}");
+}
+
+/// A tachometer beside a given speed (issue 26, item 4): the sidecar's pulses give the speed (the
+/// bundled scene turns at 30 Hz, its tachometer rising once per revolution), the given speed is the
+/// nominal one, and a given speed 10 % off (beyond the 5 % tolerance) is warned about by name; a named
+/// tachometer channel does the same as the sidecar's.
+#[test]
+fn a_tachometer_beside_a_given_speed_gives_it_and_checks_the_given_one() {
+    let cracked = rec("cracked-pinion-tooth3");
+    for extra in [&[][..], &["--tacho-channel", "2"][..]] {
+        let mut args = vec![cracked.as_str(), "--teeth", "14,39", "--rpm", "2000"];
+        args.extend_from_slice(extra);
+        let d = diag_json(&args);
+        assert_eq!(d["speed_source"], "tachometer", "{extra:?}");
+        let hz = d["shaft_hz"]["pinion"].as_f64().unwrap();
+        assert!((hz / 30.0 - 1.0).abs() < 1e-3, "{extra:?}: {hz}");
+        let warned = d["warnings"].as_array().unwrap().iter().any(|w| {
+            let w = w.as_str().unwrap();
+            w.contains("given speed 33.3333 Hz") && w.contains("beyond the +-5.0 % tolerance")
+        });
+        assert!(warned, "{extra:?}: {}", d["warnings"]);
+        assert_eq!(d["verdict"]["tooth_origin"], "tachometer pulse", "{extra:?}");
+    }
 }

@@ -1,7 +1,8 @@
 //! The same samples through every path give the same answer (issue 26, item 1): a bundled recording as
 //! WAV with its sidecar, the WAV copied without its sidecar (samples in the file's own scale, restored
 //! with `--unit` and `--sensitivity`), the samples as CSV with a time column, with and without the
-//! tachometer, with the speed given exactly, 3 % off (a nameplate speed off by the slip) or not at all.
+//! tachometer, with the speed given exactly, 3 % off (a nameplate speed off by the slip) or not at all
+//! (a tachometer, the sidecar's or a named channel, gives the speed beside a given one).
 //! Every path must give the same verdict state and gear, and the level-free indicators within stated
 //! tolerances of the reference path's.
 
@@ -69,6 +70,10 @@ fn paths(wav: &str, dir: &Path, stem: &str) -> Vec<(String, Vec<String>)> {
     add(
         "wav without sidecar, tachometer channel",
         &[&bare, "--unit", "m/s", "--sensitivity", "10", "--tacho-channel", "2", "--channel", "1"],
+    );
+    add(
+        "wav without sidecar, tachometer channel, speed given 3 % low",
+        &[&bare, "--unit", "m/s", "--sensitivity", "10", "--tacho-channel", "2", "--channel", "1", "--rpm", "1746"],
     );
     add("csv", &[&csv]);
     add("csv, speed 3 % high", &[&csv, "--rpm", "1854"]);

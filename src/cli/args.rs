@@ -137,7 +137,8 @@ pub struct DiagnoseArgs {
     /// --rpm/--shaft-hz are then the speed of the machine's `speed.shaft`.
     #[arg(long, value_name = "MACHINE.json")]
     pub machine: Option<String>,
-    /// Tachometer channel (1-based) on the pinion shaft.
+    /// Tachometer channel (1-based) on the pinion shaft (default: the sidecar's "tacho pinion"). It gives
+    /// the speed; a speed given beside it is the nominal one, checked against it.
     #[arg(long)]
     pub tacho_channel: Option<usize>,
     /// Tachometer pulses per revolution.

@@ -291,12 +291,6 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
     if a.fs.is_some() && a.fs_unknown {
         return Err(CliError::flag("--fs", "conflicts with --fs-unknown: give the sample rate or say it is unknown"));
     }
-    if a.tacho_channel.is_some() && (a.rpm.is_some() || a.shaft_hz.is_some()) {
-        return Err(CliError::flag(
-            "--tacho-channel",
-            "conflicts with --rpm/--shaft-hz: the speed comes from the tachometer or is given, not both",
-        ));
-    }
     if a.channel.is_some() && a.channel == a.tacho_channel {
         return Err(CliError::flag(
             &format!("--channel {}", a.channel.unwrap_or(0)),

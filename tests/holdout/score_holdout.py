@@ -3,8 +3,9 @@
 
 Runs the release binary as a user would, on every machine directory under --data:
   speed source: `--rpm NOMINAL` (the nameplate speed: true speed + motor slip, rounded to 10 rpm),
-                `--tacho-channel 2`, or nothing (teeth only), which reads a vibration-only copy of the file
-                (channel 1 alone, DATA/mono/; given the two-channel file gearvib takes a sidecar's tachometer)
+                `--tacho-channel 2`, or nothing (teeth only); the nameplate and teeth-only modes read a
+                vibration-only copy of the file (channel 1 alone, DATA/mono/): given the two-channel file,
+                gearvib takes a sidecar's tachometer, with or without a given speed
   baseline:     none, `--baseline healthy-s1.wav` (one sibling), or `--profile` learned from healthy-s1 and -s2
                 (`learn H1 H2 --channel 1 --teeth ZP,ZW SPEED -o P`; `diagnose REC --json --profile P`: the profile
                 fixes channel, teeth and speed source and refuses them on the command line)
@@ -65,8 +66,8 @@ def mono_copy(src, dst):
 
 
 def rec_path(speed, tr, data):
-    """The file a mode reads: the teeth-only mode reads a vibration-only (mono) copy."""
-    if speed != "teeth":
+    """The file a mode reads: the nameplate and teeth-only modes read a vibration-only (mono) copy."""
+    if speed == "tacho":
         return tr["file"]
     dst = os.path.join(data, "mono", tr["machine"], os.path.basename(tr["file"]))
     mono_copy(tr["file"], dst)

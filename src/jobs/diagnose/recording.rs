@@ -25,7 +25,11 @@ pub(super) fn read(path: &Path, o: &Options) -> Result<(Recording<'static>, Opti
     // needs the memory of those channels alone); without, the sidecar's pulse channels that are not the
     // tachometer in use are not decoded either (they are never analysed as vibration)
     let sidecar = io::sidecar::read(path)?.sidecar();
-    let sidecar_tacho = (o.tacho_channel.is_none() && o.shaft_hz.is_none())
+    // the sidecar's pinion tachometer gives the speed when no tachometer channel is named, also beside a
+    // given speed: that is then the nominal one, cross-checked against the tachometer's
+    let sidecar_tacho = o
+        .tacho_channel
+        .is_none()
         .then_some(sidecar.as_ref())
         .flatten()
         .and_then(|side| side.channels.iter().position(|c| c.name == PINION_TACHO).map(|i| i + 1));
@@ -40,6 +44,11 @@ pub(super) fn read(path: &Path, o: &Options) -> Result<(Recording<'static>, Opti
         (None, _) => None,
     };
     let mut rec = io::read_recording_channels(path, keep.as_deref())?;
+    if let (Some(t), Some(_)) = (sidecar_tacho, o.shaft_hz) {
+        rec.warnings.push(format!(
+            "the sidecar's pinion tachometer (channel {t}) gives the speed and the teeth's origin: the given speed is taken as the nominal one and checked against it"
+        ));
+    }
     apply_units(&mut rec, o, tacho);
     Ok((rec, Options { tacho_channel: tacho, ..o.clone() }))
 }

@@ -52,6 +52,11 @@ pub(super) fn nominal_speed(
     warnings: &mut Vec<String>,
 ) -> Result<Nominal, Error> {
     let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
+    // a given speed is checked against the record even when a tachometer gives the speed (it is then the
+    // nominal speed the tachometer's is compared with)
+    if let (Some(hz), Some(fs), Some(_)) = (o.shaft_hz, fs, o.tacho_channel) {
+        check_given_speed(path, hz, fs, n, o.min_revolutions)?;
+    }
     if let Some(t) = o.tacho_channel {
         let pulses = speed::tacho_pulses(&rec.channels[t - 1])
             .and_then(|p| angle::from_pulses(&p, o.pulses_per_rev.max(1)))
