@@ -406,3 +406,27 @@ pub(super) fn shaft_through_mesh(
         close_second: None,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shaft(confidence: f64, from_comb: bool, close_second: Option<f64>) -> MeshShaft {
+        MeshShaft { period_samples: 400.0, mesh_order: None, confidence, note: String::new(), from_comb, close_second }
+    }
+
+    /// No verdict of health rests on an estimated speed whose runner-up stands close (the hold-out's 13-tooth
+    /// pinion took a comb 15 % slow with the true speed's at 79 % of its evidence, and its cracked wheel came
+    /// out healthy) nor on a comb of low confidence; a clear estimate carries none.
+    #[test]
+    fn a_close_runner_up_or_a_weak_comb_leaves_a_doubt() {
+        let n = 40_000;
+        let doubt = |s: MeshShaft| s.nominal(n, &mut Vec::new()).doubt;
+        assert!(doubt(shaft(0.21, true, Some(0.79))).is_some_and(|d| d.contains("79 %")));
+        assert!(doubt(shaft(0.9, false, Some(0.85))).is_some_and(|d| d.contains("85 %")));
+        assert!(doubt(shaft(0.1, true, None)).is_some_and(|d| d.contains("confidence 0.10")));
+        assert!(doubt(shaft(0.6, true, None)).is_none());
+        // the autocorrelation's confidence is on another scale: low, it is judged elsewhere
+        assert!(doubt(shaft(0.1, false, None)).is_none());
+    }
+}
