@@ -245,7 +245,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     let absolute_only = Thresholds { faulty_count: usize::MAX, ..t.clone() };
     let t = if reference.is_none() { &absolute_only } else { t };
     let (per_gear, not_judged) = gear_triggers(d, reference, t, levels);
-    let worst = worst_gear(&per_gear, t);
+    let worst = worst_gear(&per_gear, t, d.speed_doubt.is_none());
     let mut reasons = Vec::new();
     let mut cross_talk = Vec::new();
     let (state, gear) = match worst {
@@ -352,19 +352,17 @@ fn weight(triggers: &[Trigger]) -> (f64, f64) {
 /// both generators' scorecards lost no gear and gained that one in two modes.
 const CLEARLY_FURTHER: f64 = 1.25;
 
-/// The gear a verdict goes to: the worst state; among equal states the one whose indicators moved
-/// [`CLEARLY_FURTHER`] than the others', else the one whose own average holds an impulse (FM4, M6A: a
-/// local fault is whole in its own gear's average, smeared in the other's), then the one whose strongest
-/// indicator moved furthest.
-fn worst_gear<'a>(per_gear: &'a [GearTriggers], t: &Thresholds) -> Option<&'a GearTriggers> {
+/// The gear a verdict goes to: the worst state; among equal states (with `speed_trusted`) the one whose
+/// indicators moved [`CLEARLY_FURTHER`] than the others', else the one whose own average holds an impulse
+/// (FM4, M6A: a local fault is whole in its own gear's average, smeared in the other's), then the one whose
+/// strongest indicator moved furthest. On a doubtful speed the averages can be smeared, which moves the
+/// energy measures of a gear far without a fault of its own, so the impulse decides first.
+fn worst_gear<'a>(per_gear: &'a [GearTriggers], t: &Thresholds, speed_trusted: bool) -> Option<&'a GearTriggers> {
     let key = |g: &GearTriggers| (gear_state(&g.triggers, t), weight(&g.triggers));
     per_gear.iter().max_by(|a, b| {
         let ((sa, (la, xa)), (sb, (lb, xb))) = (key(a), key(b));
-        let impulse = if xa > CLEARLY_FURTHER * xb || xb > CLEARLY_FURTHER * xa {
-            std::cmp::Ordering::Equal
-        } else {
-            (la > 0.0).cmp(&(lb > 0.0))
-        };
+        let further = speed_trusted && (xa > CLEARLY_FURTHER * xb || xb > CLEARLY_FURTHER * xa);
+        let impulse = if further { std::cmp::Ordering::Equal } else { (la > 0.0).cmp(&(lb > 0.0)) };
         sa.cmp(&sb).then(impulse).then(xa.total_cmp(&xb))
     })
 }
@@ -485,8 +483,8 @@ mod tests {
     }
 
     /// Between two faulty gears, the one whose indicators moved clearly further (25 %) takes the verdict
-    /// even when only the other's average holds an impulse; within that margin the impulse decides, and
-    /// a higher state always does.
+    /// even when only the other's average holds an impulse; within that margin, or on a doubtful speed,
+    /// the impulse decides, and a higher state always does.
     #[test]
     fn a_gear_that_moved_clearly_further_outranks_an_impulse() {
         let t = Thresholds::default();
@@ -496,12 +494,14 @@ mod tests {
                 gear(Shaft::Wheel, vec![trigger(2.2, true), trigger(1.6, true)]),
             ]
         };
-        assert_eq!(worst_gear(&worn(2.9), &t).map(|g| g.gear), Some(Shaft::Pinion));
-        assert_eq!(worst_gear(&worn(2.6), &t).map(|g| g.gear), Some(Shaft::Wheel));
+        assert_eq!(worst_gear(&worn(2.9), &t, true).map(|g| g.gear), Some(Shaft::Pinion));
+        assert_eq!(worst_gear(&worn(2.6), &t, true).map(|g| g.gear), Some(Shaft::Wheel));
+        // on a doubtful speed (averages possibly smeared) the impulse decides
+        assert_eq!(worst_gear(&worn(2.9), &t, false).map(|g| g.gear), Some(Shaft::Wheel));
         let suspect_only = [
             gear(Shaft::Pinion, vec![Trigger { state: VerdictState::Suspect, ..trigger(9.0, false) }]),
             gear(Shaft::Wheel, vec![trigger(1.2, true), trigger(1.1, false)]),
         ];
-        assert_eq!(worst_gear(&suspect_only, &t).map(|g| g.gear), Some(Shaft::Wheel));
+        assert_eq!(worst_gear(&suspect_only, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
     }
 }
