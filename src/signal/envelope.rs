@@ -462,6 +462,7 @@ pub fn lifter_comb<T: Sample>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signal::test_noise::uniform_noise;
     use std::f64::consts::TAU;
 
     #[test]
@@ -582,11 +583,8 @@ mod tests {
     fn kurtogram_finds_the_band_of_the_impacts() {
         // Gaussian-like noise (sum of 12 uniforms) plus a decaying 3 kHz ring every 100 ms
         let fs = 16384.0;
-        let mut state = 7u64;
-        let mut uni = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut centred = uniform_noise(7);
+        let mut uni = || centred() + 0.5;
         let x: Vec<f64> = (0..65536)
             .map(|i| {
                 let t = i as f64 / fs;
@@ -614,13 +612,8 @@ mod tests {
         // x(t) = s(t) + a s(t - tau): ln|1 + a e^{-i w tau}|^2 = 2 sum (-1)^(k+1) a^k cos(k w tau) / k, so
         // the cepstrum has a rahmonic of height a at quefrency tau (and -a^2/2 at 2 tau)
         let (a, tau) = (0.5, 37usize);
-        let mut state = 3u64;
-        let s: Vec<f64> = (0..70_000)
-            .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let mut noise = uniform_noise(3);
+        let s: Vec<f64> = (0..70_000).map(|_| noise()).collect();
         let x: Vec<f64> = (tau..s.len()).map(|i| s[i] + a * s[i - tau]).collect();
         let c = cepstrum(&mut Fft::new(), &x, 1024).unwrap();
         let peak = (10..400).max_by(|&i, &j| c[i].total_cmp(&c[j])).unwrap();
@@ -676,13 +669,8 @@ mod tests {
     #[test]
     fn streamed_overlap_add_is_the_record_long_sum() {
         let (n, segment, fs) = (20_000usize, 1024usize, 8192.0);
-        let mut state = 7u64;
-        let x: Vec<f64> = (0..n)
-            .map(|_| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let mut noise = uniform_noise(7);
+        let x: Vec<f64> = (0..n).map(|_| noise()).collect();
         let (streamed, r) = squared_envelope_segments(&mut Fft::new(), &x, fs, 700.0, 1500.0, segment).unwrap();
         // the reference: each segment's band inverse-transformed and added at its place in a record-long sum
         let probe = BandOverlapAdd::new(n, segment, fs, 700.0, 1500.0).unwrap();

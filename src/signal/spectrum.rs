@@ -439,19 +439,15 @@ pub fn autocorrelation<T: Sample>(fft: &mut Fft, x: &[T], max_lag: usize) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signal::test_noise::uniform_noise;
 
     /// The PSD read off an amplitude spectrum is Welch's PSD of the same segments (to rounding), and its
     /// integral is the variance of white noise (Parseval; the average of 37 segments leaves a few percent
     /// of scatter in the sum, far less: 1 %).
     #[test]
     fn psd_from_the_amplitude_is_welch_and_integrates_to_the_variance() {
-        let mut seed = 11u64;
-        let x: Vec<f64> = (0..(1 << 16))
-            .map(|_| {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        let mut noise = uniform_noise(11);
+        let x: Vec<f64> = (0..(1 << 16)).map(|_| noise()).collect();
         let fs = 2000.0;
         let mut fft = Fft::new();
         let amp = amplitude_spectrum(&mut fft, &x, fs, AmplitudeOptions { segment: 4096, overlap: 0.5 }).unwrap();
