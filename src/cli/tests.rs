@@ -1,6 +1,8 @@
 //! Tests of the command line: every flag an error is restated with exists.
 
+use super::restate::flag_of;
 use super::*;
+use crate::jobs::Given;
 use clap::CommandFactory;
 
 /// Every flag an error is restated with is a flag of some command (a renamed flag would otherwise leave
