@@ -5,13 +5,15 @@
 pub mod args;
 pub mod print;
 pub mod progress;
+mod restate;
 
 pub use args::{Cli, Command, DiagnoseArgs, FailOn, IdentifyArgs, LearnArgs, one_line, parse_args, parse_from};
 
 use crate::Error;
-use crate::jobs::{self, ChannelRole, Given, JobError};
+use crate::jobs::{self, JobError};
 use crate::report::summary::{VerdictState, to_json_line};
 use crate::scene::Scene;
+use restate::restate_for_flags;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -124,61 +126,6 @@ pub fn run(cli: Cli) -> Result<u8, Error> {
         }
     };
     result.map_err(restate_for_flags)
-}
-
-/// Library errors that a flag caused, restated with that flag.
-fn restate_for_flags(e: Error) -> Error {
-    match e {
-        Error::Job(JobError::Channel { file, role, index, count }) => {
-            let flag = match role {
-                ChannelRole::Vibration => "--channel",
-                ChannelRole::Tachometer => "--tacho-channel",
-            };
-            CliError::flag(&format!("{flag} {index}"), format!("{file} has {count} channel(s), numbered from 1"))
-        }
-        Error::Job(JobError::NoSampleRate { file, for_speed: true }) => CliError::flag(
-            "--rpm/--shaft-hz",
-            format!("{file} has no sample rate (no time column); give it with --fs"),
-        ),
-        Error::Job(JobError::NoSampleRate { file, for_speed: false }) => Error::Job(JobError::Input {
-            file,
-            message: "no sample rate: the file has no time column; pass --fs HZ, or --fs-unknown to analyse in shaft orders only".into(),
-        }),
-        Error::Job(JobError::SampleRateConflict { file, given_hz, file_hz }) => CliError::flag(
-            &format!("--fs {given_hz}"),
-            format!("contradicts the {file_hz} Hz sample rate of {file}; add --fs-override if the file's rate is wrong"),
-        ),
-        Error::Job(JobError::Aliasing { file, message }) => {
-            Error::Job(JobError::Aliasing { file, message: format!("{message} or pass --allow-aliasing") })
-        }
-        Error::Job(JobError::Value { what, message }) => match flag_of(what) {
-            Some(flag) => CliError::flag(flag, message),
-            None => Error::Job(JobError::Value { what, message }),
-        },
-        Error::Job(JobError::Missing { file, message, give }) => match flag_of(give) {
-            Some(flag) => Error::Job(JobError::Input { file, message: format!("{message} ({flag})") }),
-            None => Error::Job(JobError::Input { file, message }),
-        },
-        Error::Job(JobError::Parameter { scene, name, message }) => {
-            CliError::flag(&format!("--param {name}"), format!("{scene}: {message}"))
-        }
-        other => other,
-    }
-}
-
-/// The flag that gives a value, where one flag does.
-fn flag_of(what: Given) -> Option<&'static str> {
-    Some(match what {
-        Given::SampleRate => "--fs",
-        Given::ShaftSpeed => "--rpm/--shaft-hz",
-        Given::Teeth => "--teeth",
-        Given::PinionOrders => "--pinion-orders",
-        Given::WheelOrders => "--wheel-orders",
-        Given::Orders => "--pinion-orders/--wheel-orders",
-        Given::PitWidth => "--pit-width",
-        Given::SweepSteps => "--steps",
-        Given::SweepRange | Given::SweepValues | Given::Baseline => return None,
-    })
 }
 
 fn warn_all(warnings: &[String]) {
@@ -611,36 +558,4 @@ fn identify(out: &mut dyn Write, a: &IdentifyArgs) -> Result<u8, Error> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use clap::CommandFactory;
-
-    /// Every flag an error is restated with is a flag of some command (a renamed flag would otherwise leave
-    /// errors naming one that does not exist).
-    #[test]
-    fn every_flag_named_for_a_given_value_exists() {
-        let cli = args::Cli::command();
-        let longs: Vec<String> = cli
-            .get_subcommands()
-            .flat_map(|c| c.get_arguments().filter_map(|a| a.get_long().map(|l| format!("--{l}"))).collect::<Vec<_>>())
-            .collect();
-        let all = [
-            Given::SampleRate,
-            Given::ShaftSpeed,
-            Given::Teeth,
-            Given::PinionOrders,
-            Given::WheelOrders,
-            Given::Orders,
-            Given::PitWidth,
-            Given::SweepRange,
-            Given::SweepSteps,
-            Given::SweepValues,
-            Given::Baseline,
-        ];
-        for what in all {
-            for flag in flag_of(what).into_iter().flat_map(|f| f.split('/')) {
-                assert!(longs.iter().any(|l| l == flag), "{what}: {flag} is no flag");
-            }
-        }
-    }
-}
+mod tests;
