@@ -337,11 +337,10 @@ mod tests {
     fn a_long_record_is_scanned_in_parts() {
         let (period, revs) = (64.0, 5000usize);
         let n = (period * revs as f64) as usize + 1;
-        let mut state = 3u64;
+        let mut uniform = crate::signal::test_noise::uniform_noise(3);
         let x: Vec<f32> = (0..n)
             .map(|i| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let noise = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 12f64.sqrt();
+                let noise = uniform() * 12f64.sqrt();
                 let th = i as f64 / period;
                 let side = 14.0 / 39.0;
                 ((TAU * 14.0 * th).cos()
