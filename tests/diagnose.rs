@@ -592,3 +592,39 @@ fn a_tachometer_beside_a_given_speed_gives_it_and_checks_the_given_one() {
         assert_eq!(d["verdict"]["tooth_origin"], "tachometer pulse", "{extra:?}");
     }
 }
+
+/// An undeclared tachometer (the bundled WAV copied without its sidecar: channels 2 and 3 are the
+/// pinion's and the wheel's pulses, unnamed) gives the speed when its rate is checked: on the teeth (the
+/// 14-tooth mesh comb stands at 14 times the pinion pulses' rate, not at 14 times the wheel's) or on a
+/// given speed within its tolerance; without either, or against a given speed 33 % off, it is only named.
+#[test]
+fn an_undeclared_tachometer_is_taken_when_the_teeth_or_the_speed_confirm_it() {
+    let bare = temp_dir("undeclared-tacho").join("cracked-bare.wav");
+    std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
+    let bare = bare.to_string_lossy().into_owned();
+    let taken = |d: &serde_json::Value| {
+        d["warnings"].as_array().unwrap().iter().any(|w| {
+            w.as_str()
+                .unwrap()
+                .starts_with("channel 2 is a pulse train (it sits at two levels), taken as the pinion's tachometer")
+        })
+    };
+    for extra in [&["--teeth", "14,39"][..], &["--teeth", "14,39", "--rpm", "1750"][..]] {
+        let mut args = vec![bare.as_str()];
+        args.extend_from_slice(extra);
+        let d = diag_json(&args);
+        assert_eq!(d["speed_source"], "tachometer", "{extra:?}");
+        assert!(taken(&d), "{extra:?}: {}", d["warnings"]);
+        assert_eq!(d["verdict"]["gear"], "pinion", "{extra:?}");
+        assert_eq!(d["verdict"]["tooth"], 3, "{extra:?}: {}", d["verdict"]);
+        assert_eq!(d["verdict"]["tooth_origin"], "tachometer pulse", "{extra:?}");
+    }
+    for extra in [&[][..], &["--rpm", "2400", "--teeth", "14,39"][..]] {
+        let mut args = vec![bare.as_str()];
+        args.extend_from_slice(extra);
+        let run = gearvib(&[&["diagnose"][..], &args, &["--json"]].concat());
+        let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap_or("{}")).unwrap();
+        assert_ne!(d["speed_source"], "tachometer", "{extra:?}");
+        assert!(!taken(&d), "{extra:?}");
+    }
+}

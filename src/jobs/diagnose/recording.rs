@@ -264,6 +264,57 @@ pub(super) struct Checked {
     pub fs: Option<f64>,
 }
 
+/// Most relative difference between an undeclared tachometer's shaft rate and a given speed's, or between
+/// the mesh comb's best period near it and its own, for its pulses to be the pinion's: a given speed is
+/// nominal (its tolerance, `--speed-tolerance`), while a comb found within 1 % of the pulses' speed on a
+/// spectrum resolving a tenth of a shaft order agrees to a few parts in a thousand.
+const UNDECLARED_COMB_AGREEMENT: f64 = 0.005;
+
+/// A pulse train among `pulses` (channels that sit at two levels, none named as the tachometer) whose rate
+/// over the pulses per revolution is the pinion's speed: within the tolerance of a given speed, or, with
+/// the pinion's teeth and no speed, where the mesh comb of the vibration channel `vib` stands
+/// [`super::tracking::MIN_COMB_DB`] over its floor within [`UNDECLARED_COMB_AGREEMENT`] of the teeth times
+/// that rate. Nothing is taken without a speed or the teeth to check it on (a wheel's or a motor's
+/// tachometer would give a wrong speed silently). The channel and why it was taken.
+fn undeclared_tachometer(
+    rec: &Recording,
+    pulses: &[usize],
+    vib: usize,
+    o: &Options,
+    fs: Option<f64>,
+) -> Option<(usize, String)> {
+    let ppr = o.pulses_per_rev.max(1) as f64;
+    let period_of = |c: usize| {
+        let p = speed::tacho_pulses(&rec.channels[c - 1]).ok()?;
+        (p.len() >= 3).then(|| ppr * (p[p.len() - 1] - p[0]) / (p.len() - 1) as f64)
+    };
+    pulses.iter().find_map(|&c| {
+        let period = period_of(c)?;
+        let per_rev = if ppr > 1.0 { format!("{ppr} pulses") } else { "one pulse".into() };
+        match (o.shaft_hz, fs, o.teeth) {
+            (Some(hz), Some(fs), _) => {
+                let rate = fs / period;
+                ((rate / hz - 1.0).abs() <= o.speed_tolerance).then(|| {
+                    (c, format!("at {per_rev} per revolution it gives {rate:.4} Hz, the given speed within its tolerance"))
+                })
+            }
+            (None, _, Some((zp, _))) => {
+                let x = &rec.channels[vib - 1];
+                let (found, db) =
+                    speed::mesh_comb_period(&mut Fft::new(), &x[..x.len().min(1 << 21)], period, zp, 0.01).ok()?;
+                ((found / period - 1.0).abs() <= UNDECLARED_COMB_AGREEMENT && db >= super::tracking::MIN_COMB_DB).then(
+                    || {
+                        (c, format!(
+                            "at {per_rev} per revolution the mesh comb of {zp} teeth stands {db:.1} dB over its floor at {zp} times its rate"
+                        ))
+                    },
+                )
+            }
+            _ => None,
+        }
+    })
+}
+
 /// The channel roles and the checks before any analysis: the given tachometer and vibration channels exist
 /// and differ, pulse trains and the sidecar's tachometers are never vibration, the data is long enough,
 /// finite and not constant, and the sample rate is plausible. Warnings go to `warnings`.
@@ -285,6 +336,7 @@ pub(super) fn check_recording(
         }
     };
     let tacho = o.tacho_channel.map(|c| check_index(ChannelRole::Tachometer, c)).transpose()?;
+    let mut pulse_channels = Vec::new();
     if o.pulses_per_rev == 0 {
         return Err(bad(path, "0 tachometer pulses per revolution: a tachometer gives at least 1"));
     }
@@ -315,15 +367,7 @@ pub(super) fn check_recording(
             .filter(|&c| {
                 let pulses = looks_like_pulses(&rec.channels[c - 1]);
                 if pulses {
-                    warnings
-                        .push(format!(
-                            "channel {c} is a pulse train (it sits at two levels), a tachometer: not analysed as vibration{}",
-                            if tacho.is_none() {
-                                "; give it as the tachometer channel (with its pulses per revolution) to take the speed from it"
-                            } else {
-                                ""
-                            }
-                        ));
+                    pulse_channels.push(c);
                 }
                 !pulses
             })
@@ -337,6 +381,20 @@ pub(super) fn check_recording(
     if channels.is_empty() {
         return Err(bad(path, "no channel left to analyse besides the tachometer"));
     }
+    let undeclared = match (tacho, &o.machine) {
+        (None, None) => undeclared_tachometer(rec, &pulse_channels, channels[0], o, fs),
+        _ => None,
+    };
+    for &c in &pulse_channels {
+        warnings.push(match &undeclared {
+            Some((t, why)) if *t == c => format!("channel {c} is a pulse train (it sits at two levels), taken as the pinion's tachometer: {why}"),
+            _ if tacho.is_none() && undeclared.is_none() => format!(
+                "channel {c} is a pulse train (it sits at two levels), a tachometer: not analysed as vibration; give it as the tachometer channel (with its pulses per revolution) to take the speed from it"
+            ),
+            _ => format!("channel {c} is a pulse train (it sits at two levels), a tachometer: not analysed as vibration"),
+        });
+    }
+    let tacho = tacho.or(undeclared.map(|u| u.0));
     let checks: Vec<Result<(ind::ChannelMoments, Vec<String>), Error>> = channels
         .par_iter()
         .map(|&c| {

@@ -44,6 +44,14 @@ pub(super) fn analyse_parts<'a>(
 ) -> Result<Analysed<'a>, Error> {
     let mut warnings = std::mem::take(&mut rec.warnings);
     let checked = check_recording(path, &rec, o, &mut warnings)?;
+    // an undeclared tachometer the checks took (a pulse train whose rate is the pinion's) gives the speed
+    let adopted;
+    let o = if checked.tacho == o.tacho_channel {
+        o
+    } else {
+        adopted = Options { tacho_channel: checked.tacho, ..o.clone() };
+        &adopted
+    };
     let mut fft = Fft::new();
     let shaft = follow_shaft(path, &mut rec, &checked, o, geometry, &mut fft, &mut warnings)?;
     let plan = plan_gears(path, o, geometry, &shaft)?;

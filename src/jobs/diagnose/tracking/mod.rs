@@ -226,7 +226,7 @@ fn from_repetition(
 /// comb's speed replaces a given one: over a +-5 % window the three highest of 16 noise-only harmonics,
 /// each the largest of 2-3 bins of a spectrum averaged over 20 or more segments, reach about 3 dB; the
 /// hold-out machines' meshes stand 8-15 dB at their resonance-lifted harmonics.
-const MIN_COMB_DB: f64 = 8.0;
+pub(super) const MIN_COMB_DB: f64 = 8.0;
 
 /// Comb height (as [`MIN_COMB_DB`]) from which the comb's best speed, though not a confirmation, is a second
 /// start for the tracking beside the given speed: 2 dB over what noise alone reaches. A high harmonic's
