@@ -213,43 +213,24 @@ fn best_other_gear(scan: &[GearLines]) -> Option<GearLines> {
         .max_by(|a, b| a.score().total_cmp(&b.score()))
 }
 
-/// What the given wheel teeth's check says when it has something to say.
-#[derive(Debug, PartialEq)]
-pub(super) enum WheelCheck {
-    /// No count has its +-1 sidebands: the teeth could not be checked (a true-running wheel shows none).
-    Unchecked(String),
-    /// Another count's sidebands stand [`WHEEL_MISFIT_RATIO`] times stronger: the given teeth, or the speed
-    /// the averages rest on, do not fit the recording.
-    Misfit(String),
-}
-
-impl WheelCheck {
-    /// The warning's text.
-    pub(super) fn text(&self) -> &str {
-        match self {
-            Self::Unchecked(t) | Self::Misfit(t) => t,
-        }
-    }
-}
-
 /// The given wheel teeth checked against the wheel's sidebands on the pinion's angle ([`other_gear_scan`]
-/// with z = zp): a misfit when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger
-/// than the given count's, unchecked when no count has its +-1 lines, else nothing to say.
-pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<WheelCheck> {
+/// with z = zp): a warning when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger
+/// than the given count's, or when no count has its +-1 lines (then the teeth could not be checked).
+pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<String> {
     let scan = other_gear_scan(x, map, zp, Some(zw))?;
     let Some(best) = best_other_gear(&scan) else {
-        return Some(WheelCheck::Unchecked(format!(
+        return Some(format!(
             "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
-        )));
+        ));
     };
     let first = scan.iter().find(|g| g.teeth == zw).map_or(0.0, |g| g.first_amplitude);
     (best.teeth != zw && best.first_amplitude > WHEEL_MISFIT_RATIO * first).then(|| {
-        WheelCheck::Misfit(format!(
+        format!(
             "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {} teeth, {:.1} times those a wheel of {zw} would give; check the given teeth",
             zp as f64 / best.teeth as f64,
             best.teeth,
             best.first_amplitude / first.max(f64::MIN_POSITIVE)
-        ))
+        )
     })
 }
 
@@ -372,6 +353,6 @@ mod tests {
         assert!(map.revolutions() > SCAN_REVS);
         assert_eq!(wheel_teeth(&x, &map, 14, 39), None);
         let w = wheel_teeth(&x, &map, 14, 45).expect("45 teeth do not fit");
-        assert!(matches!(&w, WheelCheck::Misfit(t) if t.contains("a wheel of 39 teeth")), "{w:?}");
+        assert!(w.contains("a wheel of 39 teeth"), "{w}");
     }
 }
