@@ -1,6 +1,6 @@
 //! The analysis of one recording, in named stages, each returning what the next needs:
 //! 1. *read*: the channel roles and the checks of the data ([`check_recording`]);
-//! 2. *track*: the shaft's angle from one source and the speed it implies ([`follow_shaft`]);
+//! 2. *track*: the shaft's angle from one source and the speed it implies ([`shaft::follow_shaft`]);
 //! 3. *average*: the gears to average and their time-synchronous averages, whole and in blocks ([`plan_gears`],
 //!    [`average`]);
 //! 4. *indicators*: each gear's mesh order, teeth checks and condition indicators ([`gear_results`]);
@@ -13,9 +13,12 @@ use super::*;
 
 mod evidence;
 mod indicators;
+mod shaft;
 
 pub(super) use evidence::mesh_harmonics;
 pub(super) use indicators::*;
+use shaft::follow_shaft;
+pub(super) use shaft::{ShaftAngle, mains_of};
 
 /// Diagnosis of a recording already read (channels checked here): the whole pipeline for one file.
 pub(super) fn analyse(
@@ -95,212 +98,6 @@ pub(super) fn analyse_parts<'a>(
 /// averages: 2^25 samples are 128 MB of the recording, which the spectra's buffers (about as large as one
 /// channel) add to; a longer recording takes the stages one after the other, its other channels freed first.
 const CONCURRENT_SAMPLES: usize = 1 << 25;
-
-/// Track stage: the shaft's angle from one source, where it came from, and the speed it implies.
-pub(super) struct ShaftAngle {
-    /// Revolution starts of the reference shaft.
-    pub map: AngleMap,
-    /// Where the speed came from.
-    pub source: SpeedSource,
-    /// Confidence of an estimated speed (1 when given or measured).
-    pub confidence: f64,
-    /// Why an estimated speed is too doubtful for a verdict of health.
-    pub doubt: Option<String>,
-    /// Mesh order from the ratio of the repetition period to the mesh lag (estimated speed only).
-    pub mesh_from_lag: bool,
-    /// Mesh order the tracking found, when it had to.
-    pub tracked_z: Option<usize>,
-    /// Speed over the recording as reported.
-    pub profile: SpeedProfile,
-    /// Mean, least and largest revolution length, and their change (samples, fractions).
-    pub speeds: angle::SpeedProfile,
-    /// A given speed (Hz) and the measured speed's deviation from it (percent).
-    pub given: Option<(f64, f64)>,
-    /// Mean revolution, samples.
-    pub period: f64,
-}
-
-impl ShaftAngle {
-    /// The shaft that a measured or given speed belongs to: the pinion's, or a shaft nobody named when the
-    /// period was estimated.
-    fn reference(&self) -> Shaft {
-        if self.source == SpeedSource::Estimated { Shaft::Estimated } else { Shaft::Pinion }
-    }
-}
-
-/// Track stage: the nominal speed (given, tachometer, or estimated), then the angle followed on the mesh
-/// line; a given speed's deviation from the measured one is warned about.
-#[allow(clippy::too_many_arguments)]
-fn follow_shaft(
-    path: &Path,
-    rec: &mut Recording,
-    checked: &Checked,
-    o: &Options,
-    geometry: Option<&Geometry>,
-    fft: &mut Fft,
-    warnings: &mut Vec<String>,
-) -> Result<ShaftAngle, Error> {
-    let Checked { tacho, ref channels, fs, .. } = *checked;
-    let nominal = nominal_speed(path, rec, channels, o, fs, geometry, fft, warnings)?;
-    let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
-    let mesh_from_lag = nominal.mesh_order.is_some();
-    let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
-        None => track(path, rec, channels, o, known_z, nominal.map, warnings)?,
-        Some(alt) => {
-            // two starts (the given speed, the weak comb's best): the comb's when its followed line stands
-            // clearly higher
-            let mut given_warnings = Vec::new();
-            let first = track(path, rec, channels, o, known_z, nominal.map, &mut given_warnings)?;
-            let mut alt_warnings = Vec::new();
-            let second = track(path, rec, channels, o, known_z, alt, &mut alt_warnings)?;
-            let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
-            if line(&second) >= line(&first) + CLEARER_START_DB {
-                warnings.extend(alt_warnings);
-                warnings.push(format!(
-                    "the tracking from the comb's best speed followed a line {:.1} dB over its band, the one from the given speed {}: the comb's start is kept",
-                    line(&second),
-                    if line(&first).is_finite() { format!("{:.1} dB", line(&first)) } else { "none".into() }
-                ));
-                second
-            } else {
-                warnings.extend(given_warnings);
-                first
-            }
-        }
-    };
-    // the tachometer's pulses are in the angle map now and are never analysed: free them
-    if let Some(t) = tacho {
-        rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);
-    }
-    let speeds = angle::SpeedProfile::of(&map);
-    // a given speed is a nominal one: what was measured (mesh comb and tracking, or the tachometer) is used,
-    // and its deviation from the given speed reported
-    let given = o.shaft_hz.zip(fs).map(|(hz, fs)| (hz, 100.0 * (speeds.mean * fs / hz - 1.0)));
-    if let Some((hz, off)) = given {
-        let measured = speeds.mean * fs.unwrap_or(0.0);
-        if off.abs() > 100.0 * o.speed_tolerance {
-            warnings.push(format!(
-                "the given speed {hz:.4} Hz is {off:+.2} % from the measured {measured:.4} Hz ({tracking}), beyond the +-{:.1} % tolerance: check the given speed",
-                100.0 * o.speed_tolerance
-            ));
-        } else if off.abs() > 0.5 {
-            warnings.push(format!(
-                "the given speed {hz:.4} Hz is {off:+.2} % from the measured {measured:.4} Hz ({tracking}): the measured speed is used (a nameplate speed is off by the motor's slip)"
-            ));
-        }
-    }
-    let profile = SpeedProfile {
-        tracking,
-        mean_hz: fs.map(|f| f * speeds.mean),
-        min_hz: fs.map(|f| f * speeds.min),
-        max_hz: fs.map(|f| f * speeds.max),
-        change_percent: 100.0 * speeds.change,
-        fluctuation_percent: 100.0 * speeds.wander,
-        line_snr_db,
-    };
-    let doubt = nominal
-        .doubt
-        .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o))
-        .or_else(|| unfollowed_estimate(nominal.source, &profile))
-        .or_else(|| {
-            let zp = o.teeth.map(|t| t.0).filter(|_| nominal.source == SpeedSource::Estimated)?;
-            on_mains(zp, profile.mean_hz?, &speeds)
-        });
-    Ok(ShaftAngle {
-        period: map.mean_period_samples(),
-        map,
-        source: nominal.source,
-        confidence: nominal.confidence,
-        doubt,
-        mesh_from_lag,
-        tracked_z,
-        profile,
-        speeds,
-        given,
-    })
-}
-
-/// How much higher (dB) the line followed from a weak comb's best speed must stand than the one followed
-/// from the given speed for the comb's start to be kept: lines of 6-7 dB differ by a dB between two
-/// starts on the same line (a 31/47 pinion spall's 6.1 and 6.8 dB, where the comb's start smeared the
-/// pinion's FM4 from 22.8 to 3.7), while a line and its neighbour differ by several.
-const CLEARER_START_DB: f64 = 3.0;
-
-/// Why averages on an estimated speed that could not be followed cannot clear the machine: the estimate is
-/// the mean speed of a shaft that may wander by 0.5-2 %, and a constant-speed average on it smears a fault
-/// over the revolution (hold-out machines, teeth only: a spall and worn pinion averaged on a constant speed
-/// 0.95-1.34 % off the true mean were called healthy).
-fn unfollowed_estimate(source: SpeedSource, profile: &SpeedProfile) -> Option<String> {
-    (source == SpeedSource::Estimated && profile.tracking == Tracking::Constant).then(|| {
-        "the estimated speed could not be followed, so the averages assume a constant speed on a shaft that may wander by a percent or two, which smears a fault over the revolution: they cannot clear the machine; give the shaft speed or a tachometer channel".to_string()
-    })
-}
-
-/// Height over its band (dB) of a tracked mesh line under which it does not confirm a given speed that the
-/// mesh comb did not confirm: the phase-locked tracking held the true line on every generated recording
-/// whose line stood 10.6 dB or more, and on the hold-out machines lines of 6.1-7.7 dB were a neighbouring
-/// line 1-1.8 % off the true speed.
-const FOLLOWED_LINE_DB: f64 = 10.0;
-
-/// Why the averages on a given speed cannot clear the machine: the given speed's mesh comb was not found
-/// (its height over the spectrum `comb_db`, dB, when it was sought and not found) and the tracking did not follow the mesh line, so the averages run on the
-/// nameplate speed as given, which a motor's slip puts up to the speed tolerance off, on a shaft that may
-/// wander: a fault is smeared over the revolution there (on generated machines of another physics, 20 of the
-/// 38 faults called healthy this way ran on a speed over 0.5 % off).
-fn unconfirmed_speed(comb_db: Option<f64>, profile: &SpeedProfile, o: &Options) -> Option<String> {
-    let db = comb_db?;
-    match (profile.tracking, profile.line_snr_db) {
-        (Tracking::Constant, _) => {}
-        (Tracking::MeshPhase, Some(line)) if line < FOLLOWED_LINE_DB => {
-            return Some(format!(
-                "the given speed was not confirmed: its mesh comb stands only {db:.1} dB over the spectrum and the line followed stands only {line:.1} dB over its band (under {FOLLOWED_LINE_DB} dB), where the tracking can follow a neighbouring line; give a tachometer channel or the measured speed"
-            ));
-        }
-        _ => return None,
-    }
-    let comb = if db.is_finite() {
-        format!("its mesh comb stands only {db:.1} dB over the spectrum")
-    } else {
-        "its mesh comb could not be measured".to_string()
-    };
-    Some(format!(
-        "the given speed was not confirmed: {comb} and the mesh line could not be followed, so the averages run on the given speed as it is, which a motor's slip can put up to {:.1} % off; give a tachometer channel or the measured speed",
-        100.0 * o.speed_tolerance
-    ))
-}
-
-/// Largest relative distance of an estimated mesh frequency from a multiple of the mains frequency for it
-/// to be taken for hum: grids hold 50 or 60 Hz within about 0.05 Hz (0.1 %).
-const MAINS_MATCH: f64 = 1e-3;
-
-/// Largest fluctuation (fraction) of a tracked speed that a mains line shows: hum follows the grid, steady
-/// to 1e-4 over seconds, while a machine's shaft wanders by 0.5-2 % (a mesh line taken for the mesh on
-/// generated machines of another physics fluctuated 0.01-0.08 %).
-const MAINS_STEADY: f64 = 1e-3;
-
-/// The mains frequency (50 or 60 Hz) whose first or second harmonic `mesh_hz` lies on within
-/// [`MAINS_MATCH`], the strongest hum lines (see [`on_mains`] for why only those two).
-pub(in crate::jobs::diagnose) fn mains_of(mesh_hz: f64) -> Option<f64> {
-    [50.0, 60.0].into_iter().find(|&f: &f64| {
-        let k = (mesh_hz / f).round();
-        (1.0..=2.0).contains(&k) && (mesh_hz / (k * f) - 1.0).abs() <= MAINS_MATCH
-    })
-}
-
-/// Why a speed estimated from the teeth may be hum: the pinion's mesh (`zp` times the shaft's `shaft_hz`)
-/// lies on 50 or 60 Hz or its second harmonic (the strongest hum lines) and is as steady as the grid. Only
-/// those two: a machine at a synchronous speed (1500 or 1800 rpm, a drive set to 25 or 30 Hz) puts its mesh
-/// on a higher mains harmonic whenever the pinion has an even number of teeth (the bundled 14-tooth pinion
-/// at 30 Hz meshes at 420 Hz, 7 x 60), while a mesh at 50-120 Hz needs a pinion under 10 Hz.
-fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<String> {
-    let mesh = zp as f64 * shaft_hz;
-    let mains = mains_of(mesh)?;
-    (speeds.wander <= MAINS_STEADY).then(|| {
-        format!(
-            "the mesh found ({mesh:.2} Hz, {zp} x {shaft_hz:.3} Hz) lies on a harmonic of the {mains:.0} Hz mains and is as steady as the grid: it may be hum taken for the mesh, so averages on that speed cannot clear the machine; give the shaft speed or a tachometer channel"
-        )
-    })
-}
 
 /// Average stage, its plan: the gears (shafts) to average, with their speed ratios to the tracked shaft and
 /// mesh orders where known, and the averages' length.
@@ -643,30 +440,5 @@ fn other_gear_note(z: usize, other: Option<&OtherGear>) -> String {
             g.teeth, g.line_over_floor_db, g.confidence
         ),
         None => "the meshing gear's teeth were not estimated: no sidebands of another gear stand 12 dB over their floor (a true-running healthy gear shows none); give the teeth when known".into(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn steady(wander: f64) -> angle::SpeedProfile {
-        angle::SpeedProfile { mean: 1e-3, min: 1e-3, max: 1e-3, change: 0.0, wander }
-    }
-
-    /// A mesh on 50 or 60 Hz or its second harmonic within 0.1 % and steadier than 0.1 % is doubted; a
-    /// wandering one, one off by more, and a synchronous machine's mesh on a higher harmonic are not.
-    #[test]
-    fn hum_is_told_by_its_frequency_and_steadiness() {
-        // 13 teeth x 4.6154 Hz = 60.0 Hz (the first harmonic of 60 Hz)
-        assert!(on_mains(13, 60.0 / 13.0, &steady(2e-4)).is_some());
-        // 20 teeth x 5 Hz = 100 Hz (the second harmonic of 50 Hz), 0.05 % off
-        assert!(on_mains(20, 5.0025, &steady(0.0)).is_some());
-        // 0.2 % off the mains line: the grid does not wander that far
-        assert!(on_mains(13, 1.002 * 60.0 / 13.0, &steady(0.0)).is_none());
-        // on the line but wandering by 1 %, as a machine's shaft does
-        assert!(on_mains(13, 60.0 / 13.0, &steady(0.01)).is_none());
-        // a 14-tooth pinion at a synchronous 30 Hz meshes at 420 Hz = 7 x 60 Hz: not hum
-        assert!(on_mains(14, 30.0, &steady(0.0)).is_none());
     }
 }
