@@ -436,6 +436,7 @@ mod tests {
         assert!(e.contains("hour-long.wav") && e.contains("worker 9"), "{e}");
         assert_eq!(caught(file, || Ok(5)).unwrap(), 5);
     }
+
     /// A tachometer recorded through an ADC (pulses of 8 % duty, edges through a one-pole low-pass of 4
     /// samples, noise at 1 % of the pulse height, a DC offset) is told as pulses; vibration is not: a
     /// noisy sine, an impulsive signal (a one-sample shock every 500 samples on quiet noise: two levels,

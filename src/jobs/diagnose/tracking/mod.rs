@@ -52,9 +52,9 @@ pub(super) fn nominal_speed(
     warnings: &mut Vec<String>,
 ) -> Result<Nominal, Error> {
     let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
-    // a given speed is checked against the record even when a tachometer gives the speed (it is then the
-    // nominal speed the tachometer's is compared with)
-    if let (Some(hz), Some(fs), Some(_)) = (o.shaft_hz, fs, o.tacho_channel) {
+    // a given speed is checked against the record whatever gives the speed (beside a tachometer it is the
+    // nominal speed the tachometer's is compared with); without a sample rate `given_speed` refuses it
+    if let (Some(hz), Some(fs)) = (o.shaft_hz, fs) {
         check_given_speed(path, hz, fs, n, o.min_revolutions)?;
     }
     if let Some(t) = o.tacho_channel {
@@ -107,8 +107,8 @@ pub(super) fn nominal_speed(
     Ok(from_repetition(&est, &views, o, geometry, n, warnings))
 }
 
-/// A given speed `hz` (with the sample rate `fs`): checked against the record, and on the mesh comb when the
-/// teeth are given (the comb's speed, or a second start for the tracking).
+/// A given speed `hz` (with the sample rate `fs`; checked against the record by [`nominal_speed`]), sought
+/// on the mesh comb when the teeth are given (the comb's speed, or a second start for the tracking).
 fn given_speed(
     path: &Path,
     rec: &Recording,
@@ -121,7 +121,6 @@ fn given_speed(
     let n = rec.channels.iter().map(|c| c.len()).max().unwrap_or(0);
     let fs =
         fs.ok_or_else(|| Error::from(JobError::NoSampleRate { file: path.display().to_string(), for_speed: true }))?;
-    check_given_speed(path, hz, fs, n, o.min_revolutions)?;
     let (period, unconfirmed_comb_db, alternative) = match o.teeth {
         Some((zp, _)) => given_on_mesh_comb(rec, channels, fs / hz, zp, o, fft, warnings),
         None => (fs / hz, None, None),

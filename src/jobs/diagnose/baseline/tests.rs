@@ -1,0 +1,70 @@
+//! Tests of the statistical baseline: the robust spread of Gaussian values, the Student-t quantiles
+//! against the published table, the spread's floor.
+
+use super::*;
+
+#[test]
+fn robust_spread_of_gaussian_like_values() {
+    // the 1.4826 MAD of a symmetric sample equals its standard deviation for a Gaussian; for the
+    // evenly spaced quantiles of N(10, 1) at p = (i + 0.5) / 201 it is 1 within 2 %
+    let q: Vec<f64> = (0..201).map(|i| 10.0 + acklam((i as f64 + 0.5) / 201.0)).collect();
+    let s = Stat::of(&q, Scale::Linear);
+    assert!((s.centre - 10.0).abs() < 1e-9);
+    assert!((s.spread - 1.0).abs() < 0.02, "{}", s.spread);
+}
+
+/// Acklam's inverse normal CDF (relative error below 1.2e-9).
+fn acklam(p: f64) -> f64 {
+    let a = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.38357751867269e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    let b =
+        [-5.447609879822406e1, 1.615858368580409e2, -1.556989798598866e2, 6.680131188771972e1, -1.328068155288572e1];
+    let c = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    let d = [7.784695709041462e-3, 3.224671290700398e-1, 2.445134137142996, 3.754408661907416];
+    let pl = 0.02425;
+    if p < pl {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5])
+            / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0)
+    } else if p <= 1.0 - pl {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q
+            / (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+    } else {
+        -acklam(1.0 - p)
+    }
+}
+
+#[test]
+fn student_t_matches_the_published_table() {
+    // t quantiles from standard tables (e.g. NIST/SEMATECH e-Handbook 1.3.6.7.2): one-sided 0.999
+    for (nu, t) in [(4.0, 7.173), (10.0, 4.144), (30.0, 3.385)] {
+        let got = student_t(SUSPECT_Z, nu);
+        // the expansion is asymptotic in 1 / nu: within 1 % at nu = 4, closer beyond
+        assert!((got / t - 1.0).abs() < 0.01, "nu {nu}: {got} vs {t}");
+    }
+    assert!((student_t(SUSPECT_Z, 1e9) - SUSPECT_Z).abs() < 1e-6);
+}
+
+#[test]
+fn spread_has_a_floor() {
+    let s = Stat::of(&[2.0; 9], Scale::Linear);
+    assert!((s.spread - 0.1).abs() < 1e-12);
+    // on the log scale the floor is ln 1.05, and 2.1 against 2.0 is one spread
+    let s = Stat::of(&[2.0; 9], Scale::Log);
+    assert!((s.spreads(2.1) - 1.0).abs() < 1e-12);
+}
