@@ -628,3 +628,32 @@ fn an_undeclared_tachometer_is_taken_when_the_teeth_or_the_speed_confirm_it() {
         assert!(!taken(&d), "{extra:?}");
     }
 }
+
+/// A given speed a third too high (2400 rpm on the 1800 rpm cracked pinion, no tachometer: the bundled WAV
+/// without its sidecar, on its vibration channel): the mesh search takes another line 1.8 % from it and
+/// the averages hold no gear; the wheel's sidebands then contradict the given 39 teeth (a wheel of 19
+/// stands 197 times stronger), so the verdict is not judged (exit 3), never healthy.
+#[test]
+fn teeth_the_sidebands_contradict_leave_the_machine_not_judged() {
+    let bare = temp_dir("wrong-speed").join("cracked-bare.wav");
+    std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
+    let run = gearvib(&[
+        "diagnose",
+        &bare.to_string_lossy(),
+        "--channel",
+        "1",
+        "--rpm",
+        "2400",
+        "--teeth",
+        "14,39",
+        "--json",
+    ]);
+    assert_eq!(run.code, 3, "{}", run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+    assert!(
+        d["speed_doubt"].as_str().unwrap().contains("the given wheel teeth (39) do not fit"),
+        "{}",
+        d["speed_doubt"]
+    );
+}

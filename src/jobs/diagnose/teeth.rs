@@ -80,6 +80,14 @@ const WHEEL_LINE_OVER_FLOOR: f64 = 4.0;
 /// hundred revolutions, where the Hann window's skirt still reads a strong line at a third of its height.
 const WHEEL_MISFIT_RATIO: f64 = 3.0;
 
+/// Ratio of another wheel's +-1 sidebands over the given wheel's beyond which the averages are doubted
+/// (no verdict of health rests on them), ten times the warning's [`WHEEL_MISFIT_RATIO`]: noise-level
+/// sidebands of a true-running wheel let another count stand up to 3-4 times (gearvib's own drifting
+/// healthy recordings, the hold-out's broken wheel on its tachometer: 4.1), and up to 24 times on the
+/// hold-out's teeth-only runs; a speed a third off on the bundled cracked pinion puts the pinion's own
+/// sidebands on a count 197 times stronger (275 at +5.6 %, 1446 at twice the speed).
+pub(super) const WHEEL_DOUBT_RATIO: f64 = 30.0;
+
 /// Most revolutions [`other_gear_scan`] transforms at once: 4096 resolve 1/4096 of an order (the lines it
 /// reads are at least 1/200 of an order from a whole one), and their padded baseband takes 8 MB where a
 /// one-hour record's whole would take half a gigabyte (a record of up to 4096 revolutions is read whole).
@@ -213,24 +221,49 @@ fn best_other_gear(scan: &[GearLines]) -> Option<GearLines> {
         .max_by(|a, b| a.score().total_cmp(&b.score()))
 }
 
+/// What the given wheel teeth's check says when it has something to say.
+#[derive(Debug, PartialEq)]
+pub(super) enum WheelCheck {
+    /// No count has its +-1 sidebands: the teeth could not be checked (a true-running wheel shows none).
+    Unchecked(String),
+    /// Another count's sidebands stand `ratio` ([`WHEEL_MISFIT_RATIO`] or more) times stronger: the given
+    /// teeth, or the speed the averages rest on, do not fit the recording.
+    Misfit {
+        /// The warning.
+        text: String,
+        /// The best count's +-1 sidebands over the given count's (amplitude ratio).
+        ratio: f64,
+    },
+}
+
+impl WheelCheck {
+    /// The warning's text.
+    pub(super) fn text(&self) -> &str {
+        match self {
+            Self::Unchecked(text) | Self::Misfit { text, .. } => text,
+        }
+    }
+}
+
 /// The given wheel teeth checked against the wheel's sidebands on the pinion's angle ([`other_gear_scan`]
-/// with z = zp): a warning when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger
-/// than the given count's, or when no count has its +-1 lines (then the teeth could not be checked).
-pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<String> {
+/// with z = zp): a misfit when the best count's +-1 sidebands are [`WHEEL_MISFIT_RATIO`] times stronger
+/// than the given count's, unchecked when no count has its +-1 lines, else nothing to say.
+pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<WheelCheck> {
     let scan = other_gear_scan(x, map, zp, Some(zw))?;
     let Some(best) = best_other_gear(&scan) else {
-        return Some(format!(
+        return Some(WheelCheck::Unchecked(format!(
             "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
-        ));
+        )));
     };
     let first = scan.iter().find(|g| g.teeth == zw).map_or(0.0, |g| g.first_amplitude);
-    (best.teeth != zw && best.first_amplitude > WHEEL_MISFIT_RATIO * first).then(|| {
-        format!(
-            "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {} teeth, {:.1} times those a wheel of {zw} would give; check the given teeth",
+    let ratio = best.first_amplitude / first.max(f64::MIN_POSITIVE);
+    (best.teeth != zw && ratio > WHEEL_MISFIT_RATIO).then(|| WheelCheck::Misfit {
+        text: format!(
+            "the given wheel teeth ({zw}) do not fit: the mesh's sidebands stand at +-{:.4} pinion orders, a wheel of {} teeth, {ratio:.1} times those a wheel of {zw} would give; check the given teeth",
             zp as f64 / best.teeth as f64,
             best.teeth,
-            best.first_amplitude / first.max(f64::MIN_POSITIVE)
-        )
+        ),
+        ratio,
     })
 }
 
@@ -353,6 +386,6 @@ mod tests {
         assert!(map.revolutions() > SCAN_REVS);
         assert_eq!(wheel_teeth(&x, &map, 14, 39), None);
         let w = wheel_teeth(&x, &map, 14, 45).expect("45 teeth do not fit");
-        assert!(w.contains("a wheel of 39 teeth"), "{w}");
+        assert!(matches!(&w, WheelCheck::Misfit { text, .. } if text.contains("a wheel of 39 teeth")), "{w:?}");
     }
 }

@@ -157,9 +157,9 @@ pub(super) struct Averages {
     pub early_scan: Option<TeethScan>,
 }
 
-/// What the teeth scan found: a warning on the given wheel teeth, or a note on the meshing gear's estimated
+/// What the teeth scan found: the given wheel teeth's check, or a note on the meshing gear's estimated
 /// teeth and the estimate when confident.
-pub(super) type TeethScan = (Option<String>, Option<OtherGear>);
+pub(super) type TeethScan = (Option<WheelCheck>, Option<OtherGear>);
 
 /// The given wheel teeth checked, or the meshing gear's estimated, from the sidebands on the tracked angle
 /// of the first channel `x` (`z`: the tracked shaft's mesh order).
@@ -170,7 +170,8 @@ fn teeth_scan(x: &[f32], map: &AngleMap, o: &Options, z: usize) -> TeethScan {
         Some((_, zw)) => (wheel_teeth(x, map, z, zw), None),
         None => {
             let other = other_gear_teeth(x, map, z);
-            (Some(other_gear_note(z, other.as_ref())), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
+            let note = WheelCheck::Unchecked(other_gear_note(z, other.as_ref()));
+            (Some(note), other.filter(|g| g.confidence >= MIN_OTHER_GEAR_CONFIDENCE))
         }
     }
 }
@@ -226,6 +227,8 @@ pub(super) struct GearResults {
     pub teeth_source: TeethSource,
     /// The meshing gear's teeth estimated from its sidebands.
     pub other_gear: Option<OtherGear>,
+    /// Why the given wheel teeth do not fit the wheel's sidebands, when they do not.
+    pub wheel_misfit: Option<String>,
 }
 
 /// Indicators stage: each gear's mesh order (given, the baseline's, or from its averages), its checks
@@ -308,8 +311,12 @@ fn gear_results(
         },
         || early_scan.unwrap_or_else(|| teeth_scan(&rec.channels[first - 1], &shaft.map, o, mesh_orders[0])),
     );
-    warnings.extend(wheel_warning);
-    Ok(GearResults { gears, mesh_orders, teeth_source, other_gear })
+    warnings.extend(wheel_warning.as_ref().map(|w| w.text().to_string()));
+    let wheel_misfit = match wheel_warning {
+        Some(WheelCheck::Misfit { text, ratio }) if ratio >= WHEEL_DOUBT_RATIO => Some(text),
+        _ => None,
+    };
+    Ok(GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit })
 }
 
 /// The checks of a gear's mesh order `z` against the tachometer's pulses per revolution (an error) and
@@ -364,7 +371,7 @@ fn diagnosis(
     warnings: Vec<String>,
 ) -> Diagnosis {
     let Checked { channels, moments, samples, fs, .. } = checked;
-    let GearResults { gears, mesh_orders, teeth_source, other_gear } = results;
+    let GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit } = results;
     let shaft_hz = fs.map(|fs| fs / shaft.period);
     let shafts = match (&plan.machine_shafts, o.teeth) {
         (Some(_), _) => super::machine::shaft_hz(o, shaft_hz),
@@ -384,7 +391,14 @@ fn diagnosis(
         shaft_period_samples: shaft.period,
         speed_source: shaft.source,
         speed_confidence: shaft.confidence,
-        speed_doubt: shaft.doubt.clone(),
+        // given wheel teeth the sidebands contradict: the teeth or the speed the averages rest on are wrong
+        speed_doubt: shaft.doubt.clone().or_else(|| {
+            wheel_misfit.map(|why| {
+                format!(
+                    "{why}: with wrong teeth or a wrong speed the averages hold no gear, so they cannot clear the machine"
+                )
+            })
+        }),
         spectrum_scale: Default::default(),
         speed_given_hz: shaft.given.map(|g| g.0),
         speed_deviation_percent: shaft.given.map(|g| g.1),
