@@ -861,6 +861,47 @@ pub fn machines() -> Vec<Machine> {
     ]
 }
 
+/// Three more machines, kept out of every test and every threshold: the scorecard reads them with
+/// `GEARVIB_MORE_MACHINES=1` to see how the diagnosis does on pairs, speeds and sample rates it was not
+/// tuned on (40 Hz, 44.1 kHz, 32 kHz; contact ratios 1.4-1.7).
+pub fn more_machines() -> Vec<Machine> {
+    vec![
+        Machine {
+            name: "z21z37-40Hz-fs51k2",
+            zp: 21,
+            zw: 37,
+            shaft_hz: 40.0,
+            fs: 51_200.0,
+            duration_s: 8.0,
+            contact_ratio: 1.6,
+            fan_blades: 6,
+            seed: 2137,
+        },
+        Machine {
+            name: "z27z43-30Hz-fs32k",
+            zp: 27,
+            zw: 43,
+            shaft_hz: 30.0,
+            fs: 32_000.0,
+            duration_s: 8.0,
+            contact_ratio: 1.7,
+            fan_blades: 5,
+            seed: 2743,
+        },
+        Machine {
+            name: "z18z31-15Hz-fs44k1",
+            zp: 18,
+            zw: 31,
+            shaft_hz: 15.0,
+            fs: 44_100.0,
+            duration_s: 12.0,
+            contact_ratio: 1.4,
+            fan_blades: 9,
+            seed: 1831,
+        },
+    ]
+}
+
 /// Contact-ratio change per metre of centre-distance increase for base radius `rb` and `z` teeth (20 deg).
 fn contact_change(rb: f64, z: usize) -> f64 {
     let pb = 2.0 * PI * rb / z as f64;

@@ -64,11 +64,19 @@ pub(super) fn pulses_misfit<'a>(tsas: impl Iterator<Item = &'a [f64]>, z: usize)
     // 1/k revolution the shaft's own orders (the mesh's sidebands) fall between whole orders and average
     // out, while on a true revolution a line at z / k among its neighbours is one of the shaft's harmonics
     // (a worn 27-tooth pinion's order 9 stood over its weakened mesh line on a generated machine)
-    let clear = |o: usize| at(o) > PULSES_TOO_FEW_RATIO * at(o - 1).max(at(o + 1));
+    let clear = |o: usize| o + 1 < power.len() && at(o) > PULSES_TOO_FEW_RATIO * at(o - 1).max(at(o + 1));
+    // and a line at z / k is one of a mesh family only when the family's other members that a true revolution
+    // would not hold (the multiples m z / k, m not a multiple of k: the mesh harmonics 3, 5, 7 at k = 2) stand
+    // clear too, two of the first three: a fan of z / k blades on the shaft puts a line at z / k clear of its
+    // neighbours, with a harmonic or two, over a weak mesh line (a generated 18-tooth pinion with a 9-blade fan)
+    // (and over 1 % of the line at z / k, so that rounding beside nothing is not a line)
+    let member = |o: usize, m: usize| clear(m * o) && at(m * o) > PULSES_TOO_MANY_SHARE * at(o);
+    let family = |k: usize, o: usize| (2..).filter(|m| m % k != 0).take(3).filter(|&m| member(o, m)).count() >= 2;
     let part = (2..=4usize)
         .filter(|k| z.is_multiple_of(*k))
-        .map(|k| z / k)
-        .find(|&o| at(o) > PULSES_TOO_FEW_RATIO * mesh && at(o) > 0.0 && clear(o));
+        .map(|k| (k, z / k))
+        .find(|&(k, o)| at(o) > PULSES_TOO_FEW_RATIO * mesh && at(o) > 0.0 && clear(o) && family(k, o))
+        .map(|(_, o)| o);
     spans.or(part)
 }
 
@@ -348,19 +356,27 @@ mod tests {
     }
 
     /// Two pulses per revolution given as one on a 28-tooth pinion: each average spans half a revolution,
-    /// so the mesh (fundamental 1, harmonics 0.2, 0.3) stands at orders 14, 28, 42 with nothing beside it
-    /// (the shaft's orders fall between whole ones): order 14 is found. A worn 27-tooth pinion, averaged
-    /// right, whose mesh line (0.2) lies under its shaft harmonic 9 (1.0, beside orders 8 and 10 at 0.5):
-    /// not taken for a third of a revolution.
+    /// so the mesh (fundamental 1, harmonics 0.1-0.3) stands at orders 14, 28, 42, 70, 98 with nothing
+    /// beside it (the shaft's orders fall between whole ones): order 14 is found. A worn 27-tooth pinion,
+    /// averaged right, whose mesh line (0.2) lies under its shaft harmonic 9 (1.0, beside orders 8 and 10
+    /// at 0.5), that harmonic alone, or a fan tone of 9 blades with two harmonics over an 18-tooth mesh:
+    /// not taken for a fraction of a revolution, since no mesh family stands at the multiples of 9.
     #[test]
     fn a_mesh_at_a_fraction_of_the_order_must_stand_clear_of_its_neighbours() {
-        let half = average(1024, &[(14, 1.0), (28, 0.2), (42, 0.3)]);
+        // half a revolution averaged: the mesh family of 14 teeth at the multiples of 14 of the 28 given
+        let half = average(1024, &[(14, 1.0), (28, 0.2), (42, 0.3), (70, 0.2), (98, 0.1)]);
         assert_eq!(pulses_misfit(std::iter::once(half.as_slice()), 28), Some(14));
         let worn = average(1024, &[(8, 0.5), (9, 1.0), (10, 0.5), (27, 0.2), (54, 0.5), (81, 0.2)]);
         assert_eq!(pulses_misfit(std::iter::once(worn.as_slice()), 27), None);
-        // the same shaft harmonic standing alone would be read as the mesh of a third of a revolution
+        // a shaft harmonic standing alone is not a mesh family: neither is a 9-blade fan's tone with two
+        // harmonics over a weak mesh line of 18 teeth on a true revolution
         let alone = average(1024, &[(9, 1.0), (27, 0.2), (54, 0.5), (81, 0.2)]);
-        assert_eq!(pulses_misfit(std::iter::once(alone.as_slice()), 27), Some(9));
+        assert_eq!(pulses_misfit(std::iter::once(alone.as_slice()), 27), None);
+        let fan = average(1024, &[(9, 1.0), (18, 0.2), (27, 0.15), (36, 0.1), (54, 0.05)]);
+        assert_eq!(pulses_misfit(std::iter::once(fan.as_slice()), 18), None);
+        // a third of a revolution: the mesh family of 9 at the multiples of 9 of the 27 given
+        let third = average(1024, &[(9, 1.0), (18, 0.3), (27, 0.2), (36, 0.2), (45, 0.1), (54, 0.5)]);
+        assert_eq!(pulses_misfit(std::iter::once(third.as_slice()), 27), Some(9));
     }
 
     /// A 14-tooth pinion meshing with a 39-tooth wheel over 5000 revolutions, more than [`SCAN_REVS`]: the
