@@ -352,18 +352,40 @@ fn weight(triggers: &[Trigger]) -> (f64, f64) {
 /// both generators' scorecards lost no gear and gained that one in two modes.
 const CLEARLY_FURTHER: f64 = 1.25;
 
+/// How many times stronger (as a ratio to its limit) one gear's impulse (FM4, M6A) must be than the
+/// other's, when both averages hold one, to decide between them: a local fault is whole in its own gear's
+/// average and spread over the other's revolutions there, so its impulse in the other's average is weaker;
+/// a generated broken wheel tooth stood 4.3 times stronger in the wheel's (FM4) than in the pinion's, while
+/// a hold-out pinion spall raised the wheel's M6A 1.6 times higher than the pinion's own impulse (its
+/// NA4*, ER and FM0 then decide for the pinion).
+const CLEARLY_STRONGER_IMPULSE: f64 = 2.0;
+
 /// The gear a verdict goes to: the worst state; among equal states (with `speed_trusted`) the one whose
 /// indicators moved [`CLEARLY_FURTHER`] than the others', else the one whose own average holds an impulse
-/// (FM4, M6A: a local fault is whole in its own gear's average, smeared in the other's), then the one whose
-/// strongest indicator moved furthest. On a doubtful speed the averages can be smeared, which moves the
-/// energy measures of a gear far without a fault of its own, so the impulse decides first.
+/// (FM4, M6A: a local fault is whole in its own gear's average, smeared in the other's), or, when both
+/// do, the one whose impulse stands [`CLEARLY_STRONGER_IMPULSE`] times over the other's, then the one
+/// whose strongest indicator moved furthest. On a doubtful speed the averages can be smeared, which moves the energy
+/// measures of a gear far without a fault of its own, so the impulse decides first.
 fn worst_gear<'a>(per_gear: &'a [GearTriggers], t: &Thresholds, speed_trusted: bool) -> Option<&'a GearTriggers> {
     let key = |g: &GearTriggers| (gear_state(&g.triggers, t), weight(&g.triggers));
+    let by = |margin: f64| {
+        move |a: f64, b: f64| {
+            if a > margin * b {
+                std::cmp::Ordering::Greater
+            } else if b > margin * a {
+                std::cmp::Ordering::Less
+            } else {
+                std::cmp::Ordering::Equal
+            }
+        }
+    };
+    let (clearly, stronger) = (by(CLEARLY_FURTHER), by(CLEARLY_STRONGER_IMPULSE));
     per_gear.iter().max_by(|a, b| {
         let ((sa, (la, xa)), (sb, (lb, xb))) = (key(a), key(b));
-        let further = speed_trusted && (xa > CLEARLY_FURTHER * xb || xb > CLEARLY_FURTHER * xa);
-        let impulse = if further { std::cmp::Ordering::Equal } else { (la > 0.0).cmp(&(lb > 0.0)) };
-        sa.cmp(&sb).then(impulse).then(xa.total_cmp(&xb))
+        let further = if speed_trusted { clearly(xa, xb) } else { std::cmp::Ordering::Equal };
+        // a broken wheel tooth: the wheel's FM4 4.5 times its limit, the pinion's 1.05
+        let impulse = || (la > 0.0).cmp(&(lb > 0.0)).then_with(|| stronger(la, lb));
+        sa.cmp(&sb).then(further).then_with(impulse).then(xa.total_cmp(&xb))
     })
 }
 
@@ -503,5 +525,20 @@ mod tests {
             gear(Shaft::Wheel, vec![trigger(1.2, true), trigger(1.1, false)]),
         ];
         assert_eq!(worst_gear(&suspect_only, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
+        // both averages hold an impulse and their strongest indicators moved about as far: the clearly
+        // stronger impulse decides (a generated broken wheel tooth: spectral change 14.5 and 13.4 times
+        // its limit on the pinion and the wheel, FM4 1.05 and 4.5 times)
+        let broken = [
+            gear(Shaft::Pinion, vec![trigger(14.5, false), trigger(1.05, true)]),
+            gear(Shaft::Wheel, vec![trigger(13.4, false), trigger(4.5, true)]),
+        ];
+        assert_eq!(worst_gear(&broken, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
+        assert_eq!(worst_gear(&broken, &t, false).map(|g| g.gear), Some(Shaft::Wheel));
+        // an impulse only 1.6 times stronger does not decide: the strongest indicator does
+        let spall = [
+            gear(Shaft::Pinion, vec![trigger(2.28, false), trigger(1.14, true)]),
+            gear(Shaft::Wheel, vec![trigger(1.86, true)]),
+        ];
+        assert_eq!(worst_gear(&spall, &t, true).map(|g| g.gear), Some(Shaft::Pinion));
     }
 }
