@@ -75,6 +75,13 @@ pub(super) fn follow_shaft(
             }
         }
     };
+    let map = match (o.shaft_hz, known_z, tacho, tracking) {
+        (Some(_), Some(z), None, Tracking::MeshPhase) => {
+            let zw = o.teeth.map(|t| t.1).filter(|_| o.teeth.is_some_and(|t| t.0 == z));
+            mesh_not_sideband(&rec.channels[channels[0] - 1], map, (z, zw), o, fs, warnings)
+        }
+        _ => map,
+    };
     // the tachometer's pulses are in the angle map now and are never analysed: free them
     if let Some(t) = tacho {
         rec.channels[t - 1] = std::borrow::Cow::Borrowed(&[]);
@@ -125,6 +132,148 @@ pub(super) fn follow_shaft(
         speeds,
         given,
     })
+}
+
+/// How many times more synchronous energy an angle that makes the followed line a sideband must hold than
+/// the followed angle for it to be taken: on the right angle every order of both gears is a line (the mesh
+/// harmonics, their sidebands, a fault's impulse train), on an angle k z / (k z + j) of it only the orders
+/// that are multiples of k z + j. A generated broken 21-tooth pinion at 40 Hz, given 2400 rpm, was
+/// followed on the mesh's second harmonic's sideband -2 (its line 17 dB over its band, the mesh's 11 dB).
+const SIDEBAND_ENERGY_RATIO: f64 = 1.5;
+
+/// Largest height of one line over its floor that counts (power ratio, 30 dB): one strong line of another
+/// machine (a pump's mesh) that falls on an order of a wrong angle adds no more than a few of its own.
+const LINE_CAP: f64 = 1000.0;
+
+/// Most samples of a channel read for [`SyncSpectrum`]: 2^19, about 10 s at 51.2 kHz.
+const SYNC_SAMPLES: usize = 1 << 19;
+
+/// The order power spectrum of a channel on a followed angle (its first [`SYNC_SAMPLES`] over whole
+/// revolutions) up to an order: since a sideband's angle is the followed one scaled, the lines of any
+/// such angle are read from it.
+struct SyncSpectrum {
+    power: Vec<f64>,
+    /// Revolutions transformed: bin b is order b / revs.
+    revs: f64,
+    /// Highest order read.
+    top: f64,
+}
+
+impl SyncSpectrum {
+    fn new(x: &[f32], map: &AngleMap, top: f64) -> Option<Self> {
+        let x = &x[..x.len().min(SYNC_SAMPLES)];
+        let period = map.mean_period_samples();
+        let revs = (0..map.revolutions()).take_while(|&r| map.sample_at((r + 1) as f64) < x.len() as f64 - 2.0).count();
+        if revs < 8 {
+            return None;
+        }
+        let points = (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16);
+        let mut angle = vec![0.0; revs * points];
+        map.resample(x, 0.0, 1.0 / points as f64, &mut angle);
+        let mean = angle.iter().sum::<f64>() / angle.len() as f64;
+        angle.iter_mut().for_each(|v| *v -= mean);
+        let mut power: Vec<f64> = Fft::new().forward_magnitudes(&mut angle).iter().map(|a| a * a).collect();
+        let top = top.min(0.4 * period);
+        power.truncate(((top + 1.0) * revs as f64).ceil() as usize);
+        Some(Self { power, revs: revs as f64, top })
+    }
+
+    /// Summed log height over their local floor (ln of the power ratio, 0 to ln [`LINE_CAP`]) of the lines
+    /// at the orders m `step` (m = 1, 2, ... up to the top order) of the followed angle, each the largest
+    /// bin within one of its place.
+    fn lines(&self, step: f64) -> f64 {
+        (1..)
+            .map(|m| m as f64 * step)
+            .take_while(|&o| o < self.top)
+            .map(|o| {
+                let b = (o * self.revs).round() as usize;
+                let peak = (b.saturating_sub(1)..=b + 1).filter_map(|i| self.power.get(i)).copied().fold(0.0, f64::max);
+                (peak / self.floor(b)).clamp(1.0, LINE_CAP).ln()
+            })
+            .sum()
+    }
+
+    /// What the largest of three bins of noise alone reads around bin `b`: 2.65 times the median of the
+    /// bins from 3 bins to half an order away on either side (the power of a bin of noise is exponential:
+    /// its median is 0.69 of its mean, the largest of three 1.83 of it).
+    fn floor(&self, b: usize) -> f64 {
+        let w = ((self.revs / 2.0) as usize).max(6);
+        let mut near: Vec<f64> = (3..=w)
+            .flat_map(|d| [b.checked_sub(d), Some(b + d)])
+            .flatten()
+            .filter_map(|i| self.power.get(i))
+            .copied()
+            .collect();
+        if near.is_empty() {
+            return f64::INFINITY;
+        }
+        let mid = near.len() / 2;
+        2.65 * *near.select_nth_unstable_by(mid, f64::total_cmp).1
+    }
+
+    /// Synchronous energy of a shaft turning `1 / r` times per followed revolution: its orders, and its
+    /// meshing gear's (`ratio` of its speed) when known.
+    fn energy(&self, r: f64, ratio: Option<f64>) -> f64 {
+        self.lines(1.0 / r) + ratio.map_or(0.0, |q| self.lines(q / r))
+    }
+}
+
+/// A given speed's followed mesh line checked against its sidebands: the line followed for harmonic k of
+/// the mesh (order k z) may be that harmonic's sideband k z + j of a shaft turning at k z / (k z + j) of the
+/// followed speed, inside the speed tolerance (a broken tooth's sidebands can stand over the mesh line),
+/// j = +-1, +-2 pinion orders or +-1 wheel order (z / zw). The sideband's angle is the followed one scaled
+/// (the sideband's phase is k z + j times the shaft's); of the angles within the tolerance, the one whose
+/// lines (both gears' orders) hold [`SIDEBAND_ENERGY_RATIO`] times those of the followed angle and of
+/// every other candidate is taken, said in a warning.
+fn mesh_not_sideband(
+    x: &[f32],
+    map: AngleMap,
+    (z, zw): (usize, Option<usize>),
+    o: &Options,
+    fs: Option<f64>,
+    warnings: &mut Vec<String>,
+) -> AngleMap {
+    let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return map };
+    let period = map.mean_period_samples();
+    // the harmonic followed: the strongest of the first four on the followed speed, as the tracking chose
+    let line = |o: &f64| crate::signal::spectrum::line_amplitude(x, o / period, 0.2 / period);
+    let Some(order) =
+        (1..=4).map(|k| (k * z) as f64).filter(|o| o / period < 0.4).max_by(|a, b| line(a).total_cmp(&line(b)))
+    else {
+        return map;
+    };
+    let nominal = fs / hz;
+    let ratio = zw.map(|w| z as f64 / w as f64);
+    let offsets = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q]));
+    let candidates: Vec<f64> =
+        offsets.filter(|j| (nominal / (period * (order + j) / order) - 1.0).abs() <= o.speed_tolerance).collect();
+    if candidates.is_empty() {
+        return map;
+    }
+    // the orders of the mesh's first four harmonics and their sidebands: where the lines stand
+    let Some(spectrum) = SyncSpectrum::new(x, &map, 4.5 * z as f64) else { return map };
+    let own = spectrum.energy(1.0, ratio);
+    let mut scored: Vec<(f64, f64)> =
+        candidates.into_iter().map(|j| (j, spectrum.energy((order + j) / order, ratio))).collect();
+    scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+    // the best must stand clear of the followed angle and of the other sidebands' angles: a line followed
+    // badly (7 dB over its band, drifting 1.6 % where the shaft drifted -0.2 %) is no scaled angle of the
+    // shaft's, and two neighbouring scalings then share its lines (a generated broken 31-tooth pinion: 2.6
+    // and 2.1 times the followed angle's energy)
+    let runner_up = scored.get(1).map_or(0.0, |s| s.1);
+    let Some(&(j, energy)) =
+        scored.first().filter(|b| b.1 > SIDEBAND_ENERGY_RATIO * own && b.1 > SIDEBAND_ENERGY_RATIO * runner_up)
+    else {
+        return map;
+    };
+    let r = (order + j) / order;
+    warnings.push(format!(
+        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders (and its wheel's) hold {:.1} times the energy: that speed is used",
+        1.0 / r,
+        energy / own.max(f64::MIN_POSITIVE)
+    ));
+    let revs = (map.revolutions() as f64 / r).floor() as usize;
+    AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1)
 }
 
 /// How much higher (dB) the line followed from a weak comb's best speed must stand than the one followed
@@ -212,6 +361,7 @@ fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<St
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::TAU;
 
     fn steady(wander: f64) -> angle::SpeedProfile {
         angle::SpeedProfile { mean: 1e-3, min: 1e-3, max: 1e-3, change: 0.0, wander }
@@ -231,5 +381,48 @@ mod tests {
         assert!(on_mains(13, 60.0 / 13.0, &steady(0.01)).is_none());
         // a 14-tooth pinion at a synchronous 30 Hz meshes at 420 Hz = 7 x 60 Hz: not hum
         assert!(on_mains(14, 30.0, &steady(0.0)).is_none());
+    }
+
+    /// A 21-tooth pinion at 40 Hz (51.2 kHz, 8 s) whose spectrum holds every shaft order (a broken tooth's
+    /// impulse train, 0.3 each), the mesh harmonics (1.0) and a resonance that lifts order 40 over them
+    /// (3.0), with a 37-tooth wheel's orders (0.2) and noise; given 40 Hz, the angle followed on 38.095 Hz
+    /// (order 40 taken for the mesh's second harmonic, 42) is put back on 40 Hz, and the true angle is
+    /// kept as it is; without the given speed nothing is checked.
+    #[test]
+    fn a_sideband_followed_as_the_mesh_is_put_back_on_the_shaft() {
+        let (fs, f, n) = (51_200.0, 40.0, 409_600);
+        let mut noise = crate::signal::test_noise::uniform_noise(11);
+        let x: Vec<f32> = (0..n)
+            .map(|i| {
+                let t = i as f64 / fs;
+                let pinion: f64 = (1..=120)
+                    .map(|m| {
+                        let a = match m {
+                            40 => 3.0,
+                            m if m % 21 == 0 => 1.0,
+                            _ => 0.3,
+                        };
+                        a * (TAU * m as f64 * f * t + 0.7 * m as f64).cos()
+                    })
+                    .sum();
+                let wheel: f64 =
+                    (1..=150).map(|m| 0.2 * (TAU * m as f64 * f * 21.0 / 37.0 * t + 1.3 * m as f64).cos()).sum();
+                (pinion + wheel + 0.5 * noise()) as f32
+            })
+            .collect();
+        let o = Options { shaft_hz: Some(f), teeth: Some((21, 37)), ..Default::default() };
+        let mut warnings = Vec::new();
+        let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
+        let put_back = mesh_not_sideband(&x, wrong, (21, Some(37)), &o, Some(fs), &mut warnings);
+        assert!((put_back.mean_period_samples() * f / fs - 1.0).abs() < 1e-3, "{}", put_back.mean_period_samples());
+        assert!(warnings.iter().any(|w| w.contains("sideband -2")), "{warnings:?}");
+        let right = AngleMap::constant(fs / f, 0.0, n);
+        let kept = mesh_not_sideband(&x, right, (21, Some(37)), &o, Some(fs), &mut warnings);
+        assert_eq!(kept.mean_period_samples(), fs / f);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let unchecked = Options { shaft_hz: None, ..o };
+        let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
+        let as_given = mesh_not_sideband(&x, wrong, (21, Some(37)), &unchecked, Some(fs), &mut warnings);
+        assert!((as_given.mean_period_samples() * f / fs - 42.0 / 40.0).abs() < 1e-9);
     }
 }
