@@ -236,9 +236,10 @@ pub fn na4(current: &[f64], sums_sq_so_far: &[f64]) -> f64 {
     n * s4 / (mean_ss * mean_ss)
 }
 
-/// ER = RMS(difference) / RMS(regular), both about their means.
-pub fn energy_ratio(difference: &[f64], regular: &[f64]) -> f64 {
-    (sum_sq_dev(difference) / sum_sq_dev(regular)).sqrt()
+/// ER = RMS(difference) / RMS(regular), both about their means, from the difference signal and the regular
+/// signal's energy (sum of squares over as many samples; it has no mean, its DC bin being left out).
+pub fn energy_ratio(difference: &[f64], regular_energy: f64) -> f64 {
+    (sum_sq_dev(difference) / regular_energy).sqrt()
 }
 
 /// SBR: the first-order sidebands' energy over the other orders of their band, against the mesh lines'
@@ -410,7 +411,8 @@ mod tests {
         assert!((na4(&r, &[sum_sq_dev(&r)]) - kurtosis(&r)).abs() < 1e-12);
         let ss = sum_sq_dev(&r); // 10
         assert!((na4(&r, &[2.5, ss]) - 4.0 * 34.0 / (6.25 * 6.25)).abs() < 1e-12);
-        assert!((energy_ratio(&[1.0, -1.0], &[2.0, -2.0]) - 0.5).abs() < 1e-15);
+        // a regular signal (2, -2) holds 8 in energy
+        assert!((energy_ratio(&[1.0, -1.0], 8.0) - 0.5).abs() < 1e-15);
         let mut a = vec![0.0; 40];
         a[20] = 2.0;
         a[19] = 0.5;

@@ -343,8 +343,10 @@ fn tsa_constant<T: Sample>(
 pub struct Decomposition {
     /// Peak amplitude of each order 0..=L/2 in the TSA.
     pub amplitudes: Vec<f64>,
-    /// Shaft orders 1..=`shaft_orders` and mesh harmonics h z.
-    pub regular: Vec<f64>,
+    /// Energy (sum of squares over the L samples) of the regular signal: shaft orders 1..=`shaft_orders`
+    /// and mesh harmonics h z, from its bins by Parseval (sum_n r_n^2 = (1/L) sum_k w_k |X_k|^2, w_k = 2
+    /// but 1 at the DC and Nyquist bins): only ER needs it, so it is not transformed back.
+    pub regular_energy: f64,
     /// TSA - mean - regular.
     pub residual: Vec<f64>,
     /// Residual without the first-order sidebands h z +- 1.
@@ -395,10 +397,15 @@ pub fn decompose_many(
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()
     };
-    let regular = fft.inverse(&keep(&is_regular), l);
+    let weight = |k: usize| if k == 0 || (l.is_multiple_of(2) && k == l / 2) { 1.0 } else { 2.0 };
+    let regular_energy = (0..nb)
+        .filter(|&k| is_regular(k))
+        .map(|k| weight(k) * (spec[k].0 * spec[k].0 + spec[k].1 * spec[k].1))
+        .sum::<f64>()
+        / l as f64;
     let residual = fft.inverse(&keep(&|k| k > 0 && !is_regular(k)), l);
     let difference = fft.inverse(&keep(&|k| k > 0 && !is_regular(k) && !is_side(k)), l);
-    Decomposition { amplitudes, regular, residual, difference }
+    Decomposition { amplitudes, regular_energy, residual, difference }
 }
 
 #[cfg(test)]
@@ -486,15 +493,18 @@ mod tests {
             })
             .collect();
         let d = decompose(&mut Fft::new(), &x, 8, 1);
+        let mut regular_energy = 0.0;
         for i in 0..l {
             let th = 2.0 * PI * i as f64 / l as f64;
             let reg = th.cos() + (8.0 * th).cos() + 0.5 * (16.0 * th).sin();
             let res = 0.2 * (7.0 * th).cos() + 0.1 * (9.0 * th).cos() + 0.05 * (5.0 * th).cos();
-            assert!((d.regular[i] - reg).abs() < 1e-12);
+            regular_energy += reg * reg;
             assert!((d.residual[i] - res).abs() < 1e-12);
             assert!((d.difference[i] - 0.05 * (5.0 * th).cos()).abs() < 1e-12);
         }
         assert!((d.amplitudes[0] - 2.0).abs() < 1e-12);
+        // Parseval's energy of the regular signal against the sum of squares of the signal itself
+        assert!((d.regular_energy / regular_energy - 1.0).abs() < 1e-12, "{} {regular_energy}", d.regular_energy);
     }
 
     #[test]

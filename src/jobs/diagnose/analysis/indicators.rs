@@ -95,7 +95,7 @@ pub(in crate::jobs::diagnose) fn tsa_indicators(
     } else {
         tsa::decompose_many(fft, x, &[&[z][..], &others.mesh].concat(), &others.foreign, shaft_orders)
     };
-    let Decomposition { amplitudes, regular, residual, difference } = &d;
+    let Decomposition { amplitudes, regular_energy, residual, difference } = &d;
     let mesh_amps: Vec<f64> =
         (1..).map(|h| h * z).take_while(|&k| k < amplitudes.len()).map(|k| amplitudes[k]).collect();
     let moments = ind::AverageMoments::of(x);
@@ -115,7 +115,7 @@ pub(in crate::jobs::diagnose) fn tsa_indicators(
     m.insert(Indicator::M6a, m6a);
     m.insert(Indicator::M8a, m8a);
     m.insert(Indicator::Na4, ind::normalized_moments_4_6_8(residual)[0]);
-    m.insert(Indicator::Er, ind::energy_ratio(difference, regular));
+    m.insert(Indicator::Er, ind::energy_ratio(difference, *regular_energy));
     m.insert(Indicator::Si, side / 2.0);
     m.insert(Indicator::Slf, side / rms);
     m.insert(
