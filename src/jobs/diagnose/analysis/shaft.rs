@@ -211,10 +211,10 @@ impl SyncSpectrum {
         2.65 * *near.select_nth_unstable_by(mid, f64::total_cmp).1
     }
 
-    /// Synchronous energy of a shaft turning `1 / r` times per followed revolution: its orders, and its
-    /// meshing gear's (`ratio` of its speed) when known.
-    fn energy(&self, r: f64, ratio: Option<f64>) -> f64 {
-        self.lines(1.0 / r) + ratio.map_or(0.0, |q| self.lines(q / r))
+    /// Synchronous energy of a shaft turning `1 / r` times per followed revolution: its own orders' and
+    /// its meshing gear's (`ratio` of its speed, when known).
+    fn energy(&self, r: f64, ratio: Option<f64>) -> (f64, f64) {
+        (self.lines(1.0 / r), ratio.map_or(0.0, |q| self.lines(q / r)))
     }
 }
 
@@ -223,8 +223,9 @@ impl SyncSpectrum {
 /// followed speed, inside the speed tolerance (a broken tooth's sidebands can stand over the mesh line),
 /// j = +-1, +-2 pinion orders or +-1 wheel order (z / zw). The sideband's angle is the followed one scaled
 /// (the sideband's phase is k z + j times the shaft's); of the angles within the tolerance, the one whose
-/// lines (both gears' orders) hold [`SIDEBAND_ENERGY_RATIO`] times those of the followed angle and of
-/// every other candidate is taken, said in a warning.
+/// lines (both gears' orders) stand [`SIDEBAND_ENERGY_RATIO`] times higher than those of the followed
+/// angle and of every other candidate, and whose own orders stand that much higher than the followed
+/// angle's, is taken, said in a warning.
 fn mesh_not_sideband(
     x: &[f32],
     map: AngleMap,
@@ -252,25 +253,31 @@ fn mesh_not_sideband(
     }
     // the orders of the mesh's first four harmonics and their sidebands: where the lines stand
     let Some(spectrum) = SyncSpectrum::new(x, &map, 4.5 * z as f64) else { return map };
+    // both gears' lines decide, and the shaft's own must stand clearer too: each alone was fooled by a
+    // comb of the other gear on a candidate in a whole ratio to it (a cracked 14-tooth pinion's orders,
+    // given a speed a third off, on every other order of the wheel of a candidate; a broken 47-tooth
+    // wheel's orders on the pinion orders of a candidate 3/2 of the wheel's speed)
     let own = spectrum.energy(1.0, ratio);
-    let mut scored: Vec<(f64, f64)> =
+    let mut scored: Vec<(f64, (f64, f64))> =
         candidates.into_iter().map(|j| (j, spectrum.energy((order + j) / order, ratio))).collect();
-    scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let both = |e: (f64, f64)| e.0 + e.1;
+    scored.sort_by(|a, b| both(b.1).total_cmp(&both(a.1)));
     // the best must stand clear of the followed angle and of the other sidebands' angles: a line followed
     // badly (7 dB over its band, drifting 1.6 % where the shaft drifted -0.2 %) is no scaled angle of the
     // shaft's, and two neighbouring scalings then share its lines (a generated broken 31-tooth pinion: 2.6
     // and 2.1 times the followed angle's energy)
-    let runner_up = scored.get(1).map_or(0.0, |s| s.1);
-    let Some(&(j, energy)) =
-        scored.first().filter(|b| b.1 > SIDEBAND_ENERGY_RATIO * own && b.1 > SIDEBAND_ENERGY_RATIO * runner_up)
-    else {
+    let runner_up = scored.get(1).map_or(0.0, |s| both(s.1));
+    let clear = |e: (f64, f64)| {
+        both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up) && e.0 > SIDEBAND_ENERGY_RATIO * own.0
+    };
+    let Some(&(j, energy)) = scored.first().filter(|b| clear(b.1)) else {
         return map;
     };
     let r = (order + j) / order;
     warnings.push(format!(
-        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders (and its wheel's) hold {:.1} times the energy: that speed is used",
+        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's stand {:.1} times higher: that speed is used",
         1.0 / r,
-        energy / own.max(f64::MIN_POSITIVE)
+        both(energy) / both(own).max(f64::MIN_POSITIVE)
     ));
     let revs = (map.revolutions() as f64 / r).floor() as usize;
     AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1)
