@@ -134,8 +134,9 @@ pub(super) fn follow_shaft(
     })
 }
 
-/// How many times more synchronous energy an angle that makes the followed line a sideband must hold than
-/// the followed angle for it to be taken: on the right angle every order of both gears is a line (the mesh
+/// How many times higher an angle that makes the followed line a sideband must score than the followed
+/// angle (the summed log heights of its lines, [`SyncSpectrum::lines`]) for it to be taken: on the right
+/// angle every order of both gears is a line (the mesh
 /// harmonics, their sidebands, a fault's impulse train), on an angle k z / (k z + j) of it only the orders
 /// that are multiples of k z + j. A generated broken 21-tooth pinion at 40 Hz, given 2400 rpm, was
 /// followed on the mesh's second harmonic's sideband -2 (its line 17 dB over its band, the mesh's 11 dB).
@@ -217,8 +218,8 @@ impl SyncSpectrum {
         2.65 * *near.select_nth_unstable_by(mid, f64::total_cmp).1
     }
 
-    /// Synchronous energy of a shaft turning `1 / r` times per followed revolution: its own orders' and
-    /// its meshing gear's (`ratio` of its speed, when known).
+    /// Score of a shaft turning `1 / r` times per followed revolution: its own orders' lines and its
+    /// meshing gear's (`ratio` of its speed, when known), each as [`Self::lines`].
     fn energy(&self, r: f64, ratio: Option<f64>) -> (f64, f64) {
         (self.lines(1.0 / r), ratio.map_or(0.0, |q| self.lines(q / r)))
     }
@@ -229,9 +230,9 @@ impl SyncSpectrum {
 /// followed speed, inside the speed tolerance (a broken tooth's sidebands can stand over the mesh line),
 /// j = +-1, +-2 pinion orders or +-1 wheel order (z / zw). The sideband's angle is the followed one scaled
 /// (the sideband's phase is k z + j times the shaft's); of the angles within the tolerance, the one whose
-/// lines (both gears' orders) stand [`SIDEBAND_ENERGY_RATIO`] times higher than those of the followed
-/// angle and of every other candidate, and whose own orders stand that much higher than the followed
-/// angle's, is taken, said in a warning.
+/// lines (both gears' orders) score [`SIDEBAND_ENERGY_RATIO`] times those of the followed angle and of
+/// every other candidate, and whose own orders score that much more than the followed angle's, is taken,
+/// said in a warning.
 fn mesh_not_sideband(
     x: &[f32],
     map: AngleMap,
@@ -280,7 +281,7 @@ fn mesh_not_sideband(
     };
     let r = (order + j) / order;
     warnings.push(format!(
-        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's stand {:.1} times higher: that speed is used",
+        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's score {:.1} times the followed angle's (summed log heights of their lines over the local floor): that speed is used",
         1.0 / r,
         both(energy) / both(own).max(f64::MIN_POSITIVE)
     ));
