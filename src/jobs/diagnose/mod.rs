@@ -36,7 +36,7 @@ pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, dia
 use teeth::{
     MIN_OTHER_GEAR_CONFIDENCE, WHEEL_DOUBT_RATIO, WheelCheck, mesh_family, other_gear_teeth, teeth_misfit, wheel_teeth,
 };
-use tracking::{Tracked, nominal_speed, track};
+use tracking::{Tracked, nominal_speed, strongest_low_harmonic, track};
 
 pub use compare::compare;
 pub use verdict::{Thresholds, ensemble_na4, judge};

@@ -65,18 +65,14 @@ pub(super) fn analyse_parts<'a>(
     let (averages, early_spectra) = match early {
         Some(z) => {
             let (a, s) = rayon::join(
-                || {
-                    average(path, &rec, &checked.channels, o, &plan, &shaft.map)
-                        .map_err(|e| unaveraged(path, &shaft, e))
-                },
+                || average(&rec, &checked.channels, o, &plan, &shaft.map).map_err(|e| unaveraged(path, &shaft, e)),
                 || evidence::spectra(path, &rec, &checked, o, geometry, &shaft, z, &mut Fft::new()),
             );
             (a?, Some(s))
         }
-        None => (
-            average(path, &rec, &checked.channels, o, &plan, &shaft.map).map_err(|e| unaveraged(path, &shaft, e))?,
-            None,
-        ),
+        None => {
+            (average(&rec, &checked.channels, o, &plan, &shaft.map).map_err(|e| unaveraged(path, &shaft, e))?, None)
+        }
     };
     let results = gear_results(path, &rec, &checked, o, geometry, &plan, &shaft, averages, &mut fft, &mut warnings)?;
     let first = checked.channels[0];
@@ -187,13 +183,12 @@ fn teeth_scan(x: &[f32], map: &AngleMap, o: &Options, z: usize) -> TeethScan {
 /// order is known (else the block is kept until the TSAs give it); beside them the teeth scan when the
 /// first gear's mesh order is known already.
 fn average(
-    path: &Path,
     rec: &Recording,
     channels: &[usize],
     o: &Options,
     plan: &GearPlan,
     map: &AngleMap,
-) -> Result<Averages, Error> {
+) -> Result<Averages, crate::signal::SignalError> {
     let views: Vec<&[f32]> = channels.iter().map(|&c| &*rec.channels[c - 1]).collect();
     let (tsas, early_scan) = rayon::join(
         || {
@@ -211,11 +206,10 @@ fn average(
                     None => PendingBlock::Raw(b.to_vec()),
                 };
                 let per_channel =
-                    tsa::tsa_with_blocks(&views, map, ratio, plan.points, o.min_revolutions, o.block_revs(), on_block)
-                        .map_err(|e| bad(path, e))?;
+                    tsa::tsa_with_blocks(&views, map, ratio, plan.points, o.min_revolutions, o.block_revs(), on_block)?;
                 out.extend(channels.iter().zip(per_channel).map(|(&c, (t, blocks))| (c, gi, t, blocks)));
             }
-            Ok::<_, Error>(out)
+            Ok::<_, crate::signal::SignalError>(out)
         },
         || plan.gears[0].2.map(|z| teeth_scan(&rec.channels[channels[0] - 1], map, o, z)),
     );
@@ -226,21 +220,18 @@ fn average(
 /// a generated 18/31 machine's teeth-only estimate of 0.93 Hz, its true 15 Hz, was followed over 5 of the
 /// 8 revolutions needed) is the estimate's failure, not the file's: said as a missing speed, with what
 /// would supply it. Other sources' errors are as they were.
-fn unaveraged(path: &Path, shaft: &ShaftAngle, e: Error) -> Error {
+fn unaveraged(path: &Path, shaft: &ShaftAngle, e: crate::signal::SignalError) -> Error {
     if shaft.source != SpeedSource::Estimated {
-        return e;
+        return bad(path, e);
     }
-    let file = path.display().to_string();
-    let text = e.to_string();
-    let inner = text.strip_prefix(&format!("{file}: ")).unwrap_or(&text);
     let speed = shaft
         .profile
         .mean_hz
         .map_or(format!("a revolution of {:.1} samples", shaft.period), |hz| format!("{hz:.4} Hz"));
     JobError::Missing {
-        file,
+        file: path.display().to_string(),
         message: format!(
-            "the shaft speed estimated from the signal ({speed}, confidence {:.2}) gives no averages ({inner}): give the shaft speed or a tachometer channel",
+            "the shaft speed estimated from the signal ({speed}, confidence {:.2}) gives no averages ({e}): give the shaft speed or a tachometer channel",
             shaft.confidence
         ),
         give: Given::ShaftSpeed,

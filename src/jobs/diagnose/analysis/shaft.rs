@@ -77,7 +77,7 @@ pub(super) fn follow_shaft(
     };
     let map = match (o.shaft_hz, known_z, tacho, tracking) {
         (Some(_), Some(z), None, Tracking::MeshPhase) => {
-            let zw = o.teeth.map(|t| t.1).filter(|_| o.teeth.is_some_and(|t| t.0 == z));
+            let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);
             mesh_not_sideband(&rec.channels[channels[0] - 1], map, (z, zw), o, fs, warnings)
         }
         _ => map,
@@ -244,11 +244,7 @@ fn mesh_not_sideband(
     let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return map };
     let period = map.mean_period_samples();
     // the harmonic followed: the strongest of the first four on the followed speed, as the tracking chose
-    let line = |o: f64| (o, crate::signal::spectrum::line_amplitude(x, o / period, 0.2 / period));
-    let lines: Vec<(f64, f64)> = (1..=4).map(|k| (k * z) as f64).filter(|o| o / period < 0.4).map(line).collect();
-    let Some(order) = lines.iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|l| l.0) else {
-        return map;
-    };
+    let Some((order, _)) = strongest_low_harmonic(x, period, z) else { return map };
     let nominal = fs / hz;
     let ratio = zw.map(|w| z as f64 / w as f64);
     let offsets = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q]));

@@ -501,17 +501,23 @@ type ChannelRidge = (usize, Result<angle::MeshRidge, crate::signal::SignalError>
 /// second channel's too unless the first's line stands clear of its band; and, when neither does, the
 /// harmonic standing highest over its local floor (up to the 16th) on the channel where it stands highest
 /// (the first four can lie under the sensor noise while a resonance lifts a higher one 10-15 dB).
+/// The strongest of the first four mesh harmonics k z below 0.4 cycles per sample on a shaft of `period`
+/// samples, by its line within +-0.2 orders: (its order, its amplitude); the harmonic the tracking follows
+/// when one stands out. `None` when none lies below 0.4.
+pub(super) fn strongest_low_harmonic(x: &[f32], period: f64, z: usize) -> Option<(f64, f64)> {
+    (1..=4)
+        .map(|k| (k * z) as f64)
+        .filter(|o| o / period < 0.4)
+        .map(|o| (o, ind_line(x, o / period, 0.2 / period)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 fn ridges_to_follow(rec: &Recording, channels: &[usize], period: f64, z: usize) -> Vec<ChannelRidge> {
     let mut candidates: Vec<(usize, f64, f64)> = channels
         .par_iter()
         .map(|&c| {
             let x = &rec.channels[c - 1];
-            let (order, amp) = (1..=4)
-                .map(|k| (k * z) as f64)
-                .filter(|o| o / period < 0.4)
-                .map(|o| (o, ind_line(x, o / period, 0.2 / period)))
-                .max_by(|a, b| a.1.total_cmp(&b.1))
-                .unwrap_or((z as f64, 0.0));
+            let (order, amp) = strongest_low_harmonic(x, period, z).unwrap_or((z as f64, 0.0));
             (c, order, amp / ind::rms(&x[..x.len().min(1 << 16)]).max(f64::MIN_POSITIVE))
         })
         .collect();
