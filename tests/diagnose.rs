@@ -657,3 +657,23 @@ fn teeth_the_sidebands_contradict_leave_the_machine_not_judged() {
         d["speed_doubt"]
     );
 }
+
+/// Half and a third of the shaft's speed given (900 and 600 rpm on the 1800 rpm cracked pinion, its
+/// tachometer not used): the mesh line is found on the given speed's second or third harmonic and
+/// followed, so the averages hold two or three revolutions and the crack's impulse shows two or three
+/// times (pinion FM4 4.6, under its limit: HEALTHY before). The lines of the followed angle stand on
+/// every second or third order only: not judged (exit 3), the reason naming the shaft's 30 Hz.
+#[test]
+fn a_fraction_of_the_speed_given_leaves_the_machine_not_judged() {
+    let bare = temp_dir("fraction-speed").join("cracked-bare.wav");
+    std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
+    for (rpm, nth) in [("900", "second"), ("600", "third")] {
+        let args = ["diagnose", &bare.to_string_lossy(), "--channel", "1", "--rpm", rpm, "--teeth", "14,39", "--json"];
+        let run = gearvib(&args);
+        assert_eq!(run.code, 3, "{rpm} rpm: {}", run.stderr);
+        let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+        assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+        let doubt = d["speed_doubt"].as_str().unwrap();
+        assert!(doubt.contains(&format!("every {nth} order")) && doubt.contains("near 30.0000 Hz"), "{doubt}");
+    }
+}

@@ -75,12 +75,24 @@ pub(super) fn follow_shaft(
             }
         }
     };
-    let map = match (o.shaft_hz, known_z, tacho, tracking) {
+    let (map, multiple) = match (o.shaft_hz, known_z, tacho, tracking) {
         (Some(_), Some(z), None, Tracking::MeshPhase) => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);
-            mesh_not_sideband(&rec.channels[channels[0] - 1], map, (z, zw), o, fs, warnings)
+            let x = &rec.channels[channels[0] - 1];
+            let spectrum = SyncSpectrum::new(x, &map, 4.5 * z as f64);
+            let (map, spectrum) =
+                match spectrum.as_ref().and_then(|s| mesh_not_sideband(x, &map, s, (z, zw), o, fs, warnings)) {
+                    Some(scaled) => {
+                        let spectrum = SyncSpectrum::new(x, &scaled, 4.5 * z as f64);
+                        (scaled, spectrum)
+                    }
+                    None => (map, spectrum),
+                };
+            let q = zw.map(|w| z as f64 / w as f64);
+            let misfit = spectrum.as_ref().zip(o.shaft_hz).and_then(|(s, hz)| speed_multiple(s, q, hz));
+            (map, misfit)
         }
-        _ => map,
+        _ => (map, None),
     };
     // the tachometer's pulses are in the angle map now and are never analysed: free them
     if let Some(t) = tacho {
@@ -112,8 +124,8 @@ pub(super) fn follow_shaft(
         fluctuation_percent: 100.0 * speeds.wander,
         line_snr_db,
     };
-    let doubt = nominal
-        .doubt
+    let doubt = multiple
+        .or(nominal.doubt)
         .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o))
         .or_else(|| unfollowed_estimate(nominal.source, &profile))
         .or_else(|| {
@@ -189,15 +201,27 @@ impl SyncSpectrum {
     /// at the orders m `step` (m = 1, 2, ... up to the top order) of the followed angle, each the largest
     /// bin within one of its place.
     fn lines(&self, step: f64) -> f64 {
-        (1..)
-            .map(|m| m as f64 * step)
-            .take_while(|&o| o < self.top)
-            .map(|o| {
-                let b = (o * self.revs).round() as usize;
-                let peak = (b.saturating_sub(1)..=b + 1).filter_map(|i| self.power.get(i)).copied().fold(0.0, f64::max);
-                (peak / self.floor(b)).clamp(1.0, LINE_CAP).ln()
-            })
-            .sum()
+        self.line_scores(step).sum()
+    }
+
+    /// The log height of each line of [`Self::lines`], in order of m.
+    fn line_scores(&self, step: f64) -> impl Iterator<Item = f64> + '_ {
+        (1..).map(move |m| m as f64 * step).take_while(|&o| o < self.top).map(|o| {
+            let b = (o * self.revs).round() as usize;
+            let peak = (b.saturating_sub(1)..=b + 1).filter_map(|i| self.power.get(i)).copied().fold(0.0, f64::max);
+            (peak / self.floor(b)).clamp(1.0, LINE_CAP).ln()
+        })
+    }
+
+    /// Mean log height of the lines at the orders m `step` whose m is a multiple of `d`, and of the others.
+    fn split_mean(&self, step: f64, d: usize) -> (f64, f64) {
+        let (mut on, mut off) = ((0.0, 0usize), (0.0, 0usize));
+        for (m, s) in (1..).zip(self.line_scores(step)) {
+            let side = if m % d == 0 { &mut on } else { &mut off };
+            side.0 += s;
+            side.1 += 1;
+        }
+        (on.0 / on.1.max(1) as f64, off.0 / off.1.max(1) as f64)
     }
 
     /// What the largest of three bins of noise alone reads around bin `b`: 2.65 times the median of the
@@ -235,26 +259,25 @@ impl SyncSpectrum {
 /// said in a warning.
 fn mesh_not_sideband(
     x: &[f32],
-    map: AngleMap,
+    map: &AngleMap,
+    spectrum: &SyncSpectrum,
     (z, zw): (usize, Option<usize>),
     o: &Options,
     fs: Option<f64>,
     warnings: &mut Vec<String>,
-) -> AngleMap {
-    let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return map };
+) -> Option<AngleMap> {
+    let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return None };
     let period = map.mean_period_samples();
     // the harmonic followed: the strongest of the first four on the followed speed, as the tracking chose
-    let Some((order, _)) = strongest_low_harmonic(x, period, z) else { return map };
+    let (order, _) = strongest_low_harmonic(x, period, z)?;
     let nominal = fs / hz;
     let ratio = zw.map(|w| z as f64 / w as f64);
     let offsets = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q]));
     let candidates: Vec<f64> =
         offsets.filter(|j| (nominal / (period * (order + j) / order) - 1.0).abs() <= o.speed_tolerance).collect();
     if candidates.is_empty() {
-        return map;
+        return None;
     }
-    // the orders of the mesh's first four harmonics and their sidebands: where the lines stand
-    let Some(spectrum) = SyncSpectrum::new(x, &map, 4.5 * z as f64) else { return map };
     // both gears' lines decide, and the shaft's own must stand clearer too: each alone was fooled by a
     // comb of the other gear on a candidate in a whole ratio to it (a cracked 14-tooth pinion's orders,
     // given a speed a third off, on every other order of the wheel of a candidate; a broken 47-tooth
@@ -272,9 +295,7 @@ fn mesh_not_sideband(
     let clear = |e: (f64, f64)| {
         both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up) && e.0 > SIDEBAND_ENERGY_RATIO * own.0
     };
-    let Some(&(j, energy)) = scored.first().filter(|b| clear(b.1)) else {
-        return map;
-    };
+    let &(j, energy) = scored.first().filter(|b| clear(b.1))?;
     let r = (order + j) / order;
     warnings.push(format!(
         "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's score {:.1} times the followed angle's (summed log heights of their lines over the local floor): that speed is used",
@@ -282,7 +303,56 @@ fn mesh_not_sideband(
         both(energy) / both(own).max(f64::MIN_POSITIVE)
     ));
     let revs = (map.revolutions() as f64 / r).floor() as usize;
-    AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1)
+    Some(AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1))
+}
+
+/// Smallest mean log height ([`SyncSpectrum::lines`]) of the lines on every d-th order for a given speed
+/// to be taken as 1/d of the shaft's (or of the lines between whole orders, as d times it): on the
+/// hold-out machines a nameplate speed halved or divided by three put 2.0-5.7 on every d-th pinion or
+/// wheel order of the followed angle and 0.1-0.6 between them, while on the true speed's angle no gear's
+/// orders split so (the largest mean on every d-th order where those between stood a quarter of it:
+/// 0.9 on an even 16-tooth pinion, whose mesh harmonics are all even orders; noise alone reads 0.1-0.3).
+const MULTIPLE_LINES: f64 = 1.5;
+
+/// How many times the mean log height of the lines between every d-th order the lines on it must reach
+/// for the speed to be 1/d of the shaft's: 4.4-30 on the hold-out's halved and divided speeds (a broken
+/// wheel's pinion orders the least), at most 2.2 on a true speed's angle where the lines on every d-th
+/// order reach [`MULTIPLE_LINES`] (a healthy 21-tooth pinion's every third order).
+const MULTIPLE_CONTRAST: f64 = 4.0;
+
+/// Why a given speed (`hz`, Hz) that the mesh line confirmed is a whole fraction or multiple of the shaft's:
+/// a mesh harmonic was followed for another (a halved speed puts the true mesh on the given one's second
+/// harmonic, which a resonance can make the strongest), so the averages hold d revolutions, or 1/d of one,
+/// and cannot clear the machine. On the angle of d times too slow a shaft every line of both gears stands
+/// on every d-th order ([`SyncSpectrum::split_mean`] on the pinion's orders, step 1, and the wheel's, step
+/// `q` = zp / zw), and the orders between hold noise; on d times too fast a shaft the lines stand between
+/// whole orders, at the multiples of 1/d, as strong as on them.
+fn speed_multiple(spectrum: &SyncSpectrum, q: Option<f64>, hz: f64) -> Option<String> {
+    let splits = |d: usize| {
+        [("pinion", 1.0)]
+            .into_iter()
+            .chain(q.map(|q| ("wheel", q)))
+            .map(move |(g, step)| (g, spectrum.split_mean(step, d)))
+    };
+    for (d, nth) in [(2usize, "second"), (3, "third")] {
+        if let Some((gear, (on, off))) =
+            splits(d).find(|&(_, (on, off))| on >= MULTIPLE_LINES && on >= MULTIPLE_CONTRAST * off)
+        {
+            return Some(format!(
+                "the lines of the followed angle stand on every {nth} order of the {gear} only (mean log height {on:.2} over the local floor, {off:.2} between them): the shaft turns {d} times as fast as the given {hz:.4} Hz, near {:.4} Hz, and the averages on the given speed hold {d} revolutions, so they cannot clear the machine; give the shaft's speed",
+                d as f64 * hz
+            ));
+        }
+        // between whole orders: the orders m / d of the pinion, m not a multiple of d
+        let (whole, between) = spectrum.split_mean(1.0 / d as f64, d);
+        if between >= MULTIPLE_LINES && between * MULTIPLE_CONTRAST >= whole {
+            return Some(format!(
+                "the lines of the followed angle stand between whole orders of the pinion, at every 1/{d} order (mean log height {between:.2} over the local floor, {whole:.2} on whole orders): the shaft turns 1/{d} as fast as the given {hz:.4} Hz, near {:.4} Hz, and each average holds 1/{d} revolution, so it cannot clear the machine; give the shaft's speed",
+                hz / d as f64
+            ));
+        }
+    }
+    None
 }
 
 /// How much higher (dB) the line followed from a weak comb's best speed must stand than the one followed
@@ -392,6 +462,51 @@ mod tests {
         assert!(on_mains(14, 30.0, &steady(0.0)).is_none());
     }
 
+    /// A 14-tooth pinion at 30 Hz (20.48 kHz, 13 s) with a 39-tooth wheel, `comb` the amplitude of every
+    /// pinion and wheel order (a cracked tooth's impulse train, a wheel's runout) besides the mesh
+    /// harmonics (1.0 each), in noise.
+    fn pinion_at_30_hz(comb: f64) -> (Vec<f32>, f64) {
+        let (fs, f, n) = (20_480.0, 30.0, 1 << 18);
+        let mut noise = crate::signal::test_noise::uniform_noise(5);
+        let x = (0..n)
+            .map(|i| {
+                let t = i as f64 / fs;
+                let pinion: f64 = (1..=140)
+                    .map(|m| {
+                        let a = if m % 14 == 0 && m <= 56 { 1.0 } else { comb };
+                        a * (TAU * m as f64 * f * t + 0.9 * m as f64).cos()
+                    })
+                    .sum();
+                let wheel: f64 =
+                    (1..=300).map(|m| comb * (TAU * m as f64 * f * 14.0 / 39.0 * t + 0.4 * m as f64).cos()).sum();
+                (pinion + wheel + 0.5 * noise()) as f32
+            })
+            .collect();
+        (x, fs)
+    }
+
+    /// The speed given as a half, a third or twice the shaft's is found from the lines of the angle it
+    /// gives (on every second or third order only, or between whole orders) of a cracked pinion; the
+    /// true speed passes, also for a true-running pinion of even teeth showing only its mesh harmonics,
+    /// all on even orders.
+    #[test]
+    fn a_given_speed_a_whole_fraction_or_multiple_of_the_shafts_is_told() {
+        let check = |x: &[f32], fs: f64, hz: f64| {
+            let map = AngleMap::constant(fs / hz, 0.0, x.len());
+            speed_multiple(&SyncSpectrum::new(x, &map, 4.5 * 14.0).unwrap(), Some(14.0 / 39.0), hz)
+        };
+        let (cracked, fs) = pinion_at_30_hz(0.3);
+        let half = check(&cracked, fs, 15.0).expect("half the speed is told");
+        assert!(half.contains("every second order") && half.contains("near 30.0000 Hz"), "{half}");
+        let third = check(&cracked, fs, 10.0).expect("a third of the speed is told");
+        assert!(third.contains("every third order"), "{third}");
+        let double = check(&cracked, fs, 60.0).expect("twice the speed is told");
+        assert!(double.contains("every 1/2 order") && double.contains("near 30.0000 Hz"), "{double}");
+        assert_eq!(check(&cracked, fs, 30.0), None);
+        let (true_running, fs) = pinion_at_30_hz(0.0);
+        assert_eq!(check(&true_running, fs, 30.0), None);
+    }
+
     /// A 21-tooth pinion at 40 Hz (51.2 kHz, 8 s) whose spectrum holds every shaft order (a broken tooth's
     /// impulse train, 0.3 each), the mesh harmonics (1.0) and a resonance that lifts order 40 over them
     /// (3.0), with a 37-tooth wheel's orders (0.2) and noise; given 40 Hz, the angle followed on 38.095 Hz
@@ -421,17 +536,18 @@ mod tests {
             .collect();
         let o = Options { shaft_hz: Some(f), teeth: Some((21, 37)), ..Default::default() };
         let mut warnings = Vec::new();
+        let check = |map: &AngleMap, o: &Options, warnings: &mut Vec<String>| {
+            let spectrum = SyncSpectrum::new(&x, map, 4.5 * 21.0).unwrap();
+            mesh_not_sideband(&x, map, &spectrum, (21, Some(37)), o, Some(fs), warnings)
+        };
         let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
-        let put_back = mesh_not_sideband(&x, wrong, (21, Some(37)), &o, Some(fs), &mut warnings);
+        let put_back = check(&wrong, &o, &mut warnings).expect("the sideband's angle is taken");
         assert!((put_back.mean_period_samples() * f / fs - 1.0).abs() < 1e-3, "{}", put_back.mean_period_samples());
         assert!(warnings.iter().any(|w| w.contains("sideband -2")), "{warnings:?}");
         let right = AngleMap::constant(fs / f, 0.0, n);
-        let kept = mesh_not_sideband(&x, right, (21, Some(37)), &o, Some(fs), &mut warnings);
-        assert_eq!(kept.mean_period_samples(), fs / f);
+        assert!(check(&right, &o, &mut warnings).is_none());
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         let unchecked = Options { shaft_hz: None, ..o };
-        let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
-        let as_given = mesh_not_sideband(&x, wrong, (21, Some(37)), &unchecked, Some(fs), &mut warnings);
-        assert!((as_given.mean_period_samples() * f / fs - 42.0 / 40.0).abs() < 1e-9);
+        assert!(check(&wrong, &unchecked, &mut warnings).is_none());
     }
 }
