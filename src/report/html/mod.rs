@@ -95,13 +95,24 @@ dl.glossary{font-size:9.5pt}dl.glossary dt{font-weight:bold;margin-top:.4em}dl.g
 footer{margin-top:2em;font-size:9pt;color:#555}@page{size:A4;margin:14mm}\
 @media print{body{max-width:none;margin:0;padding:0;font-size:10.5pt}img{width:100%;max-width:100%}h2{page-break-after:avoid;break-after:avoid}table{page-break-inside:avoid}}";
 
+/// The style class that colours a badge of `state` (one word: a state's name can hold a space, which
+/// would make two classes, neither coloured, and leave the white word on white).
+fn badge_class(state: VerdictState) -> &'static str {
+    match state {
+        VerdictState::NotJudged => "not_judged",
+        VerdictState::Healthy => "healthy",
+        VerdictState::Suspect => "suspect",
+        VerdictState::Faulty => "faulty",
+    }
+}
+
 fn section(page: &mut String, s: &Section) -> Result<(), ReportError> {
     let _ = writeln!(page, "<section><h2>{}</h2>", escape(&s.heading));
     if let Some(b) = &s.verdict {
         let _ = writeln!(
             page,
             "<p class=\"verdict\"><span class=\"badge {}\">{}</span>{}</p>",
-            b.state.name(),
+            badge_class(b.state),
             escape(&b.word),
             escape(&b.line)
         );
@@ -204,6 +215,20 @@ mod tests {
             ("foobar", "Zm9vYmFy"),
         ] {
             assert_eq!(base64(input.as_bytes()), want);
+        }
+    }
+
+    /// Every state's badge carries one class that the page's style colours (a "not judged" badge once
+    /// had the two classes "not" and "judged", no background, and its white word was invisible).
+    #[test]
+    fn every_badge_has_a_coloured_class() {
+        for state in [VerdictState::NotJudged, VerdictState::Healthy, VerdictState::Suspect, VerdictState::Faulty] {
+            let mut page = String::new();
+            let badge = Badge { state, word: "W".into(), line: String::new() };
+            section(&mut page, &Section { verdict: Some(badge), ..Default::default() }).unwrap();
+            let class = page.split("class=\"badge ").nth(1).and_then(|r| r.split('"').next()).unwrap();
+            assert!(!class.contains(' '), "{class}");
+            assert!(STYLE.contains(&format!(".{class}{{background:")), "{class} has no colour");
         }
     }
 
