@@ -89,26 +89,9 @@ pub(super) fn envelope_chart(d: &Diagnosis, e: &crate::report::summary::Envelope
     let peak = pts.iter().map(|p| p.1).fold(f64::MIN_POSITIVE, f64::max);
     let mut series =
         vec![Series { name: "squared-envelope order spectrum".into(), points: pts, style: Style::Line, color: 4 }];
+    let (marks, markers) = envelope_marks(e);
+    series.extend(marks);
     let reference = reference_shaft(d);
-    let mut markers = Vec::new();
-    for (i, shaft) in [Shaft::Pinion, Shaft::Wheel, Shaft::Estimated].into_iter().enumerate() {
-        let lines: Vec<_> = e.lines.iter().filter(|l| l.shaft == shaft).collect();
-        let detected: Vec<(f64, f64)> =
-            lines.iter().filter(|l| l.over_floor_db >= 10.0).map(|l| (l.reference_order, l.amplitude)).collect();
-        markers.extend(lines.iter().map(|l| Marker {
-            x: l.reference_order,
-            label: format!("{}x {}", l.order, if shaft == Shaft::Estimated { "shaft" } else { shaft.name() }),
-            color: 1 + i,
-        }));
-        if !detected.is_empty() {
-            series.push(Series {
-                name: format!("{shaft} orders 10 dB over the envelope spectrum around them"),
-                points: detected,
-                style: Style::Points,
-                color: 1 + i,
-            });
-        }
-    }
     Chart {
         title: format!(
             "envelope spectrum of the band {}-{} Hz (spectral kurtosis {}){}",
@@ -126,6 +109,54 @@ pub(super) fn envelope_chart(d: &Diagnosis, e: &crate::report::summary::Envelope
         markers,
         ..Default::default()
     }
+}
+
+/// The shafts of `shafts` in order of first appearance: a pair's pinion and wheel, the shaft of an
+/// estimated period, or every shaft of a machine file.
+fn distinct_shafts(shafts: impl IntoIterator<Item = Shaft>) -> Vec<Shaft> {
+    let mut out: Vec<Shaft> = Vec::new();
+    for s in shafts {
+        if !out.contains(&s) {
+            out.push(s);
+        }
+    }
+    out
+}
+
+/// Palette index of the `i`-th shaft marked on the envelope spectrum and the cepstrum (red, green,
+/// orange, brown, pink, cyan, blue; the data's purple is left out).
+fn shaft_colour(i: usize) -> usize {
+    [1, 2, 3, 5, 6, 7, 0][i % 7]
+}
+
+/// A shaft's name on a marker ("shaft" for the shaft of an estimated period).
+fn shaft_label(shaft: Shaft) -> &'static str {
+    if shaft == Shaft::Estimated { "shaft" } else { shaft.name() }
+}
+
+/// The envelope spectrum's marks: every shaft's first orders (a pair's pinion and wheel, or each shaft of
+/// a machine) as labelled markers, and a dot on those 10 dB over the envelope spectrum around them.
+pub(super) fn envelope_marks(e: &crate::report::summary::Envelope) -> (Vec<Series>, Vec<Marker>) {
+    let (mut series, mut markers) = (Vec::new(), Vec::new());
+    for (i, shaft) in distinct_shafts(e.lines.iter().map(|l| l.shaft)).into_iter().enumerate() {
+        let lines: Vec<_> = e.lines.iter().filter(|l| l.shaft == shaft).collect();
+        let detected: Vec<(f64, f64)> =
+            lines.iter().filter(|l| l.over_floor_db >= 10.0).map(|l| (l.reference_order, l.amplitude)).collect();
+        markers.extend(lines.iter().map(|l| Marker {
+            x: l.reference_order,
+            label: format!("{}x {}", l.order, shaft_label(shaft)),
+            color: shaft_colour(i),
+        }));
+        if !detected.is_empty() {
+            series.push(Series {
+                name: format!("{shaft} orders 10 dB over the envelope spectrum around them"),
+                points: detected,
+                style: Style::Points,
+                color: shaft_colour(i),
+            });
+        }
+    }
+    (series, markers)
 }
 
 /// Dynamic range of the order map's colour scale, dB below its strongest cell.
@@ -188,13 +219,15 @@ pub(super) fn cepstrum_chart(c: &crate::report::summary::Cepstrum) -> Chart {
         .map(|(i, v)| (1e3 * i as f64 * c.dq_s, *v))
         .filter(|(q, _)| *q >= 1e3 * 5.0 * c.dq_s && *q <= 1e3 * q_max)
         .collect();
+    // one colour per shaft: a machine's three shafts were all drawn red
+    let shafts = distinct_shafts(c.rahmonics.iter().map(|r| r.shaft));
     let markers = c
         .rahmonics
         .iter()
         .map(|r| Marker {
             x: 1e3 * r.quefrency_s,
-            label: format!("{} {}", if r.shaft == Shaft::Estimated { "shaft" } else { r.shaft.name() }, r.k),
-            color: if r.shaft == Shaft::Wheel { 2 } else { 1 },
+            label: format!("{} {}", shaft_label(r.shaft), r.k),
+            color: shaft_colour(shafts.iter().position(|s| *s == r.shaft).unwrap_or(0)),
         })
         .collect();
     Chart {
@@ -204,5 +237,55 @@ pub(super) fn cepstrum_chart(c: &crate::report::summary::Cepstrum) -> Chart {
         series: vec![Series { name: "cepstrum".into(), points: pts, style: Style::Line, color: 4 }],
         markers,
         ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::summary::{Envelope, EnvelopeLine};
+
+    fn line(shaft: Shaft, order: usize, reference_order: f64, over_floor_db: f64) -> EnvelopeLine {
+        EnvelopeLine { shaft, order, reference_order, amplitude: 1.0, over_floor_db }
+    }
+
+    /// A machine's shafts are marked on the envelope spectrum as a pair's are (they were left out: the
+    /// two-stage gearbox's "output order 1 stands 21.3 dB" had neither marker nor dot), each in its own
+    /// colour.
+    #[test]
+    fn envelope_marks_every_shaft_of_a_machine() {
+        let (input, output) = (Shaft::named("input"), Shaft::named("output"));
+        let e = Envelope {
+            band_hz: [5000.0, 10000.0],
+            level: 1,
+            spectral_kurtosis: 3.0,
+            lines: vec![line(input, 1, 1.0, 7.0), line(input, 2, 2.0, 3.0), line(output, 1, 1.0 / 6.0, 21.3)],
+            liftered: None,
+            orders: Vec::new(),
+            amplitudes: Vec::new(),
+            kurtogram: Vec::new(),
+        };
+        let (series, markers) = envelope_marks(&e);
+        let labels: Vec<&str> = markers.iter().map(|m| m.label.as_str()).collect();
+        assert_eq!(labels, ["1x input", "2x input", "1x output"]);
+        assert_ne!(markers[0].color, markers[2].color, "two shafts in one colour");
+        assert_eq!(series.len(), 1, "only the output's line stands 10 dB out");
+        assert_eq!(series[0].points, vec![(1.0 / 6.0, 1.0)]);
+        assert!(series[0].name.starts_with("output orders"), "{}", series[0].name);
+    }
+
+    /// Each shaft's rahmonics in their own colour (a machine's three shafts were all red).
+    #[test]
+    fn cepstrum_gives_each_shaft_its_colour() {
+        use crate::report::summary::{Cepstrum, Rahmonic};
+        let rahmonic =
+            |name: &str, k: usize, q: f64| Rahmonic { shaft: Shaft::named(name), k, quefrency_s: q, value: 0.1 };
+        let c = Cepstrum {
+            rahmonics: vec![rahmonic("input", 1, 0.04), rahmonic("intermediate", 1, 0.08), rahmonic("output", 1, 0.24)],
+            dq_s: 1e-4,
+            values: vec![0.0; 4000],
+        };
+        let colours: Vec<usize> = cepstrum_chart(&c).markers.iter().map(|m| m.color).collect();
+        assert!(colours[0] != colours[1] && colours[1] != colours[2] && colours[0] != colours[2], "{colours:?}");
     }
 }
