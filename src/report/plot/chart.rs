@@ -82,8 +82,36 @@ impl plotters::coord::ranged1d::Ranged for SymLog {
     }
 }
 
+/// `chart` without the symbols (points, hatched squares) whose value lies outside its fixed y range, and
+/// without the series left empty by that (their legend entry would name nothing drawn); `None` when none
+/// lies outside. A symbol marks a measured value: clamped onto the axis's edge it would sit at a value
+/// it does not have (a sideband 12 dB over a simulation's floor 100 dB under the mesh line was drawn as a
+/// dot on the bottom of the axis).
+pub(super) fn symbols_in_range(chart: &Chart, (lo, hi): (f64, f64)) -> Option<Chart> {
+    chart.y_range?;
+    let symbol = |s: &Series| matches!(s.style, Style::Points | Style::Hatched);
+    let outside = |y: f64| y < lo || y > hi;
+    if !chart.series.iter().any(|s| symbol(s) && s.points.iter().any(|p| outside(p.1))) {
+        return None;
+    }
+    let series = chart
+        .series
+        .iter()
+        .filter_map(|s| {
+            if !symbol(s) {
+                return Some(s.clone());
+            }
+            let points: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| !outside(p.1)).collect();
+            (!points.is_empty()).then(|| Series { points, ..s.clone() })
+        })
+        .collect();
+    Some(Chart { series, ..chart.clone() })
+}
+
 pub(super) fn draw(chart: &Chart, area: &Area<'_>) -> DrawResult {
     let ((x0, x1), (y0, y1)) = data_range(chart)?;
+    let shown = symbols_in_range(chart, (y0.min(y1), y0.max(y1)));
+    let chart = shown.as_ref().unwrap_or(chart);
     let (w, h) = area.dim_in_pixel();
     let (w, h) = (w as i32, h as i32);
     let inner = w - 2 * MARGIN;

@@ -391,6 +391,34 @@ mod tests {
         assert!(g.smallest_text_px >= MIN_TEXT_PX);
     }
 
+    /// A symbol (a detection's dot) below a fixed y range is left out, not drawn on the axis's bottom edge
+    /// at a value it does not have; a series with no symbol left loses its legend entry.
+    #[test]
+    fn symbols_outside_a_fixed_range_are_not_drawn_on_its_edge() {
+        let line: Vec<(f64, f64)> = (0..5).map(|i| (f64::from(i), 10.0)).collect();
+        let chart = |dots: Vec<(f64, f64)>| Chart {
+            title: "t".into(),
+            x_label: "x [-]".into(),
+            y_label: "y [-]".into(),
+            y_log: true,
+            y_range: Some((1.0, 100.0)),
+            x_range: Some((0.0, 10.0)),
+            series: vec![
+                Series { name: "recording".into(), points: line.clone(), style: Style::Line, color: 4 },
+                Series { name: "detected".into(), points: dots, style: Style::Points, color: 1 },
+            ],
+            ..Default::default()
+        };
+        // one dot inside, one far under the axis: only the one inside is drawn
+        let g = layout(PAGE_WIDTH_PX, 500, 1, &[chart(vec![(6.0, 20.0), (7.0, 1e-6)])]).unwrap();
+        assert_eq!(g[0].data.len(), line.len() + 1, "{:?}", g[0].data);
+        assert!(g[0].legend.is_some());
+        // no dot inside: no dot and no legend entry for it (one series left: no legend)
+        let g = layout(PAGE_WIDTH_PX, 500, 1, &[chart(vec![(7.0, 1e-6)])]).unwrap();
+        assert_eq!(g[0].data.len(), line.len());
+        assert!(g[0].legend.is_none(), "a legend entry for dots that are not drawn");
+    }
+
     #[test]
     fn layout_rejects_images_wider_than_the_page() {
         assert!(layout(PAGE_WIDTH_PX + 1, 600, 1, &[busy_chart()]).is_err());
