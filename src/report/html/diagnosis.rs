@@ -54,12 +54,22 @@ pub fn diagnosis_section(
         "Shaft angle tracked by {}{}; speed change over the recording {} %.",
         p.tracking,
         match (p.min_hz, p.max_hz) {
-            (Some(lo), Some(hi)) => format!(", revolutions from {} to {} Hz", cell(lo), cell(hi)),
+            (Some(lo), Some(hi)) => format!(", {}", revolution_range(lo, hi)),
             _ => String::new(),
         },
         cell(p.change_percent)
     ));
-    facts.push(format!("Mesh: order {} of the reference shaft (teeth {}).", d.mesh_order, d.teeth_source));
+    match &d.machine {
+        Some(m) => {
+            facts.push(format!("Gearbox: {}; orders are of the tracked shaft {}.", m.machine, m.tracked_shaft));
+            facts.extend(m.stages.iter().map(stage_fact));
+        }
+        None => facts.push(format!(
+            "Mesh: order {} of the reference shaft ({}).",
+            d.mesh_order,
+            teeth_words(d.teeth_source)
+        )),
+    }
     facts.push(velocity_words(d, iso_class));
     if let Some(g) = &d.other_gear {
         facts.push(format!(
@@ -85,7 +95,7 @@ pub fn diagnosis_section(
         ];
         let mut t = Table {
             caption: "Condition indicators (no baseline: judged on the absolute limits the verdict names)".into(),
-            header: ["gear".to_string(), "channel".to_string()]
+            header: [averaged(d).to_string(), "channel".to_string()]
                 .into_iter()
                 .chain(keys.iter().map(|k| k.label().to_string()))
                 .collect(),
@@ -100,7 +110,7 @@ pub fn diagnosis_section(
     } else {
         let mut t = Table {
             caption: "Indicators against the statistical baseline (median of this recording's blocks; spreads from the baseline's centre; limits for false-alarm rates 1e-3 and 1e-6)".into(),
-            header: ["gear", "channel", "indicator", "value", "baseline centre", "baseline range", "spreads", "suspect at", "faulty at"]
+            header: [averaged(d), "channel", "indicator", "value", "baseline centre", "baseline range", "spreads", "suspect at", "faulty at"]
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
@@ -130,7 +140,8 @@ pub fn diagnosis_section(
         verdict: Some(Badge {
             state: d.verdict.state,
             word: d.verdict.state.name().replace('_', " ").to_uppercase(),
-            line: format!("gear: {}", d.verdict.place()),
+            // the terminal's `shaft` quotes are no words for a page
+            line: format!("gear: {}", d.verdict.place().replace('`', "")),
         }),
         reasons: d
             .verdict
@@ -143,6 +154,60 @@ pub fn diagnosis_section(
         tables,
         images: images.to_vec(),
     }
+}
+
+/// What the indicator tables' first column names: a pair's gears, or the shafts of a machine or of an
+/// estimated period (their averages are a shaft's, whatever gears it carries).
+fn averaged(d: &Diagnosis) -> &'static str {
+    match d.shaft_hz {
+        crate::report::summary::ShaftHz::Machine(_) | crate::report::summary::ShaftHz::Estimated { .. } => "shaft",
+        _ => "gear",
+    }
+}
+
+/// The slowest and fastest revolutions' speeds with the digits that tell them apart ("from 14.999 to
+/// 15.002 Hz", never "from 15 to 15 Hz"), or the one speed when every revolution had it.
+fn revolution_range(lo: f64, hi: f64) -> String {
+    use crate::report::format::sig;
+    match (4..=7).find(|&n| sig(lo, n) != sig(hi, n)) {
+        Some(n) => format!("revolutions from {} to {} Hz", sig(lo, n), sig(hi, n)),
+        None => format!("every revolution at {} Hz", sig(lo, 7)),
+    }
+}
+
+/// Where the mesh order came from, in words.
+fn teeth_words(source: crate::report::summary::TeethSource) -> &'static str {
+    match source {
+        crate::report::summary::TeethSource::Given => "teeth given",
+        crate::report::summary::TeethSource::Baseline => "mesh order as estimated on the baseline recording",
+        crate::report::summary::TeethSource::Estimated => "mesh order estimated from this recording's average",
+    }
+}
+
+/// One stage of a machine in words: "Stage 2 mesh: pinion 15 teeth on shaft intermediate, wheel 45 teeth
+/// on shaft output; order 7.5 (15/2) of the tracked shaft, 187.5 Hz."
+fn stage_fact(s: &crate::report::summary::StageDiagnosis) -> String {
+    use crate::report::format::num;
+    let gears: Vec<String> = s
+        .gears
+        .iter()
+        .map(|g| match &g.shaft {
+            Some(shaft) => format!("{} {} teeth on shaft {shaft}", g.gear.name(), g.teeth),
+            None => format!("{} {} teeth", g.gear.name(), g.teeth),
+        })
+        .collect();
+    let exact = if s.mesh_order_exact == num(s.mesh_order) || s.mesh_order_exact == format!("{}", s.mesh_order) {
+        String::new()
+    } else {
+        format!(" ({})", s.mesh_order_exact)
+    };
+    format!(
+        "Stage {} mesh: {}; order {}{exact} of the tracked shaft{}.",
+        s.stage,
+        gears.join(", "),
+        num(s.mesh_order),
+        s.mesh_hz.map_or(String::new(), |f| format!(", {} Hz", num(f)))
+    )
 }
 
 /// Lower edge, upper edge of the overall-velocity band, Hz (ISO 10816-3 for machines above 600 rpm).
@@ -236,5 +301,54 @@ pub fn trend_section(done: &[Diagnosis], images: &[PathBuf]) -> Section {
         }],
         images: images.to_vec(),
         ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::summary::{StageDiagnosis, StageGear, StageKind, TeethSource, VerdictGear};
+
+    /// The revolutions' speeds keep the digits that tell them apart: a tracked 900 rpm shaft's were "from 15
+    /// to 15 Hz" (14.999 and 15.002), a simulation's "from 25 to 25 Hz".
+    #[test]
+    fn the_range_of_revolution_speeds_is_never_one_number_twice() {
+        assert_eq!(revolution_range(14.99904, 15.00213), "revolutions from 14.999 to 15.002 Hz");
+        assert_eq!(revolution_range(29.9928, 30.0099), "revolutions from 29.99 to 30.01 Hz");
+        assert_eq!(revolution_range(25.0, 25.0), "every revolution at 25 Hz");
+        assert_eq!(revolution_range(25.0, 25.0 + 1e-12), "every revolution at 25 Hz");
+    }
+
+    /// The mesh order's source in words, not the JSON's key ("teeth baseline" was printed).
+    #[test]
+    fn the_teeth_source_is_said_in_words() {
+        for t in [TeethSource::Given, TeethSource::Baseline, TeethSource::Estimated] {
+            assert!(teeth_words(t).split(' ').count() > 1, "{}", teeth_words(t));
+        }
+        assert!(teeth_words(TeethSource::Baseline).contains("baseline recording"));
+    }
+
+    /// A machine's stages are on the page (only the first stage's mesh order was), without the terminal's
+    /// quotes around shaft names.
+    #[test]
+    fn a_stage_is_said_with_its_gears_shafts_and_mesh() {
+        let gear = |gear, shaft: &str, teeth| StageGear { gear, shaft: Some(shaft.into()), teeth };
+        let stage = StageDiagnosis {
+            stage: 2,
+            kind: StageKind::Parallel,
+            gears: vec![gear(VerdictGear::Pinion, "intermediate", 15), gear(VerdictGear::Wheel, "output", 45)],
+            mesh_order_exact: "15/2".into(),
+            mesh_order: 7.5,
+            mesh_hz: Some(187.5),
+            mesh_harmonics: Vec::new(),
+            planetary: None,
+        };
+        assert_eq!(
+            stage_fact(&stage),
+            "Stage 2 mesh: pinion 15 teeth on shaft intermediate, wheel 45 teeth on shaft output; order 7.5 (15/2) of the tracked shaft, 187.5 Hz."
+        );
+        let first =
+            StageDiagnosis { stage: 1, mesh_order_exact: "20".into(), mesh_order: 20.0, mesh_hz: None, ..stage };
+        assert!(stage_fact(&first).ends_with("; order 20 of the tracked shaft."), "{}", stage_fact(&first));
     }
 }
