@@ -152,6 +152,12 @@ pub fn fault_size(kind: super::summary::FaultKind, depth: f64) -> String {
     }
 }
 
+/// The fit's condition number as people read it: "8", "3.2e10" ("8.0e0" was printed), "infinite" for a
+/// singular fit (never "inf").
+fn condition_words(c: f64) -> String {
+    if c.is_finite() { sig(c, 2) } else { "infinite (the lines do not determine the parameters)".into() }
+}
+
 /// The section of `index.html`: the local fault (or none) as the badge, the error harmonics and gains.
 pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
     let badge = match &out.local_fault {
@@ -190,10 +196,10 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
             out.mesh_harmonics
         ),
         format!(
-            "Fit: {:.1} % of the sideband energy explained, chi2/dof {:.2}, condition {:.1e}{}.",
+            "Fit: {:.1} % of the sideband energy explained, chi2/dof {:.2}, condition number {}{}.",
             100.0 * out.explained_fraction,
             out.chi2_per_dof,
-            out.condition,
+            condition_words(out.condition),
             if out.identifiable { "" } else { " (NOT identifiable)" }
         ),
     ];
@@ -307,5 +313,18 @@ fn errors_table(caption: &str, e: &[super::summary::ErrorHarmonic]) -> Table {
                 )
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_condition_number_reads_as_a_number() {
+        assert_eq!(condition_words(8.0), "8");
+        assert_eq!(condition_words(8.04), "8");
+        assert_eq!(condition_words(3.2e10), "3.2e10");
+        assert!(condition_words(f64::INFINITY).starts_with("infinite"));
     }
 }
