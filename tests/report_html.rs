@@ -317,5 +317,14 @@ fn no_legend_or_label_covers_data_in_any_diagnosis_image() {
     // the trend axis names the recordings, and the limits are both drawn
     assert!(trend[0].x_ticks.iter().any(|t| t.1.contains("cracked-pinion-tooth3")), "{:?}", trend[0].x_ticks);
     assert!(trend.iter().all(|c| c.series.iter().any(|s| s.name.starts_with("faulty limit"))));
+    // a panel's title lists the indicators it draws, and no other (M8A and kurtosis, never scored, were
+    // listed)
+    for c in &trend {
+        if let Some((_, list)) = c.title.rsplit_once(" (") {
+            for name in list.trim_end_matches(')').split(", ") {
+                assert!(c.series.iter().any(|s| s.name == name), "{}: {name} is not drawn", c.title);
+            }
+        }
+    }
     real.clear();
 }

@@ -6,7 +6,7 @@ use super::*;
 /// The indicator families of a trend: one panel each (their spreads differ by orders of magnitude).
 pub(super) const TREND_FAMILIES: [(&str, &[Indicator]); 3] = [
     (
-        "peakiness of the averaged signal (FM4, M6A, M8A, NA4*, FM0, kurtosis)",
+        "peakiness of the averaged signal",
         &[
             Indicator::Fm4,
             Indicator::M6a,
@@ -18,10 +18,7 @@ pub(super) const TREND_FAMILIES: [(&str, &[Indicator]); 3] = [
             Indicator::CrestFactor,
         ],
     ),
-    (
-        "energy around the mesh (ER, SER, SBR, SI, SLF)",
-        &[Indicator::Er, Indicator::Ser, Indicator::Sbr, Indicator::Si, Indicator::Slf],
-    ),
+    ("energy around the mesh", &[Indicator::Er, Indicator::Ser, Indicator::Sbr, Indicator::Si, Indicator::Slf]),
     ("spectral change from the baseline", &[Indicator::SpectralChange]),
 ];
 
@@ -134,8 +131,14 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
             });
             let hi = series.iter().flat_map(|s| &s.points).map(|p| p.1).fold(faulty, f64::max);
             let lo = series.iter().flat_map(|s| &s.points).map(|p| p.1).fold(0.0, f64::min);
+            // the title names the indicators drawn (it once listed M8A and kurtosis, which are not scored)
+            let drawn = if keys.len() > 1 {
+                format!(" ({})", members.iter().map(|m| m.label()).collect::<Vec<_>>().join(", "))
+            } else {
+                String::new()
+            };
             charts.push(Chart {
-                title: format!("{gear}, channel {ch}: {family}"),
+                title: format!("{gear}, channel {ch}: {family}{drawn}"),
                 x_label: "recording [time order as given]".into(),
                 y_label: "spreads from the baseline [-]".into(),
                 series,
