@@ -38,7 +38,7 @@ fn render(page: &Path, shot: &Path) -> Option<String> {
     let probe = dir.join("probe.html");
     // images seen and decoded; the smallest computed font size of any element that holds text (hundredths
     // of a CSS px; 12 px is 9 pt), and the widest image
-    let script = "<script>window.addEventListener('load',()=>{const i=[...document.images];document.body.dataset.images=i.length;document.body.dataset.broken=i.filter(x=>!(x.complete&&x.naturalWidth>0)).length;const t=[...document.body.querySelectorAll('*')].filter(e=>[...e.childNodes].some(n=>n.nodeType==3&&n.textContent.trim()));document.body.dataset.minfont=Math.floor(100*Math.min(...t.map(e=>parseFloat(getComputedStyle(e).fontSize))));document.body.dataset.maxwidth=Math.max(0,...i.map(x=>x.naturalWidth));});</script>";
+    let script = "<script>window.addEventListener('load',()=>{const i=[...document.images];document.body.dataset.images=i.length;document.body.dataset.broken=i.filter(x=>!(x.complete&&x.naturalWidth>0)).length;const t=[...document.body.querySelectorAll('*')].filter(e=>[...e.childNodes].some(n=>n.nodeType==3&&n.textContent.trim()));document.body.dataset.minfont=Math.floor(100*Math.min(...t.map(e=>parseFloat(getComputedStyle(e).fontSize))));document.body.dataset.maxwidth=Math.max(0,...i.map(x=>x.naturalWidth));document.body.dataset.captionlines=Math.max(0,...[...document.querySelectorAll('caption,p.caption')].map(c=>Math.round(c.getBoundingClientRect().height/parseFloat(getComputedStyle(c).lineHeight))));});</script>";
     std::fs::write(&probe, html.replace("</body>", &format!("{script}</body>"))).unwrap();
     let url = format!("file://{}", probe.display());
     let profile_flag = format!("--user-data-dir={}", profile.display());
@@ -141,6 +141,10 @@ fn check_page(dir: &Path, expect: &[&str], images: usize) {
             let min = attribute(&dom, "data-minfont").expect("font sizes measured");
             assert!(min >= 1200, "text of {} px on {}", min as f64 / 100.0, page.display());
             assert!(attribute(&dom, "data-maxwidth").is_some_and(|w| w <= PAGE_WIDTH_PX as usize));
+            // a table's caption reads as a line or two across the page, not a narrow column over a narrow
+            // table (identify's captions were wrapped into four lines)
+            let lines = attribute(&dom, "data-captionlines").expect("captions measured");
+            assert!(lines <= 2, "a caption of {lines} lines on {}", page.display());
             assert!(std::fs::metadata(&shot).unwrap().len() > 10_000, "screenshot written");
         }
         None => eprintln!(

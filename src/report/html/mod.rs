@@ -88,12 +88,12 @@ h1{font-size:16pt;border-bottom:2px solid #444;padding-bottom:.2em}h2{font-size:
 .verdict{font-size:12.5pt;margin:.6em 0}.badge{display:inline-block;padding:.15em .6em;border-radius:.3em;color:#fff;font-weight:bold;margin-right:.5em}\
 .healthy{background:#2e7d32}.suspect{background:#ef6c00}.faulty{background:#c62828}.not_judged{background:#616161}\
 ul.reasons li{margin:.2em 0}.facts{color:#444;font-size:10pt}.facts p{margin:.15em 0}\
-table{border-collapse:collapse;margin:.8em 0;font-size:9.5pt}caption{text-align:left;font-weight:bold;padding:.3em 0}\
+table{border-collapse:collapse;margin:0 0 .8em;font-size:9.5pt}p.caption{font-size:9.5pt;font-weight:bold;margin:.8em 0 .3em}\
 th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child,td.t{text-align:left}\
 tr.hit td{background:#fde0dc;font-weight:bold}figure{margin:1em 0;page-break-inside:avoid;break-inside:avoid}img{display:block;max-width:100%;height:auto;border:1px solid #ddd}\
 dl.glossary{font-size:9.5pt}dl.glossary dt{font-weight:bold;margin-top:.4em}dl.glossary dd{margin-left:1.5em}\
 footer{margin-top:2em;font-size:9pt;color:#555}@page{size:A4;margin:14mm}\
-@media print{body{max-width:none;margin:0;padding:0;font-size:10.5pt}img{width:100%;max-width:100%}h2{page-break-after:avoid;break-after:avoid}table{page-break-inside:avoid}}";
+@media print{body{max-width:none;margin:0;padding:0;font-size:10.5pt}img{width:100%;max-width:100%}h2{page-break-after:avoid;break-after:avoid}div.table{page-break-inside:avoid;break-inside:avoid}}";
 
 /// The style class that colours a badge of `state` (one word: a state's name can hold a space, which
 /// would make two classes, neither coloured, and leave the white word on white).
@@ -152,7 +152,9 @@ fn section(page: &mut String, s: &Section) -> Result<(), ReportError> {
 }
 
 fn table(page: &mut String, t: &Table) {
-    let _ = write!(page, "<table><caption>{}</caption><tr>", escape(&t.caption));
+    // the caption above the table as a paragraph: a <caption> is held to the table's width, and over a
+    // narrow table of five numbers it was wrapped into a column of four lines
+    let _ = write!(page, "<div class=\"table\"><p class=\"caption\">{}</p><table><tr>", escape(&t.caption));
     for h in &t.header {
         let _ = write!(page, "<th>{}</th>", escape(h));
     }
@@ -167,7 +169,7 @@ fn table(page: &mut String, t: &Table) {
         }
         page.push_str("</tr>\n");
     }
-    page.push_str("</table>\n");
+    page.push_str("</table></div>\n");
 }
 
 /// HTML text with &, <, >, " escaped.
