@@ -186,7 +186,7 @@ pub fn section(out: &Identification, images: &[PathBuf]) -> Section {
     };
     let mut facts = vec![
         format!(
-            "{} at {} Hz; mean speed {:.3} Hz (scene {:.3} Hz); {} periods of {} pinion revolution(s) averaged; {} mesh harmonics.",
+            "{} sampled at {} Hz; mean speed {:.3} Hz (scene {:.3} Hz); {} periods of {} pinion revolution(s) averaged; {} mesh harmonics.",
             out.quantity.name(),
             out.sample_rate_hz,
             out.speed.mean_hz,
