@@ -106,10 +106,8 @@ pub fn bench_section(b: &BenchReport, images: &[PathBuf]) -> Section {
             .results
             .iter()
             .map(|r| {
-                (
-                    vec![r.scene.clone(), r.method.clone(), r.resolution.to_string(), cell(r.time_s), cell(r.error)],
-                    false,
-                )
+                let (method, resolution) = bench_words(&r.method, r.resolution);
+                (vec![r.scene.clone(), method, resolution, cell(r.time_s), cell(r.error)], false)
             })
             .collect(),
     };
@@ -120,5 +118,37 @@ pub fn bench_section(b: &BenchReport, images: &[PathBuf]) -> Section {
         facts: Vec::new(),
         tables: vec![table],
         images: images.to_vec(),
+    }
+}
+
+/// A benchmark row's method and resolution in words: "auto@1e-6->hill" is "auto at tolerance 1e-6 (chose
+/// hill)", and the resolution names its unit (steps of a time-stepping solver, harmonics of harmonic
+/// balance), which the bare number did not.
+fn bench_words(method: &str, resolution: usize) -> (String, String) {
+    let (words, solver) = match method.strip_prefix("auto@").and_then(|r| r.split_once("->")) {
+        Some((tol, solver)) => (format!("auto at tolerance {tol} (chose {solver})"), solver),
+        None => (method.to_string(), method),
+    };
+    let unit = match solver {
+        "hill" => "harmonics",
+        "rk4" | "magnus4" => "steps",
+        _ => "",
+    };
+    (words, format!("{resolution} {unit}").trim_end().to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bench_rows_say_the_method_and_the_resolutions_unit() {
+        assert_eq!(bench_words("rk4", 134), ("rk4".to_string(), "134 steps".to_string()));
+        assert_eq!(bench_words("hill", 146), ("hill".to_string(), "146 harmonics".to_string()));
+        assert_eq!(
+            bench_words("auto@1e-6->magnus4", 40),
+            ("auto at tolerance 1e-6 (chose magnus4)".to_string(), "40 steps".to_string())
+        );
+        assert_eq!(bench_words("other", 7).1, "7");
     }
 }
