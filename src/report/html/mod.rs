@@ -89,7 +89,7 @@ h1{font-size:16pt;border-bottom:2px solid #444;padding-bottom:.2em}h2{font-size:
 .healthy{background:#2e7d32}.suspect{background:#ef6c00}.faulty{background:#c62828}.not_judged{background:#616161}\
 ul.reasons li{margin:.2em 0}.facts{color:#444;font-size:10pt}.facts p{margin:.15em 0}\
 table{border-collapse:collapse;margin:0 0 .8em;font-size:9.5pt}p.caption{font-size:9.5pt;font-weight:bold;margin:.8em 0 .3em}\
-th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child,td.t{text-align:left}\
+th,td{border:1px solid #bbb;padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,th:first-child,td.t,th.t{text-align:left}\
 tr.hit td{background:#fde0dc;font-weight:bold}figure{margin:1em 0;page-break-inside:avoid;break-inside:avoid}img{display:block;max-width:100%;height:auto;border:1px solid #ddd}\
 dl.glossary{font-size:9.5pt}dl.glossary dt{font-weight:bold;margin-top:.4em}dl.glossary dd{margin-left:1.5em}\
 footer{margin-top:2em;font-size:9pt;color:#555}@page{size:A4;margin:14mm}\
@@ -155,16 +155,20 @@ fn table(page: &mut String, t: &Table) {
     // the caption above the table as a paragraph: a <caption> is held to the table's width, and over a
     // narrow table of five numbers it was wrapped into a column of four lines
     let _ = write!(page, "<div class=\"table\"><p class=\"caption\">{}</p><table><tr>", escape(&t.caption));
-    for h in &t.header {
-        let _ = write!(page, "<th>{}</th>", escape(h));
+    // words read from the left, numbers line up on the right
+    let numeric = |c: &str| c.starts_with(|ch: char| ch.is_ascii_digit() || ch == '-' || ch == '+' || ch == '.');
+    for (i, h) in t.header.iter().enumerate() {
+        // a header stands over its column as the column's cells do ("first reason" stood at the right end
+        // of a column of sentences read from the left)
+        let words = t.rows.iter().any(|(row, _)| row.get(i).is_some_and(|c| !numeric(c)));
+        let class = if words { " class=\"t\"" } else { "" };
+        let _ = write!(page, "<th{class}>{}</th>", escape(h));
     }
     page.push_str("</tr>\n");
     for (row, hit) in &t.rows {
         page.push_str(if *hit { "<tr class=\"hit\">" } else { "<tr>" });
         for c in row {
-            // words read from the left, numbers line up on the right
-            let numeric = c.starts_with(|ch: char| ch.is_ascii_digit() || ch == '-' || ch == '+' || ch == '.');
-            let class = if numeric { "" } else { " class=\"t\"" };
+            let class = if numeric(c) { "" } else { " class=\"t\"" };
             let _ = write!(page, "<td{class}>{}</td>", escape(c));
         }
         page.push_str("</tr>\n");
@@ -232,6 +236,21 @@ mod tests {
             assert!(!class.contains(' '), "{class}");
             assert!(STYLE.contains(&format!(".{class}{{background:")), "{class} has no colour");
         }
+    }
+
+    /// A column of words has its header on the left, as its cells; a column of numbers on the right.
+    #[test]
+    fn headers_stand_where_their_columns_read() {
+        let t = Table {
+            caption: "c".into(),
+            header: vec!["#".into(), "value".into(), "first reason".into()],
+            rows: vec![(vec!["#1".into(), "3.5".into(), "pinion (channel 1): NA4*".into()], false)],
+        };
+        let mut page = String::new();
+        table(&mut page, &t);
+        assert!(page.contains("<th class=\"t\">first reason</th>"), "{page}");
+        assert!(page.contains("<th>value</th>"), "{page}");
+        assert!(STYLE.contains("th.t{text-align:left}") || STYLE.contains(",th.t{text-align:left}"));
     }
 
     #[test]
