@@ -677,3 +677,28 @@ fn a_fraction_of_the_speed_given_leaves_the_machine_not_judged() {
         assert!(doubt.contains(&format!("every {nth} order")) && doubt.contains("near 30.0000 Hz"), "{doubt}");
     }
 }
+
+/// The same samples as their own baseline are healthy, also when they are a noise-free simulation: the
+/// simulated two-stage box's blocks differ by rounding alone (spectral change 8.8e-15 dB), and a spread of
+/// that size once made 1.5e-14 dB score 13.8 spreads, FAULTY against itself.
+#[test]
+fn a_noise_free_simulation_is_healthy_against_itself() {
+    let dir = temp_dir("self-baseline-two-stage");
+    let wav = dir.join("two-stage.wav");
+    let scene = "data/scenes/train-two-stage-z20z40-z15z45-recording-8s.json";
+    let made = gearvib(&["simulate", scene, "-o", &wav.to_string_lossy()]);
+    assert_eq!(made.code, 0, "{}", made.stderr);
+    let w = wav.to_string_lossy();
+    let run = gearvib(&[
+        "diagnose",
+        &w,
+        "--machine",
+        "data/machines/two-stage-z20z40-z15z45.json",
+        "--baseline",
+        &w,
+        "--json",
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "healthy", "{}", d["verdict"]);
+}
