@@ -3,7 +3,7 @@
 
 use crate::report::figures::stands_out;
 use crate::report::format::num;
-use crate::report::identify::fault_size;
+use crate::report::identify::{condition_words, fault_size};
 use crate::report::summary::{
     BenchReport, Diagnosis, ErrorHarmonic, Identification, Indicator, PhaseOrigin, SimulateSummary, StabilitySummary,
     SweepSummary,
@@ -437,10 +437,10 @@ pub fn identification(w: &mut dyn Write, r: &Identification) -> io::Result<()> {
     writeln!(w, "path gains       {}", gains.join(", "))?;
     writeln!(
         w,
-        "fit              {:.2} % of the sideband energy explained, chi2/dof {:.2}, condition {:.1e}{}",
+        "fit              {:.2} % of the sideband energy explained, chi2/dof {:.2}, condition number {}{}",
         100.0 * r.explained_fraction,
         r.chi2_per_dof,
-        r.condition,
+        condition_words(r.condition),
         if r.identifiable { "" } else { "  NOT IDENTIFIABLE" }
     )?;
     for l in &r.residual_lines {

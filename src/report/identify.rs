@@ -153,8 +153,8 @@ pub fn fault_size(kind: super::summary::FaultKind, depth: f64) -> String {
 }
 
 /// The fit's condition number as people read it: "8", "3.2e10" ("8.0e0" was printed), "infinite" for a
-/// singular fit (never "inf").
-fn condition_words(c: f64) -> String {
+/// singular fit (never "inf"); the terminal says it so too.
+pub fn condition_words(c: f64) -> String {
     if c.is_finite() { sig(c, 2) } else { "infinite (the lines do not determine the parameters)".into() }
 }
 
