@@ -495,12 +495,6 @@ fn mesh_order_on(
 /// A channel and the mesh ridge found on it (or why none was).
 type ChannelRidge = (usize, Result<angle::MeshRidge, crate::signal::SignalError>);
 
-/// The mesh ridges worth following on a shaft of `period` samples with mesh order `z`, best line first:
-/// the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
-/// second ten times the first) on the channel where it stands out most against the channel's RMS; the
-/// second channel's too unless the first's line stands clear of its band; and, when neither does, the
-/// harmonic standing highest over its local floor (up to the 16th) on the channel where it stands highest
-/// (the first four can lie under the sensor noise while a resonance lifts a higher one 10-15 dB).
 /// The strongest of the first four mesh harmonics k z below 0.4 cycles per sample on a shaft of `period`
 /// samples, by its line within +-0.2 orders: (its order, its amplitude); the harmonic the tracking follows
 /// when one stands out. `None` when none lies below 0.4.
@@ -512,6 +506,12 @@ pub(super) fn strongest_low_harmonic(x: &[f32], period: f64, z: usize) -> Option
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
+/// The mesh ridges worth following on a shaft of `period` samples with mesh order `z`, best line first:
+/// the strongest of the first four mesh harmonics below 0.4 cycles per sample (a resonance can make the
+/// second ten times the first) on the channel where it stands out most against the channel's RMS; the
+/// second channel's too unless the first's line stands clear of its band; and, when neither does, the
+/// harmonic standing highest over its local floor (up to the 16th) on the channel where it stands highest
+/// (the first four can lie under the sensor noise while a resonance lifts a higher one 10-15 dB).
 fn ridges_to_follow(rec: &Recording, channels: &[usize], period: f64, z: usize) -> Vec<ChannelRidge> {
     let mut candidates: Vec<(usize, f64, f64)> = channels
         .par_iter()
