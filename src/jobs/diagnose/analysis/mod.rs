@@ -14,6 +14,7 @@ use super::*;
 mod evidence;
 mod indicators;
 mod shaft;
+mod sync;
 
 pub(super) use evidence::mesh_harmonics;
 pub(super) use indicators::*;

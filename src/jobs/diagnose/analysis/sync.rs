@@ -1,0 +1,366 @@
+//! The order spectrum of a channel on the followed angle and the checks of the speed read from it: a given
+//! speed's mesh line that is a sideband, a given speed a whole fraction or multiple of the shaft's, an
+//! estimated speed whose angle holds no line of either gear.
+
+use super::super::*;
+
+/// How many times higher an angle that makes the followed line a sideband must score than the followed
+/// angle (the summed log heights of its lines, [`SyncSpectrum::lines`]) for it to be taken: on the right
+/// angle every order of both gears is a line (the mesh
+/// harmonics, their sidebands, a fault's impulse train), on an angle k z / (k z + j) of it only the orders
+/// that are multiples of k z + j. A generated broken 21-tooth pinion at 40 Hz, given 2400 rpm, was
+/// followed on the mesh's second harmonic's sideband -2 (its line 17 dB over its band, the mesh's 11 dB).
+const SIDEBAND_ENERGY_RATIO: f64 = 1.5;
+
+/// Largest height of one line over its floor that counts (power ratio, 30 dB): one strong line of another
+/// machine (a pump's mesh) that falls on an order of a wrong angle adds no more than a few of its own.
+const LINE_CAP: f64 = 1000.0;
+
+/// Most samples of a channel read for [`SyncSpectrum`]: 2^18, about 5 s at 51.2 kHz (128 revolutions at
+/// 40 Hz, 32 of the 60 a 12 Hz shaft turns in that time: lines a thirtieth of an order apart are told
+/// apart); the check took 28 ms of the 60 s 4-channel file's 0.33 s with twice as many.
+const SYNC_SAMPLES: usize = 1 << 18;
+
+/// The order power spectrum of a channel on a followed angle (its first [`SYNC_SAMPLES`] over whole
+/// revolutions) up to an order: since a sideband's angle is the followed one scaled, the lines of any
+/// such angle are read from it.
+pub(super) struct SyncSpectrum {
+    power: Vec<f64>,
+    /// Revolutions transformed: bin b is order b / revs.
+    revs: f64,
+    /// Highest order read.
+    top: f64,
+}
+
+impl SyncSpectrum {
+    pub(super) fn new(x: &[f32], map: &AngleMap, top: f64) -> Option<Self> {
+        let x = &x[..x.len().min(SYNC_SAMPLES)];
+        let period = map.mean_period_samples();
+        let covered =
+            (0..map.revolutions()).take_while(|&r| map.sample_at((r + 1) as f64) < x.len() as f64 - 2.0).count();
+        if covered < 8 {
+            return None;
+        }
+        // a power of two of revolutions of a power of two of points: one fast transform (307 revolutions
+        // of 2048 points, 307 a prime, took 40 ms of the 60 s file's 0.35 s)
+        let revs = 1 << covered.ilog2();
+        let points = (period.ceil() as usize).next_power_of_two().clamp(64, 1 << 16);
+        let mut angle = vec![0.0; revs * points];
+        map.resample(x, 0.0, 1.0 / points as f64, &mut angle);
+        let mean = angle.iter().sum::<f64>() / angle.len() as f64;
+        angle.iter_mut().for_each(|v| *v -= mean);
+        let mut power: Vec<f64> = Fft::new().forward_magnitudes(&mut angle).iter().map(|a| a * a).collect();
+        let top = top.min(0.4 * period);
+        power.truncate(((top + 1.0) * revs as f64).ceil() as usize);
+        Some(Self { power, revs: revs as f64, top })
+    }
+
+    /// Summed log height over their local floor (ln of the power ratio, 0 to ln [`LINE_CAP`]) of the lines
+    /// at the orders m `step` (m = 1, 2, ... up to the top order) of the followed angle, each the largest
+    /// bin within one of its place.
+    fn lines(&self, step: f64) -> f64 {
+        self.line_scores(step).sum()
+    }
+
+    /// The log height of each line of [`Self::lines`], in order of m.
+    fn line_scores(&self, step: f64) -> impl Iterator<Item = f64> + '_ {
+        (1..).map(move |m| m as f64 * step).take_while(|&o| o < self.top).map(|o| {
+            let b = (o * self.revs).round() as usize;
+            let peak = (b.saturating_sub(1)..=b + 1).filter_map(|i| self.power.get(i)).copied().fold(0.0, f64::max);
+            (peak / self.floor(b)).clamp(1.0, LINE_CAP).ln()
+        })
+    }
+
+    /// Mean log height of the lines at the orders m `step`, m = 1, 2, ... below the top order, but for the
+    /// multiples of each of `skip` (teeth counts).
+    fn lattice_mean(&self, step: f64, skip: &[usize]) -> f64 {
+        let (sum, n) = (1..)
+            .zip(self.line_scores(step))
+            .filter(|(m, _)| skip.iter().all(|&k| k == 0 || m % k != 0))
+            .fold((0.0, 0usize), |(s, n), (_, h)| (s + h, n + 1));
+        sum / n.max(1) as f64
+    }
+
+    /// Mean log height of the lines at the orders m `step` whose m is a multiple of `d`, and of the others.
+    fn split_mean(&self, step: f64, d: usize) -> (f64, f64) {
+        let (mut on, mut off) = ((0.0, 0usize), (0.0, 0usize));
+        for (m, s) in (1..).zip(self.line_scores(step)) {
+            let side = if m % d == 0 { &mut on } else { &mut off };
+            side.0 += s;
+            side.1 += 1;
+        }
+        (on.0 / on.1.max(1) as f64, off.0 / off.1.max(1) as f64)
+    }
+
+    /// What the largest of three bins of noise alone reads around bin `b`: 2.65 times the median of the
+    /// bins from 3 bins to half an order away on either side (the power of a bin of noise is exponential:
+    /// its median is 0.69 of its mean, the largest of three 1.83 of it).
+    fn floor(&self, b: usize) -> f64 {
+        let w = ((self.revs / 2.0) as usize).max(6);
+        let mut near: Vec<f64> = (3..=w)
+            .flat_map(|d| [b.checked_sub(d), Some(b + d)])
+            .flatten()
+            .filter_map(|i| self.power.get(i))
+            .copied()
+            .collect();
+        if near.is_empty() {
+            return f64::INFINITY;
+        }
+        let mid = near.len() / 2;
+        2.65 * *near.select_nth_unstable_by(mid, f64::total_cmp).1
+    }
+
+    /// Score of a shaft turning `1 / r` times per followed revolution: its own orders' lines and its
+    /// meshing gear's (`ratio` of its speed, when known), each as [`Self::lines`].
+    fn energy(&self, r: f64, ratio: Option<f64>) -> (f64, f64) {
+        (self.lines(1.0 / r), ratio.map_or(0.0, |q| self.lines(q / r)))
+    }
+}
+
+/// A given speed's followed mesh line checked against its sidebands: the line followed for harmonic k of
+/// the mesh (order k z) may be that harmonic's sideband k z + j of a shaft turning at k z / (k z + j) of the
+/// followed speed, inside the speed tolerance (a broken tooth's sidebands can stand over the mesh line),
+/// j = +-1, +-2 pinion orders or +-1 wheel order (z / zw). The sideband's angle is the followed one scaled
+/// (the sideband's phase is k z + j times the shaft's); of the angles within the tolerance, the one whose
+/// lines (both gears' orders) score [`SIDEBAND_ENERGY_RATIO`] times those of the followed angle and of
+/// every other candidate, and whose own orders score that much more than the followed angle's, is taken,
+/// said in a warning.
+pub(super) fn mesh_not_sideband(
+    x: &[f32],
+    map: &AngleMap,
+    spectrum: &SyncSpectrum,
+    (z, zw): (usize, Option<usize>),
+    o: &Options,
+    fs: Option<f64>,
+    warnings: &mut Vec<String>,
+) -> Option<AngleMap> {
+    let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return None };
+    let period = map.mean_period_samples();
+    // the harmonic followed: the strongest of the first four on the followed speed, as the tracking chose
+    let (order, _) = strongest_low_harmonic(x, period, z)?;
+    let nominal = fs / hz;
+    let ratio = zw.map(|w| z as f64 / w as f64);
+    let offsets = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q]));
+    let candidates: Vec<f64> =
+        offsets.filter(|j| (nominal / (period * (order + j) / order) - 1.0).abs() <= o.speed_tolerance).collect();
+    if candidates.is_empty() {
+        return None;
+    }
+    // both gears' lines decide, and the shaft's own must stand clearer too: each alone was fooled by a
+    // comb of the other gear on a candidate in a whole ratio to it (a cracked 14-tooth pinion's orders,
+    // given a speed a third off, on every other order of the wheel of a candidate; a broken 47-tooth
+    // wheel's orders on the pinion orders of a candidate 3/2 of the wheel's speed)
+    let own = spectrum.energy(1.0, ratio);
+    let mut scored: Vec<(f64, (f64, f64))> =
+        candidates.into_iter().map(|j| (j, spectrum.energy((order + j) / order, ratio))).collect();
+    let both = |e: (f64, f64)| e.0 + e.1;
+    scored.sort_by(|a, b| both(b.1).total_cmp(&both(a.1)));
+    // the best must stand clear of the followed angle and of the other sidebands' angles: a line followed
+    // badly (7 dB over its band, drifting 1.6 % where the shaft drifted -0.2 %) is no scaled angle of the
+    // shaft's, and two neighbouring scalings then share its lines (a generated broken 31-tooth pinion: 2.6
+    // and 2.1 times the followed angle's energy)
+    let runner_up = scored.get(1).map_or(0.0, |s| both(s.1));
+    let clear = |e: (f64, f64)| {
+        both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up) && e.0 > SIDEBAND_ENERGY_RATIO * own.0
+    };
+    let &(j, energy) = scored.first().filter(|b| clear(b.1))?;
+    let r = (order + j) / order;
+    warnings.push(format!(
+        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's score {:.1} times the followed angle's (summed log heights of their lines over the local floor): that speed is used",
+        1.0 / r,
+        both(energy) / both(own).max(f64::MIN_POSITIVE)
+    ));
+    let revs = (map.revolutions() as f64 / r).floor() as usize;
+    Some(AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1))
+}
+
+/// Largest mean log height ([`SyncSpectrum::lines`]) of the lines at a gear's orders (its mesh orders
+/// left out) that is still noise. A bin of noise alone reads 0.18 on average (its power exponential, the
+/// largest of three over 2.65 times the median: the integral of 1 - (1 - exp(-1.84 e^u))^3 over u > 0),
+/// with a spread of about 0.26 per line, so 0.03 over the 50-100 orders of a pinion's first four mesh
+/// harmonics: 0.25 lies two to three spreads above. Generated machines of another physics read 0.12-0.20 on
+/// wrong speeds estimated from the teeth, 0.29-1.2 on their true speeds (the cleanest, a 21-tooth pinion
+/// at 40 Hz whose lines are mostly its mesh's, 0.31).
+const NO_LINES: f64 = 0.25;
+
+/// Why an estimated speed rests on its mesh comb alone: on its followed angle neither the pinion's whole
+/// orders nor its meshing gear's (spacing zp / zw) hold lines beyond noise ([`NO_LINES`]), the mesh
+/// orders themselves (multiples of zp, of zw on the wheel's) left out: those are the comb the speed was
+/// found on, and on an angle k / zp of the shaft's (a comb of its k-th harmonic taken for the mesh) its
+/// own lines coincide with nothing but them. A generated 17-tooth pinion with a broken tooth, at 25 Hz,
+/// was taken at 10.29 Hz (its seventh shaft harmonic's comb as the mesh) and called HEALTHY. The price:
+/// a gear whose only lines are its mesh harmonics is not judged on an estimated speed (on the hold-out,
+/// teeth only, the weak-lined 27/35 machine's healthy recordings and one of a 16/45 machine, 6 verdicts
+/// of 27; on the first generator's seven machines every healthy recording stays judged, and four missed
+/// faults there and three on the hold-out are no longer called healthy).
+pub(super) fn no_shaft_lines(spectrum: &SyncSpectrum, (z, zw): (usize, Option<usize>)) -> Option<String> {
+    let own = spectrum.lattice_mean(1.0, &[z]);
+    let wheel = zw.map(|w| spectrum.lattice_mean(z as f64 / w as f64, &[z, w]));
+    (own < NO_LINES && wheel.is_none_or(|w| w < NO_LINES)).then(|| {
+        format!(
+            "on the angle of the speed estimated from the teeth no order of either gear but the mesh's holds a line (mean log height over the local floor {own:.2} on the pinion's{}; noise reads under {NO_LINES}): the estimate rests on the mesh comb alone, which a comb of shaft harmonics can imitate, so the averages cannot clear the machine; give the shaft speed or a tachometer channel",
+            wheel.map_or(String::new(), |w| format!(", {w:.2} on the wheel's"))
+        )
+    })
+}
+
+/// Smallest mean log height ([`SyncSpectrum::lines`]) of the lines on every d-th order for a given speed
+/// to be taken as 1/d of the shaft's (or of the lines between whole orders, as d times it): on the
+/// hold-out machines a nameplate speed halved or divided by three put 2.0-5.7 on every d-th pinion or
+/// wheel order of the followed angle and 0.1-0.6 between them, while on the true speed's angle no gear's
+/// orders split so (the largest mean on every d-th order where those between stood a quarter of it:
+/// 0.9 on an even 16-tooth pinion, whose mesh harmonics are all even orders; noise alone reads 0.1-0.3).
+const MULTIPLE_LINES: f64 = 1.5;
+
+/// How many times the mean log height of the lines between every d-th order the lines on it must reach
+/// for the speed to be 1/d of the shaft's: 4.4-30 on the hold-out's halved and divided speeds (a broken
+/// wheel's pinion orders the least), at most 2.2 on a true speed's angle where the lines on every d-th
+/// order reach [`MULTIPLE_LINES`] (a healthy 21-tooth pinion's every third order).
+const MULTIPLE_CONTRAST: f64 = 4.0;
+
+/// Why a given speed (`hz`, Hz) that the mesh line confirmed is a whole fraction or multiple of the shaft's:
+/// a mesh harmonic was followed for another (a halved speed puts the true mesh on the given one's second
+/// harmonic, which a resonance can make the strongest), so the averages hold d revolutions, or 1/d of one,
+/// and cannot clear the machine. On the angle of d times too slow a shaft every line of both gears stands
+/// on every d-th order ([`SyncSpectrum::split_mean`] on the pinion's orders, step 1, and the wheel's, step
+/// `q` = zp / zw), and the orders between hold noise; on d times too fast a shaft the lines stand between
+/// whole orders, at the multiples of 1/d, as strong as on them.
+pub(super) fn speed_multiple(spectrum: &SyncSpectrum, q: Option<f64>, hz: f64) -> Option<String> {
+    let splits = |d: usize| {
+        [("pinion", 1.0)]
+            .into_iter()
+            .chain(q.map(|q| ("wheel", q)))
+            .map(move |(g, step)| (g, spectrum.split_mean(step, d)))
+    };
+    for (d, nth) in [(2usize, "second"), (3, "third")] {
+        if let Some((gear, (on, off))) =
+            splits(d).find(|&(_, (on, off))| on >= MULTIPLE_LINES && on >= MULTIPLE_CONTRAST * off)
+        {
+            return Some(format!(
+                "the lines of the followed angle stand on every {nth} order of the {gear} only (mean log height {on:.2} over the local floor, {off:.2} between them): the shaft turns {d} times as fast as the given {hz:.4} Hz, near {:.4} Hz, and the averages on the given speed hold {d} revolutions, so they cannot clear the machine; give the shaft's speed",
+                d as f64 * hz
+            ));
+        }
+        // between whole orders: the orders m / d of the pinion, m not a multiple of d
+        let (whole, between) = spectrum.split_mean(1.0 / d as f64, d);
+        if between >= MULTIPLE_LINES && between * MULTIPLE_CONTRAST >= whole {
+            return Some(format!(
+                "the lines of the followed angle stand between whole orders of the pinion, at every 1/{d} order (mean log height {between:.2} over the local floor, {whole:.2} on whole orders): the shaft turns 1/{d} as fast as the given {hz:.4} Hz, near {:.4} Hz, and each average holds 1/{d} revolution, so it cannot clear the machine; give the shaft's speed",
+                hz / d as f64
+            ));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::TAU;
+
+    /// A 14-tooth pinion at 30 Hz (20.48 kHz, 13 s) with a 39-tooth wheel, `comb` the amplitude of every
+    /// pinion order (a cracked tooth's impulse train) besides the mesh harmonics (1.0 each) and `runout`
+    /// that of every wheel order, in noise.
+    fn pinion_at_30_hz(comb: f64, runout: f64) -> (Vec<f32>, f64) {
+        let (fs, f, n) = (20_480.0, 30.0, 1 << 18);
+        let mut noise = crate::signal::test_noise::uniform_noise(5);
+        let x = (0..n)
+            .map(|i| {
+                let t = i as f64 / fs;
+                let pinion: f64 = (1..=140)
+                    .map(|m| {
+                        let a = if m % 14 == 0 && m <= 56 { 1.0 } else { comb };
+                        a * (TAU * m as f64 * f * t + 0.9 * m as f64).cos()
+                    })
+                    .sum();
+                let wheel: f64 =
+                    (1..=300).map(|m| runout * (TAU * m as f64 * f * 14.0 / 39.0 * t + 0.4 * m as f64).cos()).sum();
+                (pinion + wheel + 0.5 * noise()) as f32
+            })
+            .collect();
+        (x, fs)
+    }
+
+    /// The speed given as a half, a third or twice the shaft's is found from the lines of the angle it
+    /// gives (on every second or third order only, or between whole orders) of a cracked pinion; the
+    /// true speed passes, also for a true-running pinion of even teeth showing only its mesh harmonics,
+    /// all on even orders.
+    #[test]
+    fn a_given_speed_a_whole_fraction_or_multiple_of_the_shafts_is_told() {
+        let check = |x: &[f32], fs: f64, hz: f64| {
+            let map = AngleMap::constant(fs / hz, 0.0, x.len());
+            speed_multiple(&SyncSpectrum::new(x, &map, 4.5 * 14.0).unwrap(), Some(14.0 / 39.0), hz)
+        };
+        let (cracked, fs) = pinion_at_30_hz(0.3, 0.3);
+        let half = check(&cracked, fs, 15.0).expect("half the speed is told");
+        assert!(half.contains("every second order") && half.contains("near 30.0000 Hz"), "{half}");
+        let third = check(&cracked, fs, 10.0).expect("a third of the speed is told");
+        assert!(third.contains("every third order"), "{third}");
+        let double = check(&cracked, fs, 60.0).expect("twice the speed is told");
+        assert!(double.contains("every 1/2 order") && double.contains("near 30.0000 Hz"), "{double}");
+        assert_eq!(check(&cracked, fs, 30.0), None);
+        let (true_running, fs) = pinion_at_30_hz(0.0, 0.0);
+        assert_eq!(check(&true_running, fs, 30.0), None);
+    }
+
+    /// A speed estimated on a comb of the cracked 14-tooth pinion's fifth shaft harmonic taken for the mesh
+    /// (30 x 5 / 14 Hz): its angle holds none of the pinion's lines on whole orders but the mesh's (the
+    /// comb it was found on), and the estimate is doubted; on the true 30 Hz angle the same recording's
+    /// lines stand and it is not. (No wheel lines here: a wheel's dense comb falls near whole orders of
+    /// many a wrong angle, which the test would then depend on.)
+    #[test]
+    fn an_estimate_whose_angle_holds_no_shaft_line_is_doubted() {
+        let (cracked, fs) = pinion_at_30_hz(0.3, 0.0);
+        let bare = |hz: f64| {
+            let map = AngleMap::constant(fs / hz, 0.0, cracked.len());
+            no_shaft_lines(&SyncSpectrum::new(&cracked, &map, 4.5 * 14.0).unwrap(), (14, Some(39)))
+        };
+        let doubt = bare(30.0 * 5.0 / 14.0).expect("a shaft harmonic's comb taken for the mesh is doubted");
+        assert!(doubt.contains("rests on the mesh comb alone"), "{doubt}");
+        assert_eq!(bare(30.0), None);
+    }
+
+    /// A 21-tooth pinion at 40 Hz (51.2 kHz, 8 s) whose spectrum holds every shaft order (a broken tooth's
+    /// impulse train, 0.3 each), the mesh harmonics (1.0) and a resonance that lifts order 40 over them
+    /// (3.0), with a 37-tooth wheel's orders (0.2) and noise; given 40 Hz, the angle followed on 38.095 Hz
+    /// (order 40 taken for the mesh's second harmonic, 42) is put back on 40 Hz, and the true angle is
+    /// kept as it is; without the given speed nothing is checked.
+    #[test]
+    fn a_sideband_followed_as_the_mesh_is_put_back_on_the_shaft() {
+        let (fs, f, n) = (51_200.0, 40.0, 409_600);
+        let mut noise = crate::signal::test_noise::uniform_noise(11);
+        let x: Vec<f32> = (0..n)
+            .map(|i| {
+                let t = i as f64 / fs;
+                let pinion: f64 = (1..=120)
+                    .map(|m| {
+                        let a = match m {
+                            40 => 3.0,
+                            m if m % 21 == 0 => 1.0,
+                            _ => 0.3,
+                        };
+                        a * (TAU * m as f64 * f * t + 0.7 * m as f64).cos()
+                    })
+                    .sum();
+                let wheel: f64 =
+                    (1..=150).map(|m| 0.2 * (TAU * m as f64 * f * 21.0 / 37.0 * t + 1.3 * m as f64).cos()).sum();
+                (pinion + wheel + 0.5 * noise()) as f32
+            })
+            .collect();
+        let o = Options { shaft_hz: Some(f), teeth: Some((21, 37)), ..Default::default() };
+        let mut warnings = Vec::new();
+        let check = |map: &AngleMap, o: &Options, warnings: &mut Vec<String>| {
+            let spectrum = SyncSpectrum::new(&x, map, 4.5 * 21.0).unwrap();
+            mesh_not_sideband(&x, map, &spectrum, (21, Some(37)), o, Some(fs), warnings)
+        };
+        let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
+        let put_back = check(&wrong, &o, &mut warnings).expect("the sideband's angle is taken");
+        assert!((put_back.mean_period_samples() * f / fs - 1.0).abs() < 1e-3, "{}", put_back.mean_period_samples());
+        assert!(warnings.iter().any(|w| w.contains("sideband -2")), "{warnings:?}");
+        let right = AngleMap::constant(fs / f, 0.0, n);
+        assert!(check(&right, &o, &mut warnings).is_none());
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        let unchecked = Options { shaft_hz: None, ..o };
+        assert!(check(&wrong, &unchecked, &mut warnings).is_none());
+    }
+}
