@@ -144,7 +144,8 @@ pub struct LocalChange {
     pub sidebands: f64,
     /// The largest of the same between the baseline's own files.
     pub sidebands_healthy: f64,
-    /// From here the growth counts as evidence: 3 times `sidebands_healthy`, at least 8.
+    /// From here the growth counts as evidence (`baseline::sidebands_limit`: the lower of 3 times
+    /// `sidebands_healthy` but at least 8, and 4.5 times it but at least 0.25).
     pub sidebands_limit: f64,
     /// Pattern change: the difference's energy at every order that is not a mesh harmonic, after each mesh
     /// harmonic's band is scaled by its own complex factor (a change of the mesh's carrier taken out), over

@@ -68,3 +68,17 @@ fn spread_has_a_floor() {
     let s = Stat::of(&[2.0; 9], Scale::Log);
     assert!((s.spreads(2.1) - 1.0).abs() < 1e-12);
 }
+
+/// The sideband growth's limit: three times what the baseline's files show among themselves but at least 8
+/// (noise-level sidebands grow by several times their energy between healthy recordings), or 4.5 times it
+/// but at least 0.25 where that is lower (real sideband lines that the files reproduce closely); one file
+/// shows nothing among itself and keeps the first path only.
+#[test]
+fn the_sideband_limit_takes_the_lower_path() {
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    assert!(close(sidebands_limit(0.02), 0.25), "least growth of the steep path");
+    assert!(close(sidebands_limit(0.1), 0.45), "4.5 x 0.1");
+    assert!(close(sidebands_limit(2.0), 8.0), "4.5 x 2 = 9 is over the first path's floor of 8");
+    assert!(close(sidebands_limit(5.0), 15.0), "3 x 5 is lower than 4.5 x 5");
+    assert!(close(sidebands_limit(f64::NAN), SIDEBAND_MIN), "one file: the first path alone");
+}
