@@ -97,6 +97,10 @@ pub fn diagnosis(
         _ => format!("revolutions 10-90 % within +-{:.3} %, ", p.fluctuation_percent),
     };
     let snr = p.line_snr_db.map_or(String::new(), |s| format!(", tracked line {s:.0} dB above its band"));
+    let snr = match p.refined_gain {
+        Some(g) => format!("{snr}, refined on the synchronous average (its RMS x{g:.2})"),
+        None => snr,
+    };
     writeln!(w, "tracking         {}: {range}change {:+.3} % over the recording{snr}", p.tracking, p.change_percent)?;
     match d.mesh_hz {
         Some(f) => writeln!(w, "mesh             {f:.3} Hz = order {} ({})", d.mesh_order, d.teeth_source)?,

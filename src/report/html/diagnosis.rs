@@ -51,8 +51,12 @@ pub fn diagnosis_section(
     });
     let p = &d.speed_profile;
     facts.push(format!(
-        "Shaft angle tracked by {}{}; speed change over the recording {} %.",
+        "Shaft angle tracked by {}{}{}; speed change over the recording {} %.",
         p.tracking,
+        p.refined_gain.map_or(String::new(), |g| format!(
+            " and refined by lining the revolutions up with their average (its RMS {} times that on the line's angle)",
+            crate::report::format::sig(g, 3)
+        )),
         match (p.min_hz, p.max_hz) {
             (Some(lo), Some(hi)) => format!(", {}", revolution_range(lo, hi)),
             _ => String::new(),

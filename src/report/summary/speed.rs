@@ -232,6 +232,10 @@ pub struct SpeedProfile {
     pub fluctuation_percent: f64,
     /// With mesh-phase tracking: how far the tracked line stands above its band, dB.
     pub line_snr_db: Option<f64>,
+    /// With mesh-phase tracking, when the angle was refined by lining every revolution up with the average
+    /// of all of them: the RMS of that average on the refined angle over its RMS on the tracked one (above
+    /// 1.02; `null` when the tracked angle was kept).
+    pub refined_gain: Option<f64>,
 }
 
 /// The gear meshing with the tracked shaft, estimated from its sidebands when the teeth are not given.

@@ -31,6 +31,8 @@ use rayon::prelude::*;
 
 mod lock;
 use lock::*;
+mod refine;
+pub use refine::*;
 
 /// Speed of the reference shaft over a recording, from its revolution starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
