@@ -120,10 +120,13 @@ fn advanced(spectra: &[Vec<(f64, f64)>], shifts: &[f64]) -> Vec<Vec<(f64, f64)>>
         .iter()
         .zip(shifts)
         .map(|(r, &d)| {
+            let step = (std::f64::consts::TAU * d).sin_cos();
+            let mut turn = (0.0, 1.0);
             r.iter()
-                .enumerate()
-                .map(|(k, c)| {
-                    let (s, co) = (std::f64::consts::TAU * k as f64 * d).sin_cos();
+                .map(|c| {
+                    // turn = exp(i 2 pi k d) by recurrence: (sin, cos) of one more step
+                    let (s, co) = turn;
+                    turn = (s * step.1 + co * step.0, co * step.1 - s * step.0);
                     (c.0 * co - c.1 * s, c.0 * s + c.1 * co)
                 })
                 .collect()
@@ -164,9 +167,13 @@ fn shift(fft: &mut Fft, r: &[(f64, f64)], template: &[(f64, f64)], bins: &Bins) 
     let w = std::f64::consts::TAU / points as f64;
     for _ in 0..4 {
         let (mut d1, mut d2) = (0.0, 0.0);
+        // exp(i w k at) by recurrence over k (a rotation per bin, not a sine and cosine)
+        let step = (w * at).sin_cos();
+        let mut turn = step;
         for (k, &(cr, ci)) in cross.iter().enumerate().take(highest + 1).skip(1) {
             let wk = w * k as f64;
-            let (s, co) = (wk * at).sin_cos();
+            let (s, co) = turn;
+            turn = (s * step.1 + co * step.0, co * step.1 - s * step.0);
             // Re(C e^{i wk d}) = cr cos - ci sin
             d1 += -wk * (cr * s + ci * co);
             d2 += -wk * wk * (cr * co - ci * s);
