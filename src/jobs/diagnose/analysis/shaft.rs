@@ -185,8 +185,7 @@ const FOLLOWED_LINE_DB: f64 = 10.0;
 
 /// A mesh-phase angle `map` (mesh order `z`) refined by lining the revolutions of `x` up with their average
 /// ([`angle::refine`]) when that averages more of the signal coherently (by [`angle::MIN_GAIN`] or more in
-/// RMS), and the gain;
-/// `map` itself and `None` otherwise. The followed line's phase noise grows with the mesh harmonic, and a
+/// RMS), and the gain; `map` itself and `None` otherwise. The followed line's phase noise grows with the mesh harmonic, and a
 /// housing resonance far above the mesh puts the vibration at harmonics 10-40: on the 18/31 generated
 /// machine at 15 Hz (tests/unseen_machines.rs) the averages on the tracked angle held a quarter of the RMS
 /// the tachometer's give, and a 25 % pinion crack's M6A fell from 1336 to 7.5; refined, 1305.
