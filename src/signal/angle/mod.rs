@@ -22,7 +22,10 @@
 //!    theta(t) += (psi(t) - psi0) / (2 pi m). Once after the lock (twice from the ridge alone, the
 //!    second time around the first result), so the angle follows speed changes slower than f1 / 2.
 //!
-//! Revolutions start where theta crosses an integer; [`AngleMap`] interpolates between the starts.
+//! Revolutions start where theta crosses an integer; [`AngleMap`] interpolates between the starts. The
+//! angle can then be refined by the synchronous average itself ([`refine`]): every revolution lined up with
+//! the average of all, which carries the angle at every mesh harmonic, where the followed line carries it
+//! at one.
 
 use super::spectrum::{Fft, hann, phasor_sum};
 use super::tsa::AngleMap;
