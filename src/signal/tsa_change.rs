@@ -23,6 +23,8 @@ pub fn order_spectrum(fft: &mut Fft, x: &[f64], max_order: usize) -> OrderSpectr
     let mut out = Vec::new();
     fft.forward(&mut input, &mut out);
     out.truncate(max_order + 1);
+    // kept spectra (one per revolution in the angle's refinement) hold only the orders asked for
+    out.shrink_to_fit();
     for c in out.iter_mut() {
         *c = (c.0 / n, c.1 / n);
     }
@@ -86,6 +88,13 @@ fn correlation_at(c: &[(f64, f64)], s: f64) -> (f64, f64, f64) {
 /// The shift that best lines `x` up with `reference`: the peak of their circular cross-correlation on a grid of
 /// at least four points per period of the highest order, refined by Newton steps on its derivative.
 pub fn align(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)]) -> Alignment {
+    align_within(fft, x, reference, 0.5)
+}
+
+/// [`align`] with the shift sought within +-`reach` revolutions of 0 only (the peak of the cross-correlation
+/// there; `shift` still in [0, 1)): a revolution lined up with an average of revolutions of the same gear
+/// must not jump a tooth to a stronger peak one mesh cycle away.
+pub fn align_within(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], reach: f64) -> Alignment {
     let len = x.len().min(reference.len());
     // C_k = X_k conj(R_k) = |R_k|^2 exp(-2 pi i k shift) when x is the reference delayed by `shift`
     let c: Vec<(f64, f64)> = (0..len)
@@ -100,7 +109,10 @@ pub fn align(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)]) -> Align
     let mut buf = vec![(0.0, 0.0); grid];
     buf[..len].copy_from_slice(&c);
     fft.inverse_complex(&mut buf);
-    let best = (0..grid).max_by(|&a, &b| buf[a].0.total_cmp(&buf[b].0)).unwrap_or(0);
+    // grid points within the reach, as signed offsets (all of them at a reach of half a revolution)
+    let half = ((reach * grid as f64) as isize).min(grid as isize / 2);
+    let at = |l: isize| buf[l.rem_euclid(grid as isize) as usize].0;
+    let best = (-half..=half.min(grid as isize / 2 - 1)).max_by(|&a, &b| at(a).total_cmp(&at(b))).unwrap_or(0);
     let mut s = best as f64 / grid as f64;
     for _ in 0..4 {
         let (_, d1, d2) = correlation_at(&c, s);
@@ -113,6 +125,8 @@ pub fn align(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)]) -> Align
             break;
         }
     }
+    // (Newton may step past the reach by a grid point or two; at half a revolution there is no edge)
+    let s = if reach < 0.5 { s.clamp(-reach, reach) } else { s };
     let (v, _, _) = correlation_at(&c, s);
     Alignment { shift: s.rem_euclid(1.0), correlation: v / norm }
 }

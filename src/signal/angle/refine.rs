@@ -17,6 +17,7 @@
 use super::super::Sample;
 use super::super::spectrum::Fft;
 use super::super::tsa::AngleMap;
+use super::super::tsa_change::{OrderSpectrum, advanced, align_within, mean, order_spectrum};
 use super::smooth_starts;
 use rayon::prelude::*;
 
@@ -49,38 +50,39 @@ pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refine
         return None;
     }
     let points = (period as usize).next_power_of_two().clamp(256, 8192);
-    let bins = Bins { points, highest: ((HIGHEST * period) as usize).min(points / 2), reach: points / (3 * teeth) };
-    let mut spectra_now = spectra(x, map, &bins);
-    let energy0 = energy(&mean(&spectra_now));
+    let highest = ((HIGHEST * period) as usize).min(points / 2);
+    // a third of a mesh cycle: a revolution is never moved onto the next tooth
+    let reach = 1.0 / (3 * teeth) as f64;
+    let mut spectra_now = spectra(x, map, points, highest);
+    let energy0 = energy(&average(&spectra_now));
     let (mut best, mut best_energy) = (None, energy0);
     let mut current = map.clone();
     for round in 0..ROUNDS {
-        let template = mean(&spectra_now);
+        let template = average(&spectra_now);
+        // the lag of each revolution behind the average, revolutions in (-reach, reach)
         let shifts: Vec<f64> = spectra_now
             .par_iter()
-            .map_init(Fft::new, |fft, r| shift(fft, r, &template, &bins) / points as f64)
+            .map_init(Fft::new, |fft, r| {
+                let s = align_within(fft, r, &template, reach).shift;
+                if s > 0.5 { s - 1.0 } else { s }
+            })
             .collect();
-        if round == 0 && energy(&mean(&advanced(&spectra_now, &shifts))) < MIN_GAIN * MIN_GAIN * energy0 {
-            return None;
+        if round == 0 {
+            let lined_up: Vec<OrderSpectrum> = spectra_now.iter().zip(&shifts).map(|(r, &d)| advanced(r, d)).collect();
+            if energy(&average(&lined_up)) < MIN_GAIN * MIN_GAIN * energy0 {
+                return None;
+            }
         }
         let Some(next) = moved(&current, &shifts) else { break };
         current = next;
-        spectra_now = spectra(x, &current, &bins);
-        let e = energy(&mean(&spectra_now));
+        spectra_now = spectra(x, &current, points, highest);
+        let e = energy(&average(&spectra_now));
         if e > best_energy {
             (best, best_energy) = (Some(current.clone()), e);
         }
     }
     let gain = (best_energy / energy0).sqrt();
     best.filter(|_| gain >= MIN_GAIN).map(|map| Refined { map, gain })
-}
-
-/// The sizes of a revolution's spectrum: points per revolution, the highest bin used, and the largest shift
-/// sought (points).
-struct Bins {
-    points: usize,
-    highest: usize,
-    reach: usize,
 }
 
 /// `map` with revolution k's shift `shifts[k]` (revolutions) moved onto the revolution starts (start k
@@ -98,96 +100,22 @@ fn moved(map: &AngleMap, shifts: &[f64]) -> Option<AngleMap> {
     (next.revolutions() >= 8).then_some(next)
 }
 
-/// Each revolution's spectrum on `map` (bins 0..=highest of `points` per revolution).
-fn spectra<T: Sample>(x: &[T], map: &AngleMap, bins: &Bins) -> Vec<Vec<(f64, f64)>> {
-    let (points, revs) = (bins.points, map.revolutions());
-    let mut y = vec![0.0; revs * points];
+/// Each revolution's order spectrum on `map` (orders 0..=`highest`, DC zero), resampled at `points` per
+/// revolution.
+fn spectra<T: Sample>(x: &[T], map: &AngleMap, points: usize, highest: usize) -> Vec<OrderSpectrum> {
+    let mut y = vec![0.0; map.revolutions() * points];
     map.resample(x, 0.0, 1.0 / points as f64, &mut y);
-    y.par_chunks_exact_mut(points)
-        .map_init(
-            || (Fft::new(), Vec::new()),
-            |(fft, s), r| {
-                fft.forward(r, s);
-                s[..=bins.highest].to_vec()
-            },
-        )
-        .collect()
+    y.par_chunks_exact(points).map_init(Fft::new, |fft, r| order_spectrum(fft, r, highest)).collect()
 }
 
-/// The revolutions' spectra advanced by their shifts (revolutions): R_k exp(+i 2 pi k shift).
-fn advanced(spectra: &[Vec<(f64, f64)>], shifts: &[f64]) -> Vec<Vec<(f64, f64)>> {
-    spectra
-        .iter()
-        .zip(shifts)
-        .map(|(r, &d)| {
-            let step = (std::f64::consts::TAU * d).sin_cos();
-            let mut turn = (0.0, 1.0);
-            r.iter()
-                .map(|c| {
-                    // turn = exp(i 2 pi k d) by recurrence: (sin, cos) of one more step
-                    let (s, co) = turn;
-                    turn = (s * step.1 + co * step.0, co * step.1 - s * step.0);
-                    (c.0 * co - c.1 * s, c.0 * s + c.1 * co)
-                })
-                .collect()
-        })
-        .collect()
+/// The mean of the revolutions' spectra.
+fn average(spectra: &[OrderSpectrum]) -> OrderSpectrum {
+    mean(&spectra.iter().map(|s| s.as_slice()).collect::<Vec<_>>())
 }
 
-fn mean(spectra: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
-    let n = spectra.len().max(1) as f64;
-    let len = spectra.first().map_or(0, |s| s.len());
-    (0..len)
-        .map(|k| {
-            let (re, im) = spectra.iter().fold((0.0, 0.0), |a, s| (a.0 + s[k].0, a.1 + s[k].1));
-            (re / n, im / n)
-        })
-        .collect()
-}
-
-/// Energy of bins 1 and up.
+/// Energy of a spectrum whose DC is zero.
 fn energy(s: &[(f64, f64)]) -> f64 {
-    s.iter().skip(1).map(|c| c.0 * c.0 + c.1 * c.1).sum()
-}
-
-/// The shift (points, within +-reach) by which revolution `r` lags `template`: the maximum of their
-/// cross-correlation over bins 1..=highest, found on the whole-point grid and refined by Newton's method.
-fn shift(fft: &mut Fft, r: &[(f64, f64)], template: &[(f64, f64)], bins: &Bins) -> f64 {
-    let Bins { points, highest, reach } = *bins;
-    // C_k = R_k conj(T_k); c(l) = sum_k C_k exp(+2 pi i k l / N) peaks at the lag
-    let mut cross = vec![(0.0, 0.0); points / 2 + 1];
-    for (k, (a, b)) in r.iter().zip(template).enumerate().take(highest + 1).skip(1) {
-        cross[k] = (a.0 * b.0 + a.1 * b.1, a.1 * b.0 - a.0 * b.1);
-    }
-    let c = fft.inverse(&cross, points);
-    let lag = |l: isize| c[l.rem_euclid(points as isize) as usize];
-    let reach = reach as isize;
-    let mut at = (-reach..=reach).max_by(|&a, &b| lag(a).total_cmp(&lag(b))).unwrap_or(0) as f64;
-    // Newton on f(d) = sum_k Re(C_k exp(i w_k d)), w_k = 2 pi k / N
-    let w = std::f64::consts::TAU / points as f64;
-    for _ in 0..4 {
-        let (mut d1, mut d2) = (0.0, 0.0);
-        // exp(i w k at) by recurrence over k (a rotation per bin, not a sine and cosine)
-        let step = (w * at).sin_cos();
-        let mut turn = step;
-        for (k, &(cr, ci)) in cross.iter().enumerate().take(highest + 1).skip(1) {
-            let wk = w * k as f64;
-            let (s, co) = turn;
-            turn = (s * step.1 + co * step.0, co * step.1 - s * step.0);
-            // Re(C e^{i wk d}) = cr cos - ci sin
-            d1 += -wk * (cr * s + ci * co);
-            d2 += -wk * wk * (cr * co - ci * s);
-        }
-        if d2 >= 0.0 {
-            break;
-        }
-        let step = (-d1 / d2).clamp(-1.0, 1.0);
-        at += step;
-        if step.abs() < 1e-4 {
-            break;
-        }
-    }
-    at.clamp(-(reach as f64), reach as f64)
+    s.iter().map(|c| c.0 * c.0 + c.1 * c.1).sum()
 }
 
 #[cfg(test)]
