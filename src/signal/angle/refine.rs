@@ -41,8 +41,8 @@ pub struct Refined {
 
 /// The angle `map` of a shaft with `teeth` teeth (the mesh order it was tracked on) refined by lining every
 /// revolution of `x` up with their average; `None` when that gains less than [`MIN_GAIN`] (predicted from
-/// the first round's shifts applied to each revolution's spectrum before the record is resampled again) or
-/// for fewer than 8 revolutions.
+/// the first round's shifts applied to each revolution's spectrum before the record is resampled again;
+/// first on [`CHECK_REVS`] revolutions of a longer record) or for fewer than 8 revolutions.
 pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refined> {
     let revs = map.revolutions();
     let period = map.mean_period_samples();
@@ -53,6 +53,9 @@ pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refine
     let highest = ((HIGHEST * period) as usize).min(points / 2);
     // a third of a mesh cycle: a revolution is never moved onto the next tooth
     let reach = 1.0 / (3 * teeth) as f64;
+    if revs > CHECK_REVS && predicted_gain(&spectra_of(x, map, points, highest, spread(revs)), reach) < MIN_GAIN {
+        return None;
+    }
     let mut spectra_now = spectra(x, map, points, highest);
     let energy0 = energy(&average(&spectra_now));
     let (mut best, mut best_energy) = (None, energy0);
@@ -60,18 +63,9 @@ pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refine
     for round in 0..ROUNDS {
         let template = average(&spectra_now);
         // the lag of each revolution behind the average, revolutions in (-reach, reach)
-        let shifts: Vec<f64> = spectra_now
-            .par_iter()
-            .map_init(Fft::new, |fft, r| {
-                let s = align_within(fft, r, &template, reach).shift;
-                if s > 0.5 { s - 1.0 } else { s }
-            })
-            .collect();
-        if round == 0 {
-            let lined_up: Vec<OrderSpectrum> = spectra_now.iter().zip(&shifts).map(|(r, &d)| advanced(r, d)).collect();
-            if energy(&average(&lined_up)) < MIN_GAIN * MIN_GAIN * energy0 {
-                return None;
-            }
+        let shifts = lags(&spectra_now, &template, reach);
+        if round == 0 && lined_up_gain(&spectra_now, &template, &shifts) < MIN_GAIN {
+            return None;
         }
         let Some(next) = moved(&current, &shifts) else { break };
         current = next;
@@ -83,6 +77,41 @@ pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refine
     }
     let gain = (best_energy / energy0).sqrt();
     best.filter(|_| gain >= MIN_GAIN).map(|map| Refined { map, gain })
+}
+
+/// Revolutions beyond which the first round's prediction is made on [`CHECK_REVS`] of them spread over the
+/// record before the whole record is resampled (a minute at 30 Hz is 1800 revolutions, 0.2 s of resampling
+/// and alignment for an angle that usually needs nothing). Fewer revolutions hold more noise in their
+/// average, which the shifts partly line up too: the prediction from a sample errs towards a gain, so an
+/// angle that would gain is not skipped for it.
+const CHECK_REVS: usize = 256;
+
+/// [`CHECK_REVS`] revolution numbers spread evenly over `revs`.
+fn spread(revs: usize) -> Vec<usize> {
+    (0..CHECK_REVS).map(|i| i * revs / CHECK_REVS).collect()
+}
+
+/// The lag of each revolution's spectrum behind `template`, revolutions in (-reach, reach).
+fn lags(spectra: &[OrderSpectrum], template: &[(f64, f64)], reach: f64) -> Vec<f64> {
+    spectra
+        .par_iter()
+        .map_init(Fft::new, |fft, r| {
+            let s = align_within(fft, r, template, reach).shift;
+            if s > 0.5 { s - 1.0 } else { s }
+        })
+        .collect()
+}
+
+/// RMS of the average of `spectra` each advanced by its shift over the RMS of their average `template`.
+fn lined_up_gain(spectra: &[OrderSpectrum], template: &[(f64, f64)], shifts: &[f64]) -> f64 {
+    let lined_up: Vec<OrderSpectrum> = spectra.iter().zip(shifts).map(|(r, &d)| advanced(r, d)).collect();
+    (energy(&average(&lined_up)) / energy(template)).sqrt()
+}
+
+/// The gain in RMS that one round of lining `spectra` up with their average would give.
+fn predicted_gain(spectra: &[OrderSpectrum], reach: f64) -> f64 {
+    let template = average(spectra);
+    lined_up_gain(spectra, &template, &lags(spectra, &template, reach))
 }
 
 /// `map` with revolution k's shift `shifts[k]` (revolutions) moved onto the revolution starts (start k
@@ -108,6 +137,25 @@ fn spectra<T: Sample>(x: &[T], map: &AngleMap, points: usize, highest: usize) ->
     y.par_chunks_exact(points).map_init(Fft::new, |fft, r| order_spectrum(fft, r, highest)).collect()
 }
 
+/// The order spectra of the revolutions `revs` of `x` on `map`, as [`spectra`] gives them.
+fn spectra_of<T: Sample>(
+    x: &[T],
+    map: &AngleMap,
+    points: usize,
+    highest: usize,
+    revs: Vec<usize>,
+) -> Vec<OrderSpectrum> {
+    revs.into_par_iter()
+        .map_init(
+            || (Fft::new(), vec![0.0; points]),
+            |(fft, y), k| {
+                map.resample(x, k as f64, 1.0 / points as f64, y);
+                order_spectrum(fft, y, highest)
+            },
+        )
+        .collect()
+}
+
 /// The mean of the revolutions' spectra.
 fn average(spectra: &[OrderSpectrum]) -> OrderSpectrum {
     mean(&spectra.iter().map(|s| s.as_slice()).collect::<Vec<_>>())
@@ -129,7 +177,18 @@ mod tests {
     /// gives.
     #[test]
     fn a_jittered_angle_is_lined_up_by_the_average() {
-        let (z, period, revs) = (18usize, 1500.0f64, 60usize);
+        jittered_angle_lined_up(60);
+    }
+
+    /// The same over more than [`CHECK_REVS`] revolutions, where the first round is predicted on a sample
+    /// of them: the sample must not refuse an angle that gains.
+    #[test]
+    fn a_long_jittered_angle_passes_the_sampled_check() {
+        jittered_angle_lined_up(3 * CHECK_REVS / 2);
+    }
+
+    fn jittered_angle_lined_up(revs: usize) {
+        let (z, period) = (18usize, 1500.0f64);
         let n = (period * revs as f64) as usize + 10;
         // theta(t) = t / period + a sin(2 pi f t): a 1 % fluctuation of a cycle per 7 revolutions
         let f = 1.0 / (7.0 * period);
@@ -178,10 +237,16 @@ mod tests {
         assert!(r.gain > 2.0, "gain {}", r.gain);
     }
 
-    /// On the true angle there is nothing to gain: no refined angle is given.
+    /// On the true angle there is nothing to gain: no refined angle is given, whether the first round is
+    /// predicted on every revolution or on a sample of them.
     #[test]
     fn a_right_angle_stays() {
-        let (z, period, revs) = (13usize, 1024.0f64, 40usize);
+        right_angle_stays(40);
+        right_angle_stays(2 * CHECK_REVS);
+    }
+
+    fn right_angle_stays(revs: usize) {
+        let (z, period) = (13usize, 1024.0f64);
         let x: Vec<f64> = (0..(period as usize * revs + 5))
             .map(|i| {
                 let th = i as f64 / period;
