@@ -92,6 +92,17 @@ fn real_period_estimate_is_the_repetition_period() {
     // the hunting period of the unloaded rig is a whole number of the revolutions found
     assert!((2151.0 / p0 - 5.0).abs() < 0.02, "{p0}");
     assert_eq!(d0["teeth_source"], "estimated");
+    // the same gearbox's mesh order must not change with the load unannounced: where the family of half the
+    // order is taken (its odd harmonics 16 and 48 lie about 20 dB under 32 and 64 in the spectrum), the
+    // output says it may be the double
+    for d in [&d0, &d90] {
+        let z = d["mesh_order"].as_u64().unwrap();
+        let said = d["warnings"].as_array().unwrap().iter().any(|w| {
+            let w = w.as_str().unwrap();
+            w.contains(&format!("mesh order {z} may be {}", 2 * z))
+        });
+        assert!(z == 32 || (z == 16 && said), "mesh order {z}: {}", d["warnings"]);
+    }
 }
 
 /// Without a baseline the real rig's healthy recordings are kept healthy: their gears' own pattern (FM4 up

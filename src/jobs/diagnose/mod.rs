@@ -34,7 +34,8 @@ pub use compat::{
 use recording::*;
 pub use recording::{MIN_SAMPLES_PER_REV, PINION_TACHO, SAMPLE_RATE_RANGE_HZ, diagnose, diagnose_in_memory};
 use teeth::{
-    MIN_OTHER_GEAR_CONFIDENCE, WHEEL_DOUBT_RATIO, WheelCheck, mesh_family, other_gear_teeth, teeth_misfit, wheel_teeth,
+    MIN_OTHER_GEAR_CONFIDENCE, WHEEL_DOUBT_RATIO, WheelCheck, doubled_family, mesh_family, other_gear_teeth,
+    teeth_misfit, wheel_teeth,
 };
 use tracking::{Tracked, nominal_speed, strongest_low_harmonic, track};
 

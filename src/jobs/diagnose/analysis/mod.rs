@@ -179,6 +179,17 @@ fn teeth_scan(x: &[f32], map: &AngleMap, o: &Options, z: usize) -> TeethScan {
     }
 }
 
+/// The warning that an estimated mesh order `z` may be `2z`, its odd harmonics `db` (negative) under its
+/// even ones.
+fn doubled_note(z: usize, db: f64) -> String {
+    format!(
+        "the estimated mesh order {z} may be {}: the odd harmonics of {z} stand {:.0} dB under its even ones, which the family {} alone explains; the teeth would decide",
+        2 * z,
+        -db,
+        2 * z
+    )
+}
+
 /// Average stage: the TSAs of every channel, gear by gear (each in parallel runs of blocks, the channels
 /// sharing the angle's interpolation); each block's indicators as the block completes when the gear's mesh
 /// order is known (else the block is kept until the TSAs give it); beside them the teeth scan when the
@@ -304,6 +315,9 @@ fn gear_results(
                 z
             }
         };
+        if teeth_source == TeethSource::Estimated {
+            warnings.extend(doubled_family(fft, averages(), z).map(|db| doubled_note(z, db)));
+        }
         check_mesh_order(path, z, plan.points, *name, shaft.source)?;
         check_teeth(path, checked.tacho, o, *name, z, averages, warnings)?;
         mesh_orders.push(z);
