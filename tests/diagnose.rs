@@ -65,6 +65,9 @@ fn real_recordings_against_parts_of_themselves_and_other_loads() {
         for (x, y) in [(&h1, &h2), (&h2, &h1)] {
             let d = diag_json(&[x, "--fs-unknown", "--baseline", y]);
             assert_eq!(d["verdict"]["state"], "healthy", "load {load}: {}", d["verdict"]);
+            // the single baseline file's halves give the local change its healthy figures: it is measured
+            let measured = d["local_change"].as_array().is_some_and(|c| c.iter().any(|c| c["limit"].is_number()));
+            assert!(measured, "load {load}: no local change against one file: {}", d["local_change"]);
         }
         let d = diag_json(&[&b1, "--fs-unknown", "--baseline", &h1]);
         let state = d["verdict"]["state"].as_str().unwrap();
@@ -122,6 +125,27 @@ fn rec(name: &str) -> String {
 
 fn pinion(d: &serde_json::Value, key: &str) -> f64 {
     d["gears"].as_array().unwrap().iter().find(|g| g["gear"] == "pinion").unwrap()["indicators"][key].as_f64().unwrap()
+}
+
+/// One healthy file as the baseline: its halves stand in for two files, so the local change is scored. The
+/// scene cracks pinion tooth 3 (`data/scenes`, the recording's sidecar): the change is on the pinion, over
+/// its limit, at tooth 3 (counted from the tachometer's origin); the healthy recording against itself stays
+/// under it.
+#[test]
+fn one_healthy_file_scores_the_local_change() {
+    let args = |name: &str| -> Vec<String> {
+        [rec(name), "--teeth".into(), "14,39".into(), "--baseline".into(), rec("healthy")].into()
+    };
+    let change = |d: &serde_json::Value| -> serde_json::Value {
+        d["local_change"].as_array().unwrap().iter().find(|c| c["gear"] == "pinion").unwrap().clone()
+    };
+    let cracked = diag_json(&args("cracked-pinion-tooth3").iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    let c = change(&cracked);
+    assert!(c["value"].as_f64().unwrap() > c["limit"].as_f64().unwrap(), "{c}");
+    assert_eq!(c["tooth"], 3, "{c}");
+    let healthy = diag_json(&args("healthy").iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    let h = change(&healthy);
+    assert!(h["value"].as_f64().unwrap() < h["limit"].as_f64().unwrap(), "{h}");
 }
 
 #[test]

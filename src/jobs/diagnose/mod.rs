@@ -261,7 +261,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
 fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Error> {
     let mut opts = options.clone();
     let baseline_files = expand_dirs(paths)?;
-    opts.residual_spectra = baseline_files.len() >= 2;
+    opts.residual_spectra = !baseline_files.is_empty();
     let mut first = baseline_files.first().map(|b| diagnose(b, &opts, None)).transpose()?;
     if let (Some(b), None) = (&first, opts.block_revs) {
         let revs = b.gears.iter().map(|g| g.revolutions).min().unwrap_or(0) * baseline_files.len();
@@ -529,7 +529,7 @@ pub struct Options {
     /// the JSON and the images use the deciding channel's alone; a library caller may want them all.
     #[serde(skip)]
     pub all_spectra: bool,
-    /// Keep each block's residual order spectrum for the change against a baseline (set when two healthy
+    /// Keep each block's residual order spectrum for the change against a baseline (set when healthy
     /// files or a profile are given: the recordings and the baseline files then need them; otherwise they
     /// would cost 17 MB on a 60 s, 4-channel recording for nothing).
     #[serde(skip)]
