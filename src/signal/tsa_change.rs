@@ -110,9 +110,11 @@ pub fn align_within(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], r
     buf[..len].copy_from_slice(&c);
     fft.inverse_complex(&mut buf);
     // grid points within the reach, as signed offsets (all of them at a reach of half a revolution)
-    let half = ((reach * grid as f64) as isize).min(grid as isize / 2);
-    let at = |l: isize| buf[l.rem_euclid(grid as isize) as usize].0;
-    let best = (-half..=half.min(grid as isize / 2 - 1)).max_by(|&a, &b| at(a).total_cmp(&at(b))).unwrap_or(0);
+    let half = ((reach * grid as f64) as usize).min(grid / 2);
+    // offsets -half ..= -1 (the buffer's end), then 0 ..= min(half, grid / 2 - 1): the last maximum wins
+    let negative = (grid - half..grid).map(|i| (i as isize - grid as isize, buf[i].0));
+    let positive = (0..=half.min(grid / 2 - 1)).map(|i| (i as isize, buf[i].0));
+    let best = negative.chain(positive).max_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |p| p.0);
     let mut s = best as f64 / grid as f64;
     for _ in 0..4 {
         let (_, d1, d2) = correlation_at(&c, s);

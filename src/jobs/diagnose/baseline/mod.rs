@@ -441,7 +441,7 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> LocalRefer
     let mut reference = tsa_change::mean(&slices(&files[0]));
     let mut aligned: Vec<OrderSpectrum> = Vec::new();
     for _ in 0..2 {
-        aligned = files.iter().map(|f| aligned_mean(fft, f, &reference)).collect();
+        aligned = files.iter().map(|f| aligned_mean(f, &reference)).collect();
         reference = tsa_change::mean(&slices(&aligned));
     }
     for f in 0..aligned.len() {
@@ -469,10 +469,14 @@ struct LocalReference {
     pattern_healthy: Vec<f64>,
 }
 
-/// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first.
-fn aligned_mean(fft: &mut Fft, blocks: &[OrderSpectrum], reference: &[(f64, f64)]) -> OrderSpectrum {
-    let shifted: Vec<OrderSpectrum> =
-        blocks.iter().map(|b| tsa_change::advanced(b, tsa_change::align(fft, b, reference).shift)).collect();
+/// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first (the blocks in
+/// parallel, each with a transform of four times its orders).
+fn aligned_mean(blocks: &[OrderSpectrum], reference: &[(f64, f64)]) -> OrderSpectrum {
+    use rayon::prelude::*;
+    let shifted: Vec<OrderSpectrum> = blocks
+        .par_iter()
+        .map_init(Fft::new, |fft, b| tsa_change::advanced(b, tsa_change::align(fft, b, reference).shift))
+        .collect();
     tsa_change::mean(&slices(&shifted))
 }
 
@@ -497,7 +501,7 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     // each block shifted onto the baseline's origin (a tracked angle wanders slowly between blocks), then
     // the mean and the baseline's delayed together onto the recording's own origin, so that teeth count
     // from the recording's
-    let mean = tsa_change::advanced(&aligned_mean(fft, &own, &r.residual_mean), -a.shift);
+    let mean = tsa_change::advanced(&aligned_mean(&own, &r.residual_mean), -a.shift);
     let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
     let z = g.mesh_order;
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
