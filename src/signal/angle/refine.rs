@@ -42,7 +42,7 @@ pub struct Refined {
 /// The angle `map` of a shaft with `teeth` teeth (the mesh order it was tracked on) refined by lining every
 /// revolution of `x` up with their average; `None` when that gains less than [`MIN_GAIN`] (predicted from
 /// the first round's shifts applied to each revolution's spectrum before the record is resampled again;
-/// first on [`CHECK_REVS`] revolutions of a longer record) or for fewer than 8 revolutions.
+/// first on 256 revolutions spread over a longer record) or for fewer than 8 revolutions.
 pub fn refine<T: Sample>(x: &[T], map: &AngleMap, teeth: usize) -> Option<Refined> {
     let revs = map.revolutions();
     let period = map.mean_period_samples();
