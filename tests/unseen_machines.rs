@@ -606,8 +606,9 @@ fn without_a_baseline_no_healthy_recording_is_faulty() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
-/// The scorecard: every recording diagnosed with the speed, with the tachometer, each with and without the
-/// sibling baseline; a table on stdout and counts at the end. Never fails (it reports). With
+/// The scorecard: every recording diagnosed with the speed, with the tachometer, with the teeth only, each
+/// without a baseline, against two healthy siblings (`+baseline`) and against one (`+sibling`, a single
+/// healthy file); a table on stdout and counts at the end. Never fails (it reports). With
 /// `GEARVIB_MORE_MACHINES=1` it reads the machines no threshold was set on ([`more_machines`]) instead.
 #[test]
 #[ignore = "scorecard: prints a table; run with --ignored --nocapture"]
@@ -621,16 +622,24 @@ fn scorecard() {
         let all: Vec<&Case> = healthy.iter().chain(&faults).collect();
         for case in all {
             for mode in [Mode::Speed, Mode::Tacho, Mode::Teeth] {
-                for with_base in [false, true] {
-                    let base: Vec<&Case> = if !with_base {
-                        vec![]
-                    } else if case.fault.is_none() {
-                        healthy.iter().filter(|h| h.seed != case.seed).collect()
+                // no baseline, two siblings, one sibling (a single healthy file)
+                for siblings in [0usize, 2, 1] {
+                    let with_base = siblings > 0;
+                    let base: Vec<&Case> = if case.fault.is_none() {
+                        healthy.iter().filter(|h| h.seed != case.seed).take(siblings).collect()
                     } else {
-                        vec![&healthy[0], &healthy[1]]
+                        healthy.iter().take(siblings).collect()
                     };
                     let o = diagnose(case, mode, &base);
-                    let key = format!("{}{}", mode.name(), if with_base { "+baseline" } else { "" });
+                    let key = format!(
+                        "{}{}",
+                        mode.name(),
+                        match siblings {
+                            0 => "",
+                            1 => "+sibling",
+                            _ => "+baseline",
+                        }
+                    );
                     let entry = counts.entry(key.clone()).or_default();
                     let flagged = o.state == "suspect" || o.state == "faulty";
                     let note = match case.fault {
