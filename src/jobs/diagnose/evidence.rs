@@ -133,7 +133,7 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
         v
     };
     let reason = format!(
-        "{other} (channel {}): its own teeth changed against the baseline: the pattern around its mesh harmonics (each harmonic's change of amplitude and phase taken out) differs by {} of its energy (the baseline's own files by at most {}), the {gear}'s by {} ({}): the {gear}'s {} measure the mesh both averages share, so the change is put on the {other} (one value per recording, so it names the gear, not the state)",
+        "{other} (channel {}): its own teeth changed against the baseline: the pattern around its mesh harmonics (each harmonic's change of amplitude and phase taken out) differs by {} of its energy (healthy recordings by at most {}: the baseline's files against each other, a single file's halves counted twice), the {gear}'s by {} ({}): the {gear}'s {} measure the mesh both averages share, so the change is put on the {other} (one value per recording, so it names the gear, not the state)",
         theirs.3,
         num(theirs.1),
         num(theirs.2),
@@ -174,7 +174,7 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                 c.value / c.limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): local change{at} against the baseline's average: the difference's largest tooth pitch holds {} times the median pitch's energy (the baseline's own files differ by at most {}; limit {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): local change{at} against the baseline's average: the difference's largest tooth pitch holds {} times the median pitch's energy (healthy recordings differ by at most {}: the baseline's files against each other, a single file's halves counted twice; limit {}): the average changed at one tooth, as a crack, a spall or a broken tooth changes it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
                     num(c.value),
@@ -188,7 +188,7 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                 c.sidebands / c.sidebands_limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (its own files at most {}; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (healthy recordings at most {}: the baseline's files against each other, a single file's halves counted twice; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
                     num(c.sidebands),
