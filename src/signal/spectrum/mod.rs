@@ -35,9 +35,10 @@ fn plans() -> std::sync::MutexGuard<'static, Plans> {
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
-/// Longest transform (entries) whose plan the process keeps: a record-long plan's twiddles (15 MB for the
-/// order spectrum of a 60 s recording, 4 MB for a teeth scan's baseband) are freed after use.
-const KEPT_PLAN: usize = 1 << 17;
+/// Longest transform (entries) whose plan the process keeps: a teeth scan's baseband of up to 2^18 entries
+/// (4 MB of twiddles) is planned once for its two harmonics and the next recordings of a batch; a longer
+/// plan's twiddles (15 MB for the order spectrum of a 60 s recording) are freed after use.
+const KEPT_PLAN: usize = 1 << 18;
 
 fn real_forward(n: usize) -> std::sync::Arc<dyn realfft::RealToComplex<f64>> {
     if n <= KEPT_PLAN { plans().real.plan_fft_forward(n) } else { RealFftPlanner::new().plan_fft_forward(n) }
@@ -293,8 +294,53 @@ pub fn averaged_power<T: Sample>(
     overlap: f64,
     what: &str,
 ) -> Result<(Vec<f64>, usize), SignalError> {
-    averaged_power_each(fft, x, segment, overlap, what, false, |_, _, _| {})
+    use rayon::prelude::*;
+    if x.len() < 8 {
+        return Err(SignalError::TooShort { what: what.into(), needed: 8, got: x.len() });
+    }
+    let n = segment.min(x.len()).max(8);
+    let step = ((n as f64 * (1.0 - overlap)).round() as usize).max(1);
+    let count = (x.len() - n) / step + 1;
+    // the segments in at most POWER_PARTS runs of consecutive ones, each summed in order on its own and the
+    // runs' sums added in order: the same sums whatever the number of threads
+    let parts = (count / MIN_SEGMENTS_PER_PART).clamp(1, POWER_PARTS);
+    let w = hann(n);
+    let run = |fft: &mut Fft, part: usize| {
+        let mut acc = vec![0.0; n / 2 + 1];
+        let (mut buf, mut out) = (vec![0.0; n], Vec::new());
+        for i in part * count / parts..(part + 1) * count / parts {
+            let seg = &x[i * step..i * step + n];
+            let mean = seg.iter().map(|v| v.f()).sum::<f64>() / n as f64;
+            for ((bv, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
+                *bv = (v.f() - mean) * wi;
+            }
+            fft.forward(&mut buf, &mut out);
+            for (p, c) in acc.iter_mut().zip(&out) {
+                *p += c.0 * c.0 + c.1 * c.1;
+            }
+        }
+        acc
+    };
+    let mut acc = if parts == 1 {
+        run(fft, 0)
+    } else {
+        let sums: Vec<Vec<f64>> = (0..parts).into_par_iter().map(|part| run(&mut Fft::new(), part)).collect();
+        sums.into_iter()
+            .reduce(|mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(s, v)| *s += v);
+                a
+            })
+            .expect("at least one part")
+    };
+    acc.iter_mut().for_each(|a| *a /= count as f64);
+    Ok((acc, n))
 }
+
+/// Most runs of segments [`averaged_power`] sums in parallel (their sums held at once: 16 half-spectra).
+const POWER_PARTS: usize = 16;
+
+/// Fewest segments a run of [`averaged_power`] holds (fewer segments are summed in one run).
+const MIN_SEGMENTS_PER_PART: usize = 4;
 
 /// [`averaged_power`], handing every segment's spectrum to `each(fft, start, spectrum)` (start in samples)
 /// as it is made, so one pass of transforms serves several analyses. With `padded`, the segments also run
