@@ -929,3 +929,46 @@ fn an_estimate_that_gives_no_averages_asks_for_the_speed() {
         assert!((hz / m.shaft_hz - 1.0).abs() < 0.025, "{hz} Hz: {}", d["verdict"]);
     }
 }
+
+/// Sidebands of a count dividing the given wheel's are the given wheel's higher sidebands, not another
+/// wheel: a 16/45 pair (as the hold-out's broken 45-tooth wheel, whose +-5 sidebands stood over its +-1
+/// through the housing's resonance) with lines added at the mesh's +-5 wheel orders (+-16 * 5 / 45 =
+/// +-1.7778 pinion orders, where a wheel of 9 teeth puts its +-1) is not told its 45 teeth do not fit (it
+/// was: "a wheel of 9 teeth"); 44 teeth given, which 9 does not divide, are still said not to fit.
+#[test]
+fn a_wheels_higher_sidebands_do_not_contradict_its_teeth() {
+    let m = Machine {
+        name: "z16z45-20Hz-fs20k",
+        zp: 16,
+        zw: 45,
+        shaft_hz: 20.0,
+        fs: 20_000.0,
+        duration_s: 8.0,
+        contact_ratio: 1.6,
+        fan_blades: 0,
+        seed: 1645,
+    };
+    let mut rng = common::gearbox_gen::Rng::new(45);
+    let env = Environment::plant(0, &mut rng);
+    let mut rec = generate(&m, None, 3, Some(&env), m.duration_s);
+    let a = 0.5 * rec.gear_rms;
+    let d = 5.0 * 16.0 / 45.0;
+    for (v, th) in rec.accel.iter_mut().zip(&rec.angle) {
+        for (k, o) in [16.0 - d, 16.0 + d, 32.0 - d, 32.0 + d].into_iter().enumerate() {
+            *v += a * (o * th + k as f64).sin();
+        }
+    }
+    let dir = temp_dir("wheel-higher-sidebands");
+    let path = dir.join("z16z45-sidebands5.wav");
+    write_wav(&path, &rec);
+    let path = path.to_string_lossy().into_owned();
+    let warnings = |teeth: &str| {
+        let run = gearvib(&["diagnose", &path, "--json", "--channel", "1", "--tacho-channel", "2", "--teeth", teeth]);
+        let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+        d["warnings"].to_string()
+    };
+    let w = warnings("16,45");
+    assert!(!w.contains("do not fit"), "{w}");
+    let w = warnings("16,44");
+    assert!(w.contains("given wheel teeth (44) do not fit"), "{w}");
+}

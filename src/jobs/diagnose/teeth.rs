@@ -137,6 +137,11 @@ impl GearLines {
     fn score(&self) -> f64 {
         self.first_score + self.more_score
     }
+
+    /// Whether its +-1 lines stand: two at least, and three quarters of those read.
+    fn stands(&self) -> bool {
+        self.first_present >= 2 && 4 * self.first_present >= 3 * self.first_read
+    }
 }
 
 /// The other gear's lines around the first two mesh harmonics, read on the tracked shaft's angle over
@@ -238,10 +243,7 @@ fn other_gear_scan(x: &[f32], map: &AngleMap, z: usize, extra: Option<usize>) ->
 /// The best-scoring count of a scan among those with at least three quarters of their +-1 lines present
 /// (and at least two).
 fn best_other_gear(scan: &[GearLines]) -> Option<GearLines> {
-    scan.iter()
-        .copied()
-        .filter(|g| g.first_present >= 2 && 4 * g.first_present >= 3 * g.first_read)
-        .max_by(|a, b| a.score().total_cmp(&b.score()))
+    scan.iter().copied().filter(GearLines::stands).max_by(|a, b| a.score().total_cmp(&b.score()))
 }
 
 /// What the given wheel teeth's check says when it has something to say.
@@ -273,10 +275,24 @@ impl WheelCheck {
 /// than the given count's, unchecked when no count has its +-1 lines, else nothing to say.
 pub(super) fn wheel_teeth(x: &[f32], map: &AngleMap, zp: usize, zw: usize) -> Option<WheelCheck> {
     let scan = other_gear_scan(x, map, zp, Some(zw))?;
+    // a count dividing the given one puts its +-1 lines on the given wheel's +-(zw / n) lines, which a local
+    // wheel fault lifts as much as its first ones (the hold-out's broken 45-tooth wheel: its +-5 lines, a
+    // wheel of 9's +-1, stood 4 times over its +-1 lines through the housing's resonance): they fit the given
+    // teeth and cannot contradict them (a given count twice the true one goes unflagged: its averages span
+    // two revolutions and still hold the wheel's faults)
+    let (scan, divisors): (Vec<GearLines>, Vec<GearLines>) =
+        scan.into_iter().partition(|g| g.teeth == zw || !zw.is_multiple_of(g.teeth));
     let Some(best) = best_other_gear(&scan) else {
-        return Some(WheelCheck::Unchecked(format!(
-            "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
-        )));
+        return Some(WheelCheck::Unchecked(match best_other_gear(&divisors) {
+            Some(d) => format!(
+                "the wheel's teeth ({zw}) could not be checked on its first sidebands: only lines at +-{:.4} pinion orders stand, the given wheel's +-{} sidebands (which fit it)",
+                zp as f64 / d.teeth as f64,
+                zw / d.teeth
+            ),
+            None => format!(
+                "the wheel's teeth ({zw}) could not be checked: no wheel's +-1 sidebands stand 12 dB above their floor around the first two mesh harmonics (a true-running healthy wheel shows none)"
+            ),
+        }));
     };
     let first = scan.iter().find(|g| g.teeth == zw).map_or(0.0, |g| g.first_amplitude);
     let ratio = best.first_amplitude / first.max(f64::MIN_POSITIVE);
