@@ -737,3 +737,20 @@ fn a_noise_free_simulation_is_healthy_against_itself() {
     let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
     assert_eq!(d["verdict"]["state"], "healthy", "{}", d["verdict"]);
 }
+
+/// Without a sample rate each shaft's revolution is printed in samples, the wheel's from its own ratio:
+/// on the real 90 % load recording with the teeth 32,80 the wheel's revolution is 80 / 32 of the pinion's
+/// (it printed the pinion's for both); to the four significant digits printed (5e-4 each).
+#[test]
+fn without_a_sample_rate_each_shaft_has_its_own_revolution() {
+    let run = gearvib(&["diagnose", &real("h30hz90"), "--fs-unknown", "--teeth", "32,80"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let line = run.stdout.lines().find(|l| l.starts_with("speed")).expect("a speed line");
+    let period = |shaft: &str| -> f64 {
+        let at = line.find(&format!("{shaft}: one revolution every ")).unwrap_or_else(|| panic!("{line}"));
+        let rest = &line[at + shaft.len() + ": one revolution every ".len()..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let ratio = period("wheel") / period("pinion");
+    assert!((ratio / 2.5 - 1.0).abs() < 1e-3, "{line}");
+}

@@ -69,11 +69,14 @@ pub fn diagnosis(
         .shaft_hz
         .entries()
         .into_iter()
-        .map(|(k, v)| {
+        .zip(d.shaft_hz.shafts())
+        .filter_map(|((k, v), shaft)| {
             let k = if k == "estimated_shaft" { "shaft of the estimated period" } else { k };
             match v {
-                Some(f) => format!("{k} {} Hz", num(f)),
-                None => format!("{k}: one revolution every {} samples", num(d.shaft_period_samples)),
+                Some(f) => Some(format!("{k} {} Hz", num(f))),
+                None => d
+                    .revolution_samples(shaft)
+                    .map(|period| format!("{k}: one revolution every {} samples", num(period))),
             }
         })
         .collect();

@@ -35,11 +35,15 @@ pub fn diagnosis_section(
         .shaft_hz
         .entries()
         .into_iter()
-        .map(|(k, v)| {
+        .zip(d.shaft_hz.shafts())
+        .filter_map(|((k, v), shaft)| {
             let k = if k == "estimated_shaft" { "shaft of the estimated period" } else { k };
-            v.map_or(format!("{k}: one revolution every {} samples", cell(d.shaft_period_samples)), |f| {
-                format!("{k} {} Hz ({} rpm)", cell(f), cell(60.0 * f))
-            })
+            match v {
+                Some(f) => Some(format!("{k} {} Hz ({} rpm)", cell(f), cell(60.0 * f))),
+                None => d
+                    .revolution_samples(shaft)
+                    .map(|period| format!("{k}: one revolution every {} samples", cell(period))),
+            }
         })
         .collect();
     facts.push(match (d.speed_given_hz, d.speed_deviation_percent) {

@@ -137,6 +137,20 @@ impl Diagnosis {
     pub fn tsas(&self) -> impl Iterator<Item = (&GearIndicators, &[f64], &[f64])> {
         self.gears.iter().map(|g| (g, g.tsa.as_slice(), g.tsa_amplitudes.as_slice()))
     }
+    /// Samples per revolution of `shaft` (for a recording without a sample rate): the tracked shaft's
+    /// period, a pair's wheel's that times its mesh order over the pinion's (the mesh is one line on both);
+    /// `None` for a machine's other shafts, whose ratios the machine file holds.
+    pub fn revolution_samples(&self, shaft: Shaft) -> Option<f64> {
+        let reference = *self.shaft_hz.shafts().first()?;
+        if shaft == reference {
+            return Some(self.shaft_period_samples);
+        }
+        let order = |g: Shaft| self.gears.iter().find(|x| x.gear == g).map(|x| x.mesh_order as f64);
+        match self.shaft_hz {
+            ShaftHz::Pair { .. } => Some(self.shaft_period_samples * order(shaft)? / order(reference)?),
+            _ => None,
+        }
+    }
 }
 
 macro_rules! display_by_name {
