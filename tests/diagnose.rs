@@ -754,3 +754,20 @@ fn without_a_sample_rate_each_shaft_has_its_own_revolution() {
     let ratio = period("wheel") / period("pinion");
     assert!((ratio / 2.5 - 1.0).abs() < 1e-3, "{line}");
 }
+
+/// With the teeth and neither speed nor sample rate, a mesh comb whose wheel would turn too few times for
+/// its averages is not taken for the shaft: the real 0 % load recording with 32,80 took an order-3 line
+/// for the mesh (a revolution of 4588.5 samples, a wheel of 7.7 revolutions) and was refused. Each file's
+/// revolution must be the one its repetition alone gives without the teeth (430 samples: the pair repeats
+/// every five pinion revolutions), to 0.5 % (the two estimates read different lines).
+#[test]
+fn with_the_teeth_and_no_speed_the_wheel_must_get_its_averages() {
+    for f in ["h30hz0", "b30hz0", "h30hz90"] {
+        let with = diag_json(&[&real(f), "--fs-unknown", "--teeth", "32,80"]);
+        let without = diag_json(&[&real(f), "--fs-unknown"]);
+        let (a, b) =
+            (with["shaft_period_samples"].as_f64().unwrap(), without["shaft_period_samples"].as_f64().unwrap());
+        assert!((a / b - 1.0).abs() < 5e-3, "{f}: {a} with the teeth, {b} without");
+        assert_ne!(with["verdict"]["state"], "not_judged", "{f}: {}", with["verdict"]);
+    }
+}

@@ -216,9 +216,12 @@ pub(super) fn shaft_from_comb(
     fs: Option<f64>,
 ) -> Option<MeshShaft> {
     let n = full.iter().map(|c| c.len()).min()?;
-    // a pinion of min_revs revolutions with two to spare, its mesh below a quarter of the sample rate
+    // a pinion and a wheel of min_revs revolutions each with two to spare (both are averaged: a comb
+    // read as a mesh so slow that the wheel's averages cannot be taken is not the shaft; the real rig at
+    // 0 % load with 32,80 took an order-3 line for the mesh, a wheel of 7.7 revolutions), its mesh below a
+    // quarter of the sample rate
     let (z_p, z_w) = (zp as f64, zw as f64);
-    let slowest = (min_revs.max(2) + 2) as f64 / n as f64;
+    let slowest = (min_revs.max(2) + 2) as f64 / n as f64 * (z_w / z_p).max(1.0);
     // (and a revolution long enough for the TSA to resolve both mesh orders with their sidebands:
     // analysis::check_mesh_order's 2 z + 8 orders within half its points)
     let fastest = (MESH_HIGHEST / z_p).min(1.0 / MIN_SAMPLES_PER_REV).min(1.0 / (4.0 * z_p.max(z_w) + 16.0));
