@@ -295,11 +295,7 @@ pub fn averaged_power<T: Sample>(
     what: &str,
 ) -> Result<(Vec<f64>, usize), SignalError> {
     use rayon::prelude::*;
-    if x.len() < 8 {
-        return Err(SignalError::TooShort { what: what.into(), needed: 8, got: x.len() });
-    }
-    let n = segment.min(x.len()).max(8);
-    let step = ((n as f64 * (1.0 - overlap)).round() as usize).max(1);
+    let (n, step) = segments(x.len(), segment, overlap, what)?;
     let count = (x.len() - n) / step + 1;
     // the segments in at most POWER_PARTS runs of consecutive ones, each summed in order on its own and the
     // runs' sums added in order: the same sums whatever the number of threads
@@ -309,15 +305,9 @@ pub fn averaged_power<T: Sample>(
         let mut acc = vec![0.0; n / 2 + 1];
         let (mut buf, mut out) = (vec![0.0; n], Vec::new());
         for i in part * count / parts..(part + 1) * count / parts {
-            let seg = &x[i * step..i * step + n];
-            let mean = seg.iter().map(|v| v.f()).sum::<f64>() / n as f64;
-            for ((bv, v), wi) in buf.iter_mut().zip(seg).zip(&w) {
-                *bv = (v.f() - mean) * wi;
-            }
+            windowed(&mut buf, &x[i * step..i * step + n], &w);
             fft.forward(&mut buf, &mut out);
-            for (p, c) in acc.iter_mut().zip(&out) {
-                *p += c.0 * c.0 + c.1 * c.1;
-            }
+            add_power(&mut acc, &out);
         }
         acc
     };
@@ -359,11 +349,7 @@ pub fn averaged_power_each<T: Sample>(
     padded: bool,
     mut each: impl FnMut(&mut Fft, isize, &[(f64, f64)]),
 ) -> Result<(Vec<f64>, usize), SignalError> {
-    if x.len() < 8 {
-        return Err(SignalError::TooShort { what: what.into(), needed: 8, got: x.len() });
-    }
-    let n = segment.min(x.len()).max(8);
-    let step = ((n as f64 * (1.0 - overlap)).round() as usize).max(1);
+    let (n, step) = segments(x.len(), segment, overlap, what)?;
     let w = hann(n);
     let mut acc = vec![0.0; n / 2 + 1];
     let mut buf = vec![0.0; n];
@@ -374,20 +360,14 @@ pub fn averaged_power_each<T: Sample>(
     while if padded { start < len } else { start + n as isize <= len } {
         let inside = start >= 0 && start + n as isize <= len;
         let (a, b) = (start.max(0) as usize, (start + n as isize).min(len) as usize);
-        let seg = &x[a..b];
-        let mean = seg.iter().map(|v| v.f()).sum::<f64>() / seg.len().max(1) as f64;
         let offset = (a as isize - start) as usize;
         if !inside {
             buf.iter_mut().for_each(|v| *v = 0.0);
         }
-        for ((bv, v), wi) in buf[offset..].iter_mut().zip(seg).zip(&w[offset..]) {
-            *bv = (v.f() - mean) * wi;
-        }
+        windowed(&mut buf[offset..], &x[a..b], &w[offset..]);
         fft.forward(&mut buf, &mut out);
         if inside {
-            for (p, c) in acc.iter_mut().zip(&out) {
-                *p += c.0 * c.0 + c.1 * c.1;
-            }
+            add_power(&mut acc, &out);
             count += 1;
         }
         each(fft, start, &out);
@@ -395,6 +375,35 @@ pub fn averaged_power_each<T: Sample>(
     }
     acc.iter_mut().for_each(|a| *a /= count.max(1) as f64);
     Ok((acc, n))
+}
+
+/// The segment length (`segment`, at most the record's `len` samples, at least 8) and the step between
+/// segments (samples) of a Welch average with `overlap`.
+///
+/// # Errors
+/// Fewer than 8 samples.
+fn segments(len: usize, segment: usize, overlap: f64, what: &str) -> Result<(usize, usize), SignalError> {
+    if len < 8 {
+        return Err(SignalError::TooShort { what: what.into(), needed: 8, got: len });
+    }
+    let n = segment.min(len).max(8);
+    Ok((n, ((n as f64 * (1.0 - overlap)).round() as usize).max(1)))
+}
+
+/// `buf[i]` = (`seg[i]` - mean of `seg`) `w[i]` for the samples of `seg` (a segment mean-removed and
+/// windowed).
+fn windowed<T: Sample>(buf: &mut [f64], seg: &[T], w: &[f64]) {
+    let mean = seg.iter().map(|v| v.f()).sum::<f64>() / seg.len().max(1) as f64;
+    for ((bv, v), wi) in buf.iter_mut().zip(seg).zip(w) {
+        *bv = (v.f() - mean) * wi;
+    }
+}
+
+/// `acc[k]` += |X_k|^2 of a spectrum `out`.
+fn add_power(acc: &mut [f64], out: &[(f64, f64)]) {
+    for (p, c) in acc.iter_mut().zip(out) {
+        *p += c.0 * c.0 + c.1 * c.1;
+    }
 }
 
 /// One-sided amplitude spectrum from an averaged power of `n`-point Hann segments ([`averaged_power`]):
