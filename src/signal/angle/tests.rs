@@ -192,6 +192,17 @@ fn the_phase_lock_follows_its_linear_theory() {
     assert!(e.min(1.0 - e) < 1e-9, "{e}");
 }
 
+/// Uniform noise in +-0.5 (xorshift from `seed`), its rms 0.29.
+fn uniform_noise(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
 /// A mesh harmonic at order 60 (15 teeth, fourth harmonic) with sidebands at +-1 order and noise, on a
 /// shaft whose speed swings by 1.5 % once every 8 revolutions (1.5 Hz at 12 Hz): the line's phase swings
 /// by +-1.15 cycles around a steady angle and its frequency by +-0.9 orders, beyond the demodulation's
@@ -199,14 +210,7 @@ fn the_phase_lock_follows_its_linear_theory() {
 fn fluctuating_mesh(n: usize, period: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
     let mut th = 0.0;
     let mut angle = Vec::with_capacity(n);
-    let mut state = seed;
-    let mut noise = move || {
-        // a uniform in +-0.5 (xorshift), its rms 0.29
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut noise = uniform_noise(seed);
     let x = (0..n)
         .map(|_| {
             angle.push(th);
@@ -265,16 +269,8 @@ fn a_line_lost_in_noise_is_not_locked() {
     let (n, period) = (60_000, 250.0);
     let (clean, _) = fluctuating_mesh(n, period, 9);
     // the line at 0.05 of noise of rms 2.9 (a tenth of the helper's noise, amplified 100 times)
-    let mut state = 12345u64;
-    let x: Vec<f64> = clean
-        .iter()
-        .map(|v| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            0.05 * v + 10.0 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
-        })
-        .collect();
+    let mut noise = uniform_noise(12345);
+    let x: Vec<f64> = clean.iter().map(|v| 0.05 * v + 10.0 * noise()).collect();
     let r = mesh_ridge(&x, period, 60.0).unwrap();
     assert!(lock(&x, &r.knots, period, 60.0, LOCK_NATURAL_ORDER).is_none());
     assert!(lock(&x, &r.knots, period, 60.0, LOCK_WIDE_NATURAL_ORDER).is_none());
@@ -283,15 +279,10 @@ fn a_line_lost_in_noise_is_not_locked() {
 /// A mesh comb of 20 teeth whose first harmonics lie in the noise and whose ninth stands out (a
 /// resonance), with noise of rms 1.15 times the ninth harmonic's amplitude, on a shaft whose speed swings by
 /// +-1.5 % once every 8 revolutions and +-0.5 % every 23: the ninth harmonic's frequency swings by +-2.7
-/// orders (over 40 bins of a frame of 13.6 revolutions) and its phase by +-3.4 cycles. Returns the samples and the true angle (revolutions) at each sample.
+/// orders (over 40 bins of a frame of 13.6 revolutions) and its phase by +-3.4 cycles. Returns the
+/// samples and the true angle (revolutions) at each sample.
 fn wandering_comb(n: usize, period: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut state = seed;
-    let mut noise = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut noise = uniform_noise(seed);
     // harmonic k of the mesh: its amplitude (the ninth lifted, its neighbours half as much)
     let amp = |k: usize| match k {
         9 => 1.0,

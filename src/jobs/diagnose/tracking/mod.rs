@@ -462,19 +462,28 @@ const COMB_FALLBACK_DB: f64 = 10.0;
 /// The mesh-phase tracking of the whole mesh comb of `z` teeth within +-`tolerance` of the revolution of
 /// `period` samples, on the analysed channel where its line stands highest: on each channel the ridges
 /// of the frame lengths are followed, the highest line first, until the phase-locked loop holds one (a
-/// ridge the loop loses gives an angle that slips whole cycles of the line). `None` when no channel
-/// allows it.
+/// ridge the loop loses gives an angle that slips whole cycles of the line); the channels in turn until
+/// one's line stands [`CLEAR_LINE_DB`] over its band. `None` when no channel allows it.
 fn comb_tracked(rec: &Recording, channels: &[usize], period: f64, z: usize, tolerance: f64) -> Option<angle::Tracked> {
-    channels
-        .par_iter()
-        .filter_map(|&c| {
-            let x = &rec.channels[c - 1];
-            let ridges = angle::comb_ridges(x, period, z, tolerance).ok()?;
-            ridges.into_iter().find_map(|r| angle::follow_ridge(x, r).ok().filter(|t| t.locked))
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .max_by(|a, b| a.line_snr_db.total_cmp(&b.line_snr_db))
+    // channel after channel (each comb's frames are transformed in parallel): the first whose line stands
+    // clear ends the search
+    let mut best: Option<angle::Tracked> = None;
+    for &c in channels {
+        let x = &rec.channels[c - 1];
+        let Ok(ridges) = angle::comb_ridges(x, period, z, tolerance) else { continue };
+        let found = ridges
+            .into_iter()
+            .filter(|r| r.line_snr_db >= MIN_TRACKING_SNR_DB)
+            .find_map(|r| angle::follow_ridge(x, r).ok().filter(|t| t.locked));
+        if let Some(t) = found.filter(|t| best.as_ref().is_none_or(|b| t.line_snr_db > b.line_snr_db)) {
+            let clear = t.line_snr_db >= CLEAR_LINE_DB;
+            best = Some(t);
+            if clear {
+                break;
+            }
+        }
+    }
+    best
 }
 
 /// What [`track`] gives: the angle, how it was found, the followed line's height over its band (dB) and
