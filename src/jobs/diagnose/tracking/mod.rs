@@ -453,7 +453,7 @@ pub(super) fn track(
 }
 
 /// Height of the followed mesh line over its band under which the whole mesh comb is followed as well
-/// ([`angle::comb_ridge`]) and kept when its strongest harmonic stands higher, dB: the height under which a
+/// ([`angle::comb_ridges`]) and kept when its strongest harmonic stands higher, dB: the height under which a
 /// given speed counts as not confirmed. On the hold-out's 27/35 machine (a 1.7 % speed wander within a few
 /// revolutions, sensor noise 0.57 of the signal) the single lines in frames of 8 revolutions stood 5-8 dB
 /// over their band, noise's own height; its ninth harmonic stands 11-15 dB in frames of one revolution.
