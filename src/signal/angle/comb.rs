@@ -10,9 +10,9 @@
 //! u the speed relative to the nominal f0 within +-`tolerance`, |X| the frame's Hann magnitude read by
 //! linear interpolation between bins, floor_k the median magnitude of harmonic k's search band. The mesh
 //! lines of all harmonics line up at one u while a shaft sideband of harmonic k sits at u = 1 +- 1/(k z),
-//! different for every k. Frames of about 1, 2, 4 and 8 revolutions are tried and the one whose followed
-//! harmonic stands highest over its band is kept: short frames hold a fast-wandering high harmonic in a
-//! few bins, long ones lift a steady line out of the noise.
+//! different for every k. Frames of about 1, 2, 4 and 8 revolutions each give a ridge, the one whose
+//! followed harmonic stands highest over its band first: short frames hold a fast-wandering high harmonic
+//! in a few bins, long ones lift a steady line out of the noise.
 
 use super::super::spectrum::{Fft, hann};
 use super::super::{Sample, SignalError};
@@ -106,7 +106,7 @@ pub fn comb_ridges<T: Sample>(x: &[T], period: f64, z: usize, tolerance: f64) ->
     Ok(ridges)
 }
 
-/// [`comb_ridge`] with frames of `nw` samples.
+/// One ridge of [`comb_ridges`], with frames of `nw` samples.
 fn frames_ridge<T: Sample>(x: &[T], period: f64, z: usize, tol: f64, harmonics: &[usize], nw: usize) -> MeshRidge {
     let n = x.len();
     // a quarter of a frame (with half a frame, one of the hold-out's m3 ridges was lost by the loop and
@@ -168,13 +168,9 @@ fn frame_votes(mag: &[f64], grid: &[f64], harmonics: &[usize], z: usize, bpo: f6
     let mut sum = vec![0.0; grid.len()];
     let du = if grid.len() > 1 { grid[1] - grid[0] } else { 0.0 };
     for b in &bands {
-        let top = (b.mag.len() - 1) as f64;
         let (start, step) = (grid[0] * b.centre - b.lo as f64, du * b.centre);
         for (j, s) in sum.iter_mut().enumerate() {
-            let p = (start + j as f64 * step).clamp(0.0, top);
-            let i = (p as usize).min(b.mag.len().saturating_sub(2));
-            let v = b.mag[i] + (p - i as f64) * (b.mag[(i + 1).min(b.mag.len() - 1)] - b.mag[i]);
-            *s += (v / b.floor).powi(2);
+            *s += (read(&b.mag, start + j as f64 * step) / b.floor).powi(2);
         }
     }
     FrameVotes { sum, bands }
@@ -275,8 +271,7 @@ fn read(v: &[f64], p: f64) -> f64 {
     // a cast, not floor (a library call on baseline x86-64): p is clamped to 0 or above
     let p = p.clamp(0.0, (v.len() - 1) as f64);
     let i = (p as usize).min(v.len().saturating_sub(2));
-    let t = p - i as f64;
-    if v.len() < 2 { v[0] } else { v[i] * (1.0 - t) + v[i + 1] * t }
+    if v.len() < 2 { v[0] } else { v[i] + (p - i as f64) * (v[i + 1] - v[i]) }
 }
 
 fn argmax(v: &[f64], a: usize, b: usize) -> usize {
