@@ -247,8 +247,8 @@ impl Mesh {
     /// (driving tooth j mod z1, driven tooth j mod z2) is in contact for u in [j + (1-eps)/2, j + (1+eps)/2).
     /// Calls `f(j, s)` with s in [0, 1) the position along the path.
     fn pairs(&self, u: f64, eps: f64, mut f: impl FnMut(i64, f64)) {
-        let lo = (u - 0.5 * (1.0 + eps)).floor() as i64;
-        let hi = (u - 0.5 * (1.0 - eps)).floor() as i64;
+        let lo = floor_i64(u - 0.5 * (1.0 + eps));
+        let hi = floor_i64(u - 0.5 * (1.0 - eps));
         for j in lo..=hi {
             let s = (u - j as f64 - 0.5 * (1.0 - eps)) / eps;
             if (0.0..1.0).contains(&s) {
@@ -278,13 +278,22 @@ impl Mesh {
     /// Mesh force (N) at mesh position `u` (mesh cycles); see [`Mesh::force`].
     fn force_at(&self, u: f64, runout: (f64, f64), delta: f64, rate: f64) -> f64 {
         let (runout, eps) = runout;
-        let z1 = self.drv.teeth.len() as i64;
-        let z2 = self.drn.teeth.len() as i64;
+        let (z1, z2) = (self.drv.teeth.len(), self.drn.teeth.len());
+        // the tooth indices of the first pair that may touch, then counted on (one division each per call, not
+        // per pair: the generator spends most of its time here)
+        let first = floor_i64(u - 0.5 * (1.0 + eps));
+        let (mut i1, mut i2) = (first.rem_euclid(z1 as i64) as usize, first.rem_euclid(z2 as i64) as usize);
+        let mut next = first;
         let mut force = 0.0;
         let mut touching = false;
         self.pairs(u, eps, |j, s| {
-            let t1 = &self.drv.teeth[j.rem_euclid(z1) as usize];
-            let t2 = &self.drn.teeth[j.rem_euclid(z2) as usize];
+            while next < j {
+                i1 = if i1 + 1 == z1 { 0 } else { i1 + 1 };
+                i2 = if i2 + 1 == z2 { 0 } else { i2 + 1 };
+                next += 1;
+            }
+            let t1 = &self.drv.teeth[i1];
+            let t2 = &self.drn.teeth[i2];
             let k = self.pair_stiffness(s) * t1.stiffness * t2.stiffness;
             let e = t1.error(s) + t2.error(s) + self.relief(s) + runout;
             let d = delta - e;
@@ -305,6 +314,13 @@ impl Mesh {
         }
         sum / n as f64
     }
+}
+
+/// `x.floor() as i64` without the library call (the tests are built for the baseline x86-64, which has no
+/// rounding instruction): the same integer for every finite `x` within the range of i64.
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x { t - 1 } else { t }
 }
 
 /// Number of tooth pairs in contact at mesh position `u` for contact ratio `eps` (for the tests' invariants).
