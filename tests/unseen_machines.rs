@@ -496,8 +496,9 @@ fn a_ten_percent_crack_changes_the_average_at_its_tooth() {
 }
 
 /// A profile learned from two healthy siblings holds the baseline's mean residual and how the siblings differ:
-/// `diagnose --profile` gives the same local change and sideband growth as `--baseline` with the same two
-/// files (a JSON round trip of f64 is exact; the values agree to rounding) and the same verdict.
+/// `diagnose --profile` gives the same local change and sideband growth (with its noise allowance and limit)
+/// as `--baseline` with the same two files (a JSON round trip of f64 is exact; the values agree to rounding)
+/// and the same verdict.
 #[test]
 fn a_profile_keeps_the_local_change() {
     let (healthy, crack) = healthy_and_fault("z23z41-18Hz-fs25k6", "wheel-crack10-t12");
@@ -523,14 +524,22 @@ fn a_profile_keeps_the_local_change() {
     let (a, b) = (json(&with_profile), json(&with_baseline));
     assert_eq!(a["verdict"]["state"], b["verdict"]["state"]);
     assert_eq!(a["verdict"]["gear"], "wheel", "{}", a["verdict"]);
-    let changes = |x: &serde_json::Value| -> Vec<[f64; 4]> {
+    let changes = |x: &serde_json::Value| -> Vec<[f64; 7]> {
         x["local_change"]
             .as_array()
             .map(|v| {
                 v.iter()
                     .map(|c| {
-                        ["value", "healthy", "sidebands", "sidebands_healthy"]
-                            .map(|k| c[k].as_f64().unwrap_or(f64::NAN))
+                        [
+                            "value",
+                            "healthy",
+                            "sidebands",
+                            "sidebands_healthy",
+                            "sidebands_beyond_noise",
+                            "sidebands_noise",
+                            "sidebands_limit",
+                        ]
+                        .map(|k| c[k].as_f64().unwrap_or(f64::NAN))
                     })
                     .collect()
             })

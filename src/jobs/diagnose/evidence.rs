@@ -188,11 +188,20 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                 c.sidebands / c.sidebands_limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (healthy recordings at most {}: the baseline's files against each other, a single file's halves counted twice; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (healthy recordings at most {}: the baseline's files against each other, a single file's halves counted twice{}; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
                     num(c.sidebands),
                     num(c.sidebands_healthy),
+                    if c.sidebands_noise.is_finite() && c.sidebands_beyond_noise.is_finite() {
+                        format!(
+                            "; or {} beyond their noise, plus the {} this recording's noise and the baseline's explain",
+                            num(c.sidebands_beyond_noise),
+                            num(c.sidebands_noise)
+                        )
+                    } else {
+                        String::new()
+                    },
                     num(c.sidebands_limit)
                 ),
             ));

@@ -144,8 +144,16 @@ pub struct LocalChange {
     pub sidebands: f64,
     /// The largest of the same between the baseline's own files.
     pub sidebands_healthy: f64,
-    /// From here the growth counts as evidence (`baseline::sidebands_limit`: the lower of 3 times
-    /// `sidebands_healthy` but at least 8, and 4.5 times it but at least 0.25).
+    /// The largest of the same between the baseline's own files less what their noise explains (NaN from a
+    /// profile written before it).
+    pub sidebands_beyond_noise: f64,
+    /// The growth the noise of the recording's blocks and of the baseline's average explains (their block
+    /// scatter at those orders over their block counts, over the baseline's own energy there); NaN when not
+    /// known (a profile written before it, fewer than two blocks).
+    pub sidebands_noise: f64,
+    /// From here the growth counts as evidence: the lower of `baseline::sidebands_limit` of
+    /// `sidebands_healthy` and of `sidebands_beyond_noise` + `sidebands_noise` (each the lower of 3 times
+    /// its argument but at least 8, and 4.5 times it but at least 0.25).
     pub sidebands_limit: f64,
     /// Pattern change: the difference's energy at every order that is not a mesh harmonic, after each mesh
     /// harmonic's band is scaled by its own complex factor (a change of the mesh's carrier taken out), over

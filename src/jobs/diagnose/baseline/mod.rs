@@ -15,7 +15,7 @@ use super::{Given, JobError};
 use crate::Error;
 use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft, Tracking};
 use crate::signal::spectrum::Fft;
-use crate::signal::tsa_change::{self, OrderSpectrum};
+use crate::signal::tsa_change::{self, OrderSpectrum, Scatter, SidebandChange};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -215,6 +215,15 @@ struct GearReference {
     /// The sideband growth of each baseline file against the other files'.
     #[serde(default)]
     sidebands_healthy: Vec<f64>,
+    /// The same less what the files' noise explains (see [`SidebandNoise`]); empty in profiles written
+    /// before it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    sidebands_beyond_noise: Vec<f64>,
+    /// The noise energy `residual_mean` holds at the first-order sidebands (the files' block scatter there,
+    /// each file's over its blocks, over the files squared); absent in profiles written before it, which
+    /// then score the sideband growth without a noise allowance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sidebands_noise: Option<f64>,
     /// The pattern change ([`tsa_change::pattern_change`]) of each baseline file against the other files'.
     #[serde(default)]
     pattern_healthy: Vec<f64>,
@@ -277,6 +286,8 @@ impl TryFrom<ReferenceFile> for Reference {
             let ok = g.reference.log_spectrum.iter().all(|v| v.is_finite())
                 && g.reference.residual_mean.iter().all(|c| c.0.is_finite() && c.1.is_finite())
                 && g.reference.local_healthy.iter().all(|v| v.is_finite() && *v > 0.0)
+                && g.reference.sidebands_noise.is_none_or(|v| v.is_finite() && v >= 0.0)
+                && g.reference.sidebands_beyond_noise.iter().all(|v| v.is_finite() && *v >= 0.0)
                 && g.reference.stats.values().all(|s| s.spread > 0.0 && s.centre.is_finite() && s.count > 0)
                 && g.reference.residual_var > 0.0;
             if !ok {
@@ -370,8 +381,14 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 rms_db(l, &others)
             })
             .collect();
-        let LocalReference { residual_mean, local_healthy, sidebands_healthy, pattern_healthy } =
-            local_reference(&mut fft, &per_file[&key], teeth[&key]);
+        let LocalReference {
+            residual_mean,
+            local_healthy,
+            sidebands_healthy,
+            sidebands_beyond_noise,
+            sidebands_noise,
+            pattern_healthy,
+        } = local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
         for k in Indicator::DECIDING {
             let values: Vec<f64> = match k {
@@ -395,6 +412,8 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 residual_mean,
                 local_healthy,
                 sidebands_healthy,
+                sidebands_beyond_noise,
+                sidebands_noise,
                 pattern_healthy,
             },
         );
@@ -440,10 +459,18 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> LocalRefer
     // block, so that a tracked angle's slow wander between blocks does not smear the high orders
     let mut reference = tsa_change::mean(&slices(&files[0]));
     let mut aligned: Vec<OrderSpectrum> = Vec::new();
+    let mut noise: Vec<Option<f64>> = Vec::new();
     for _ in 0..2 {
-        aligned = files.iter().map(|f| aligned_mean(f, &reference)).collect();
+        (aligned, noise) = files
+            .iter()
+            .map(|f| {
+                let (mean, scatter) = aligned_blocks(f, &reference, z);
+                (mean, scatter.map(|s| s.energy / s.blocks as f64))
+            })
+            .unzip();
         reference = tsa_change::mean(&slices(&aligned));
     }
+    let files_noise: Option<Vec<f64>> = noise.iter().copied().collect();
     for f in 0..aligned.len() {
         if aligned.len() < 2 {
             break;
@@ -452,11 +479,50 @@ fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> LocalRefer
             aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
         let r = tsa_change::mean(&others);
         out.local_healthy.extend(tsa_change::concentration(fft, &aligned[f], &r, z).map(|c| margin * c.ratio));
-        out.sidebands_healthy.extend(tsa_change::sideband_growth(&aligned[f], &r, z).map(|v| margin * v));
+        if let Some(c) = tsa_change::sideband_change(&aligned[f], &r, z) {
+            out.sidebands_healthy.push(margin * c.change / c.own);
+            if let Some(files) = &files_noise {
+                out.sidebands_beyond_noise.push(margin * SidebandNoise::between(files, f).beyond(c));
+            }
+        }
         out.pattern_healthy.extend(tsa_change::pattern_change(&aligned[f], &r, z).map(|v| margin * v));
     }
+    out.sidebands_noise = files_noise.map(|n| n.iter().sum::<f64>() / (n.len() * n.len()) as f64);
     out.residual_mean = reference;
     out
+}
+
+/// The noise at the first-order sidebands of one comparison `x - s r` ([`tsa_change::sideband_change`]):
+/// the noise energy of `x`'s mean and of `r`'s (each a block scatter over its block count), so that what a
+/// healthy recording's growth holds beyond its noise can be told from what the noise alone puts there. The
+/// halves of one file hold twice the noise a whole recording does, and a long recording less than a short
+/// one: taken out, the healthy figure keeps the change between recordings and the noise is allowed for the
+/// recording under test by its own scatter.
+#[derive(Clone, Copy, Debug)]
+struct SidebandNoise {
+    /// Noise energy of `x`'s mean.
+    x: f64,
+    /// Noise energy of `r`'s mean.
+    r: f64,
+}
+
+impl SidebandNoise {
+    /// File `f` against the mean of the others, from each file's mean's noise energy.
+    fn between(files: &[f64], f: usize) -> Self {
+        let m = (files.len() - 1).max(1) as f64;
+        let r = files.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, v)| v).sum::<f64>() / (m * m);
+        Self { x: files[f], r }
+    }
+
+    /// The growth noise explains: (noise of x + s^2 noise of r) over the reference's own energy.
+    fn growth(self, c: SidebandChange) -> f64 {
+        (self.x + c.scale * c.scale * self.r) / c.own
+    }
+
+    /// The growth beyond what the noise explains (at least 0).
+    fn beyond(self, c: SidebandChange) -> f64 {
+        ((c.change / c.own) - self.growth(c)).max(0.0)
+    }
 }
 
 /// What [`local_reference`] gives: the baseline's mean residual spectrum and how far each file's differs
@@ -466,18 +532,21 @@ struct LocalReference {
     residual_mean: OrderSpectrum,
     local_healthy: Vec<f64>,
     sidebands_healthy: Vec<f64>,
+    sidebands_beyond_noise: Vec<f64>,
+    sidebands_noise: Option<f64>,
     pattern_healthy: Vec<f64>,
 }
 
 /// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first (the blocks in
-/// parallel, each with a transform of four times its orders).
-fn aligned_mean(blocks: &[OrderSpectrum], reference: &[(f64, f64)]) -> OrderSpectrum {
+/// parallel, each with a transform of four times its orders), and their scatter at the first-order
+/// sidebands of a gear of `z` teeth.
+fn aligned_blocks(blocks: &[OrderSpectrum], reference: &[(f64, f64)], z: usize) -> (OrderSpectrum, Option<Scatter>) {
     use rayon::prelude::*;
     let shifted: Vec<OrderSpectrum> = blocks
         .par_iter()
         .map_init(Fft::new, |fft, b| tsa_change::advanced(b, tsa_change::align(fft, b, reference).shift))
         .collect();
-    tsa_change::mean(&slices(&shifted))
+    (tsa_change::mean(&slices(&shifted)), tsa_change::sideband_scatter(&shifted, z))
 }
 
 /// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
@@ -501,12 +570,28 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
     // each block shifted onto the baseline's origin (a tracked angle wanders slowly between blocks), then
     // the mean and the baseline's delayed together onto the recording's own origin, so that teeth count
     // from the recording's
-    let mean = tsa_change::advanced(&aligned_mean(&own, &r.residual_mean), -a.shift);
-    let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
     let z = g.mesh_order;
+    let (mean, scatter) = aligned_blocks(&own, &r.residual_mean, z);
+    let mean = tsa_change::advanced(&mean, -a.shift);
+    let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
-    let sidebands = tsa_change::sideband_growth(&mean, &reference, z).unwrap_or(f64::NAN);
+    let change = tsa_change::sideband_change(&mean, &reference, z);
+    let sidebands = change.map_or(f64::NAN, |c| c.change / c.own);
     let sidebands_healthy = r.sidebands_healthy.iter().copied().fold(f64::NAN, f64::max);
+    let sidebands_beyond_noise = r.sidebands_beyond_noise.iter().copied().fold(f64::NAN, f64::max);
+    // the growth the recording's own noise and the baseline's explain: a healthy recording grows by the
+    // baseline files' change beyond their noise plus that. The files' growth among themselves holds their
+    // own noise instead (a single file's halves twice a whole recording's): the lower of the two limits
+    let noise = match (change, scatter, r.sidebands_noise) {
+        (Some(c), Some(s), Some(rn)) => SidebandNoise { x: s.energy / s.blocks as f64, r: rn }.growth(c),
+        _ => f64::NAN,
+    };
+    let with_noise = sidebands_limit(sidebands_beyond_noise + noise);
+    let sidebands_limit = if with_noise.is_finite() {
+        with_noise.min(sidebands_limit(sidebands_healthy))
+    } else {
+        sidebands_limit(sidebands_healthy)
+    };
     let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
     let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
     let n = tsa_change::points(mean.len().min(reference.len()), z);
@@ -521,7 +606,9 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference) -> Opti
         tooth,
         sidebands,
         sidebands_healthy,
-        sidebands_limit: sidebands_limit(sidebands_healthy),
+        sidebands_beyond_noise,
+        sidebands_noise: noise,
+        sidebands_limit,
         pattern,
         pattern_healthy,
     })

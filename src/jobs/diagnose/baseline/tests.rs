@@ -82,3 +82,43 @@ fn the_sideband_limit_takes_the_lower_path() {
     assert!(close(sidebands_limit(5.0), 15.0), "3 x 5 is lower than 4.5 x 5");
     assert!(close(sidebands_limit(f64::NAN), SIDEBAND_MIN), "one file: the first path alone");
 }
+
+/// The growth that noise alone gives a comparison of two means of noisy blocks is what their scatter
+/// predicts, and a sideband added to one stands beyond it.
+#[test]
+fn noise_alone_grows_the_sidebands_by_what_the_scatter_predicts() {
+    use crate::signal::tsa_change::tests::noisy_blocks;
+    // 300 trials of a mean of 8 blocks against a mean of 16 (noise 0.2 on a pattern of unit lines): the
+    // growth over its prediction averages 1 (each trial's ratio is a sum of 24 noise terms, relative
+    // deviation about 0.3, so the mean of 300 is within 0.02 of its expectation; 0.08 is 4 of them)
+    let (mut sum, trials) = (0.0, 300);
+    for t in 0..trials {
+        let (xb, rb) = (noisy_blocks(8, 60, 0.2, 2 * t + 1), noisy_blocks(16, 60, 0.2, 2 * t + 2));
+        let mean = |b: &[OrderSpectrum]| tsa_change::mean(&slices(b));
+        let (x, r) = (mean(&xb), mean(&rb));
+        let c = tsa_change::sideband_change(&x, &r, 10).expect("a reference");
+        let (sx, sr) = (tsa_change::sideband_scatter(&xb, 10).unwrap(), tsa_change::sideband_scatter(&rb, 10).unwrap());
+        let n = SidebandNoise { x: sx.energy / 8.0, r: sr.energy / 16.0 };
+        sum += (c.change / c.own) / n.growth(c);
+    }
+    let ratio = sum / trials as f64;
+    assert!((ratio - 1.0).abs() < 0.08, "growth over prediction {ratio}");
+    // one sideband (order 11) raised by 0.5 in the recording's blocks: what stands beyond the noise is its
+    // energy 0.25 over the reference's sideband energy, within the noise's own scatter (the noise's
+    // expected growth is about 0.02 of that energy here; 20 % covers its spread)
+    let mut xb = noisy_blocks(8, 60, 0.2, 1001);
+    for b in &mut xb {
+        b[11].0 += 0.5;
+    }
+    let rb = noisy_blocks(16, 60, 0.2, 1002);
+    let (x, r) = (tsa_change::mean(&slices(&xb)), tsa_change::mean(&slices(&rb)));
+    let c = tsa_change::sideband_change(&x, &r, 10).expect("a reference");
+    let n = SidebandNoise {
+        x: tsa_change::sideband_scatter(&xb, 10).unwrap().energy / 8.0,
+        r: tsa_change::sideband_scatter(&rb, 10).unwrap().energy / 16.0,
+    };
+    let own: f64 =
+        [1, 9, 11, 19, 21, 29, 31, 39, 41, 49, 51, 59].iter().map(|&k| r[k].0.powi(2) + r[k].1.powi(2)).sum();
+    let expected = 0.25 / (c.scale * c.scale * own);
+    assert!((n.beyond(c) / expected - 1.0).abs() < 0.2, "{} against {expected}", n.beyond(c));
+}
