@@ -148,8 +148,9 @@ pub struct LocalChange {
     /// profile written before it).
     pub sidebands_beyond_noise: f64,
     /// The growth the noise of the recording's blocks and of the baseline's average explains (their block
-    /// scatter at those orders over their block counts, over the baseline's own energy there); NaN when not
-    /// known (a profile written before it, fewer than two blocks).
+    /// scatter at those orders over their block counts, over the baseline's own energy there), taken 7/6
+    /// times over from a single baseline file (`baseline::ONE_FILE_NOISE_MARGIN`); NaN when not known (a
+    /// profile written before it, fewer than two blocks).
     pub sidebands_noise: f64,
     /// From here the growth counts as evidence: the lower of `baseline::sidebands_limit` of
     /// `sidebands_healthy` and of `sidebands_beyond_noise` + `sidebands_noise` (each the lower of 3 times
