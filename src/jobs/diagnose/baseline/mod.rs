@@ -597,11 +597,13 @@ fn local_change_of(fft: &mut Fft, g: &GearIndicators, r: &GearReference, one_fil
         (Some(c), Some(s), Some(rn)) => margin * SidebandNoise { x: s.energy / s.blocks as f64, r: rn }.growth(c),
         _ => f64::NAN,
     };
-    let with_noise = sidebands_limit(sidebands_beyond_noise + noise);
-    let sidebands_limit = if with_noise.is_finite() {
-        with_noise.min(sidebands_limit(sidebands_healthy))
+    // (`sidebands_limit` of NaN is the first path's floor, so the noise path is taken only when both parts
+    // are known: a profile written before them, or a recording of one block, keeps the files' limit)
+    let files_limit = sidebands_limit(sidebands_healthy);
+    let sidebands_limit = if noise.is_finite() && sidebands_beyond_noise.is_finite() {
+        sidebands_limit(sidebands_beyond_noise + noise).min(files_limit)
     } else {
-        sidebands_limit(sidebands_healthy)
+        files_limit
     };
     let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
     let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
