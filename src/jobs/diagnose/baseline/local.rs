@@ -1,0 +1,192 @@
+//! The change of a gear's average against the baseline's: the baseline files' mean residual and how far
+//! each file differs from the others ([`local_reference`]), and a recording's local change, sideband growth
+//! (with the noise its comparison carries) and pattern change against them ([`local_change_of`]).
+
+use super::*;
+
+/// The local-change reference of one gear and channel of `z` teeth from the baseline's blocks grouped by
+/// file: the mean residual spectrum of the files, each shifted onto their common origin, and the local
+/// change of each file's mean against the mean of the other files (a new recording differs from the
+/// baseline by its load, speed and noise, as the files differ among themselves). A single file of at
+/// least 2 [`MIN_BASELINE_BLOCKS`] blocks stands in for two by its halves, whose figures are taken
+/// [`ONE_FILE_MARGIN`] times over.
+pub(super) fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) -> LocalReference {
+    let mut files: Vec<Vec<OrderSpectrum>> = files.iter().map(|f| spectra(f)).filter(|s| !s.is_empty()).collect();
+    let halves = files.len() == 1 && files[0].len() >= 2 * MIN_BASELINE_BLOCKS;
+    if halves {
+        let half = files[0].len() / 2;
+        let second = files[0].split_off(half);
+        files.push(second);
+    }
+    let margin = if halves { ONE_FILE_MARGIN } else { 1.0 };
+    let mut out = LocalReference::default();
+    if files.is_empty() {
+        return out;
+    }
+    // every file's blocks shifted onto the first file's mean, then onto the mean of them all: block by
+    // block, so that a tracked angle's slow wander between blocks does not smear the high orders
+    let mut reference = tsa_change::mean(&slices(&files[0]));
+    let mut aligned: Vec<OrderSpectrum> = Vec::new();
+    let mut noise: Vec<Option<f64>> = Vec::new();
+    for _ in 0..2 {
+        (aligned, noise) = files
+            .iter()
+            .map(|f| {
+                let (mean, scatter) = aligned_blocks(f, &reference, z);
+                (mean, scatter.map(|s| s.energy / s.blocks as f64))
+            })
+            .unzip();
+        reference = tsa_change::mean(&slices(&aligned));
+    }
+    let files_noise: Option<Vec<f64>> = noise.iter().copied().collect();
+    for f in 0..aligned.len() {
+        if aligned.len() < 2 {
+            break;
+        }
+        let others: Vec<&[(f64, f64)]> =
+            aligned.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, a)| a.as_slice()).collect();
+        let r = tsa_change::mean(&others);
+        out.local_healthy.extend(tsa_change::concentration(fft, &aligned[f], &r, z).map(|c| margin * c.ratio));
+        if let Some(c) = tsa_change::sideband_change(&aligned[f], &r, z) {
+            out.sidebands_healthy.push(margin * c.change / c.own);
+            if let Some(files) = &files_noise {
+                out.sidebands_beyond_noise.push(margin * SidebandNoise::between(files, f).beyond(c));
+            }
+        }
+        out.pattern_healthy.extend(tsa_change::pattern_change(&aligned[f], &r, z).map(|v| margin * v));
+    }
+    out.sidebands_noise = files_noise.map(|n| n.iter().sum::<f64>() / (n.len() * n.len()) as f64);
+    out.residual_mean = reference;
+    out
+}
+
+/// The noise at the first-order sidebands of one comparison `x - s r` ([`tsa_change::sideband_change`]):
+/// the noise energy of `x`'s mean and of `r`'s (each a block scatter over its block count), so that what a
+/// healthy recording's growth holds beyond its noise can be told from what the noise alone puts there. The
+/// halves of one file hold twice the noise a whole recording does, and a long recording less than a short
+/// one: taken out, the healthy figure keeps the change between recordings and the noise is allowed for the
+/// recording under test by its own scatter.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SidebandNoise {
+    /// Noise energy of `x`'s mean.
+    pub(super) x: f64,
+    /// Noise energy of `r`'s mean.
+    pub(super) r: f64,
+}
+
+impl SidebandNoise {
+    /// File `f` against the mean of the others, from each file's mean's noise energy.
+    fn between(files: &[f64], f: usize) -> Self {
+        let m = (files.len() - 1).max(1) as f64;
+        let r = files.iter().enumerate().filter(|(g, _)| *g != f).map(|(_, v)| v).sum::<f64>() / (m * m);
+        Self { x: files[f], r }
+    }
+
+    /// The growth noise explains: (noise of x + s^2 noise of r) over the reference's own energy.
+    pub(super) fn growth(self, c: SidebandChange) -> f64 {
+        (self.x + c.scale * c.scale * self.r) / c.own
+    }
+
+    /// The growth beyond what the noise explains (at least 0).
+    pub(super) fn beyond(self, c: SidebandChange) -> f64 {
+        ((c.change / c.own) - self.growth(c)).max(0.0)
+    }
+}
+
+/// What [`local_reference`] gives: the baseline's mean residual spectrum and how far each file's differs
+/// from the others' (local change, sideband growth, pattern change).
+#[derive(Default)]
+pub(super) struct LocalReference {
+    pub(super) residual_mean: OrderSpectrum,
+    pub(super) local_healthy: Vec<f64>,
+    pub(super) sidebands_healthy: Vec<f64>,
+    pub(super) sidebands_beyond_noise: Vec<f64>,
+    pub(super) sidebands_noise: Option<f64>,
+    pub(super) pattern_healthy: Vec<f64>,
+}
+
+/// The mean of `blocks` (order spectra), each shifted onto `reference`'s angle origin first (the blocks in
+/// parallel, each with a transform of four times its orders), and their scatter at the first-order
+/// sidebands of a gear of `z` teeth.
+fn aligned_blocks(blocks: &[OrderSpectrum], reference: &[(f64, f64)], z: usize) -> (OrderSpectrum, Option<Scatter>) {
+    use rayon::prelude::*;
+    let shifted: Vec<OrderSpectrum> = blocks
+        .par_iter()
+        .map_init(Fft::new, |fft, b| tsa_change::advanced(b, tsa_change::align(fft, b, reference).shift))
+        .collect();
+    (tsa_change::mean(&slices(&shifted)), tsa_change::sideband_scatter(&shifted, z))
+}
+
+/// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
+/// onto the recording's angle origin), with the tooth where it is largest. `None` when the reference has no
+/// residual or healthy values, or the recording's residual does not line up with it (correlation under
+/// [`MIN_ALIGNMENT`]).
+pub(super) fn local_change_of(
+    fft: &mut Fft,
+    g: &GearIndicators,
+    r: &GearReference,
+    one_file: bool,
+) -> Option<LocalChange> {
+    let healthy = r.local_healthy.iter().copied().fold(f64::NAN, f64::max);
+    if r.residual_mean.len() < 2 || !healthy.is_finite() {
+        return None;
+    }
+    let blocks: Vec<&Block> = g.blocks.iter().collect();
+    let own = spectra(&blocks);
+    if own.is_empty() {
+        return None;
+    }
+    let a = tsa_change::align(fft, &tsa_change::mean(&slices(&own)), &r.residual_mean);
+    if a.correlation < MIN_ALIGNMENT {
+        return None;
+    }
+    // each block shifted onto the baseline's origin (a tracked angle wanders slowly between blocks), then
+    // the mean and the baseline's delayed together onto the recording's own origin, so that teeth count
+    // from the recording's
+    let z = g.mesh_order;
+    let (mean, scatter) = aligned_blocks(&own, &r.residual_mean, z);
+    let mean = tsa_change::advanced(&mean, -a.shift);
+    let reference = tsa_change::advanced(&r.residual_mean, -a.shift);
+    let c = tsa_change::concentration(fft, &mean, &reference, z)?;
+    let change = tsa_change::sideband_change(&mean, &reference, z);
+    let sidebands = change.map_or(f64::NAN, |c| c.change / c.own);
+    let sidebands_healthy = r.sidebands_healthy.iter().copied().fold(f64::NAN, f64::max);
+    let sidebands_beyond_noise = r.sidebands_beyond_noise.iter().copied().fold(f64::NAN, f64::max);
+    // the growth the recording's own noise and the baseline's explain: a healthy recording grows by the
+    // baseline files' change beyond their noise plus that. The files' growth among themselves holds their
+    // own noise instead (a single file's halves twice a whole recording's): the lower of the two limits
+    let margin = if one_file { ONE_FILE_NOISE_MARGIN } else { 1.0 };
+    let noise = match (change, scatter, r.sidebands_noise) {
+        (Some(c), Some(s), Some(rn)) => margin * SidebandNoise { x: s.energy / s.blocks as f64, r: rn }.growth(c),
+        _ => f64::NAN,
+    };
+    // (`sidebands_limit` of NaN is the first path's floor, so the noise path is taken only when both parts
+    // are known: a profile written before them, or a recording of one block, keeps the files' limit)
+    let files_limit = sidebands_limit(sidebands_healthy);
+    let sidebands_limit = if noise.is_finite() && sidebands_beyond_noise.is_finite() {
+        sidebands_limit(sidebands_beyond_noise + noise).min(files_limit)
+    } else {
+        files_limit
+    };
+    let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
+    let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
+    let n = tsa_change::points(mean.len().min(reference.len()), z);
+    let tooth =
+        tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::super::tooth::impulse_tooth(&d, z));
+    Some(LocalChange {
+        gear: g.gear,
+        channel: g.channel,
+        value: c.ratio,
+        healthy,
+        limit: (LOCAL_RISE * healthy).max(LOCAL_MIN),
+        alignment: a.correlation,
+        tooth,
+        sidebands,
+        sidebands_healthy,
+        sidebands_beyond_noise,
+        sidebands_noise: noise,
+        sidebands_limit,
+        pattern,
+        pattern_healthy,
+    })
+}
