@@ -918,6 +918,30 @@ fn on_a_doubtful_speed_the_envelope_names_the_gear() {
     );
 }
 
+/// The envelope names the gear whose averages hold no impulse of its own: the 10 % crack on the 18/31
+/// machine's pinion (15 Hz) leaves the pinion's FM4 and M6A within their baselines while the wheel's FM0,
+/// ER and SBR move (FAULTY on the wheel before), and the pinion's envelope order 1 rises 17 dB against its
+/// healthy sibling while the wheel's falls. With the speed and with the tachometer, against one sibling and
+/// against two, the verdict must be on the pinion, saying why, and name the wheel's move as cross-talk.
+#[test]
+fn the_envelope_names_the_gear_whose_average_holds_no_impulse() {
+    let m = more_machines().into_iter().find(|m| m.name.starts_with("z18z31")).unwrap();
+    let (healthy, faults) = test_set(&m);
+    let fault = faults.iter().find(|c| c.label() == "pinion-crack10-t4").unwrap();
+    ensure(&healthy.iter().chain([fault]).cloned().collect::<Vec<_>>());
+    for mode in [Mode::Speed, Mode::Tacho] {
+        for baseline in [vec![&healthy[0]], vec![&healthy[0], &healthy[1]]] {
+            let o = diagnose(fault, mode, &baseline);
+            let why = format!("{} against {} sibling(s): {}", mode.name(), baseline.len(), o.json["verdict"]);
+            assert_eq!(o.gear, "pinion", "{why}");
+            assert!(o.state == "suspect" || o.state == "faulty", "{why}");
+            let reasons = o.json["verdict"]["reasons"].to_string();
+            assert!(reasons.contains("pinion order 1 stands"), "{why}");
+            assert!(o.json["verdict"]["cross_talk"].to_string().contains("envelope order 1 rose"), "{why}");
+        }
+    }
+}
+
 /// Teeth only, on a machine no threshold was set on (18/31 at 15 Hz, a 9-blade fan), its spalled pinion:
 /// the estimate either gets the shaft within 2.5 % or the error asks for the speed, saying the estimate
 /// failed (it took 0.93 Hz and followed it over 5 of the 8 revolutions an average needs: the message was
