@@ -6,32 +6,12 @@
 //! within a per-case bound that only a hang would exceed.
 
 mod common;
+use common::mutants::{self, XorShift};
 use common::*;
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// Largest single allocation seen since the last reset.
-static LARGEST: AtomicUsize = AtomicUsize::new(0);
-
-struct Counting;
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        LARGEST.fetch_max(new_size, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: mutants::Counting = mutants::Counting;
 
 /// No input here is over 4 MB: 256 MiB in one request can only come from a size believed from a header
 /// or an absurd value.
@@ -39,38 +19,9 @@ const CEILING: usize = 256 << 20;
 /// Seconds a case may take before it counts as a hang (the slowest legitimate case takes well under 1 s).
 const HANG_S: f64 = 30.0;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
-/// Runs one case: `f` gets the file's path and returns Ok or an error message.
+/// Runs one case (`mutants::case` with this test's ceiling and hang bound).
 fn case(path: &Path, f: impl FnOnce(&Path) -> Result<(), String> + std::panic::UnwindSafe) {
-    LARGEST.store(0, Ordering::Relaxed);
-    let started = std::time::Instant::now();
-    let p = path.to_path_buf();
-    let outcome = std::panic::catch_unwind(move || f(&p));
-    let took = started.elapsed().as_secs_f64();
-    let name = path.file_name().unwrap().to_string_lossy().into_owned();
-    match outcome {
-        Err(_) => panic!("{name}: panicked"),
-        Ok(Err(msg)) => {
-            assert!(msg.contains(&name), "{name}: error does not name its input: {msg}");
-            assert!(!msg.contains('\n'), "{name}: multi-line error: {msg}");
-        }
-        Ok(Ok(())) => {}
-    }
-    let largest = LARGEST.load(Ordering::Relaxed);
-    assert!(largest <= CEILING, "{name}: a single allocation of {largest} bytes");
-    assert!(took < HANG_S, "{name}: {took:.1} s");
+    mutants::case(path, CEILING, HANG_S, f);
 }
 
 fn diagnose(path: &Path) -> Result<(), String> {
@@ -83,7 +34,7 @@ fn simulate(path: &Path) -> Result<(), String> {
     gearvib::jobs::simulate::simulate(&scene).map(|_| ()).map_err(|e| format!("{}: {e}", scene.file))
 }
 
-fn wav_mutants(rng: &mut Rng, wav: &[u8]) -> Vec<Vec<u8>> {
+fn wav_mutants(rng: &mut XorShift, wav: &[u8]) -> Vec<Vec<u8>> {
     let mut out = Vec::new();
     // truncation at every header byte and a few data lengths
     for n in (0..=72).chain([100, 1001, 4096, wav.len() / 2, wav.len() - 1]) {
@@ -119,7 +70,7 @@ fn wav_mutants(rng: &mut Rng, wav: &[u8]) -> Vec<Vec<u8>> {
     out
 }
 
-fn csv_mutants(rng: &mut Rng, csv: &str) -> Vec<String> {
+fn csv_mutants(rng: &mut XorShift, csv: &str) -> Vec<String> {
     let mut out = Vec::new();
     let lines: Vec<&str> = csv.lines().collect();
     for n in [0, 1, 2, 3, 10, lines.len() / 2] {
@@ -151,7 +102,7 @@ fn csv_mutants(rng: &mut Rng, csv: &str) -> Vec<String> {
     out
 }
 
-fn json_mutants(rng: &mut Rng, v: &serde_json::Value) -> Vec<String> {
+fn json_mutants(rng: &mut XorShift, v: &serde_json::Value) -> Vec<String> {
     let text = v.to_string();
     let mut out = Vec::new();
     // every number in turn replaced by an extreme
@@ -191,7 +142,7 @@ fn json_mutants(rng: &mut Rng, v: &serde_json::Value) -> Vec<String> {
 #[test]
 fn two_thousand_mutants_fail_cleanly() {
     let dir = temp_dir("mutants");
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
     let mut count = 0;
     // WAV (integer, extensible header, 3 channels) with and without its sidecar
     let wav = std::fs::read(repo("data/recordings/gear-z14z39-fs10kHz-healthy.wav")).unwrap();

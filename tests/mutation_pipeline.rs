@@ -6,34 +6,14 @@
 //! ceiling, and within a per-case bound that only a hang would exceed.
 
 mod common;
+use common::mutants::{self, XorShift};
 use common::*;
 use gearvib::jobs::diagnose::{self, Options};
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::borrow::Cow;
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// Largest single allocation seen since the last reset.
-static LARGEST: AtomicUsize = AtomicUsize::new(0);
-
-struct Counting;
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        LARGEST.fetch_max(layout.size(), Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        LARGEST.fetch_max(new_size, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: mutants::Counting = mutants::Counting;
 
 /// Every input here is under 1 MB (16000 frames): 256 MiB in one request can only come from a size
 /// believed from a header or an absurd value.
@@ -44,40 +24,9 @@ const HANG_S: f64 = 20.0;
 /// Frames of the cut: 1.6 s at 10 kHz, 48 revolutions of the 30 Hz pinion (the TSA needs 8).
 const FRAMES: usize = 16_000;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
-/// Runs one case: `f` gets the input's path and returns Ok or the error's message.
+/// Runs one case (`mutants::case` with this test's ceiling and hang bound): whether `f` gave a result.
 fn case(path: &Path, f: impl FnOnce(&Path) -> Result<(), String> + std::panic::UnwindSafe) -> bool {
-    LARGEST.store(0, Ordering::Relaxed);
-    let started = std::time::Instant::now();
-    let p = path.to_path_buf();
-    let outcome = std::panic::catch_unwind(move || f(&p));
-    let took = started.elapsed().as_secs_f64();
-    let name = path.file_name().unwrap().to_string_lossy().into_owned();
-    let ok = match outcome {
-        Err(_) => panic!("{name}: panicked"),
-        Ok(Err(msg)) => {
-            assert!(msg.contains(&name), "{name}: error does not name its input: {msg}");
-            assert!(!msg.contains('\n'), "{name}: multi-line error: {msg}");
-            false
-        }
-        Ok(Ok(())) => true,
-    };
-    let largest = LARGEST.load(Ordering::Relaxed);
-    assert!(largest <= CEILING, "{name}: a single allocation of {largest} bytes");
-    assert!(took < HANG_S, "{name}: {took:.1} s");
-    ok
+    mutants::case(path, CEILING, HANG_S, f)
 }
 
 fn diagnose_with(o: Options) -> impl FnOnce(&Path) -> Result<(), String> + std::panic::UnwindSafe {
@@ -121,7 +70,7 @@ fn base() -> gearvib::io::Recording<'static> {
 
 /// Tachometer damage: chatter bursts, missing pulses, extra pulses, a stuck or noisy channel, pulses of
 /// random width, a tachometer that stops.
-fn damaged_tacho(rng: &mut Rng, t: &[f32]) -> Vec<f32> {
+fn damaged_tacho(rng: &mut XorShift, t: &[f32]) -> Vec<f32> {
     let hi = t.iter().copied().fold(0.0f32, f32::max);
     let mut x = t.to_vec();
     match rng.below(8) {
@@ -197,7 +146,7 @@ fn damaged_tacho(rng: &mut Rng, t: &[f32]) -> Vec<f32> {
     x
 }
 
-fn bytes_mutant(rng: &mut Rng, b: &[u8], header: usize) -> Vec<u8> {
+fn bytes_mutant(rng: &mut XorShift, b: &[u8], header: usize) -> Vec<u8> {
     let mut m = b.to_vec();
     match rng.below(3) {
         0 => m.truncate(rng.below(b.len())),
@@ -221,7 +170,7 @@ fn bytes_mutant(rng: &mut Rng, b: &[u8], header: usize) -> Vec<u8> {
     m
 }
 
-fn csv_mutant(rng: &mut Rng, csv: &str) -> String {
+fn csv_mutant(rng: &mut XorShift, csv: &str) -> String {
     let mut b = csv.as_bytes().to_vec();
     match rng.below(4) {
         0 => b.truncate(rng.below(b.len())),
@@ -248,7 +197,7 @@ fn csv_mutant(rng: &mut Rng, csv: &str) -> String {
     String::from_utf8_lossy(&b).into_owned()
 }
 
-fn sidecar_mutant(rng: &mut Rng, text: &str) -> String {
+fn sidecar_mutant(rng: &mut XorShift, text: &str) -> String {
     let mut b = text.as_bytes().to_vec();
     match rng.below(4) {
         0 => b.truncate(rng.below(b.len())),
@@ -276,7 +225,7 @@ fn two_thousand_pipeline_mutants_fail_cleanly() {
     let dir = temp_dir("pipeline-mutants");
     // a fresh campaign: MUTATION_SEED=<u64> (the default seed is the one the fixtures were found with)
     let seed = std::env::var("MUTATION_SEED").ok().and_then(|s| s.parse::<u64>().ok()).filter(|&s| s != 0);
-    let mut rng = Rng(seed.unwrap_or(0x2545_F491_4F6C_DD1D));
+    let mut rng = XorShift(seed.unwrap_or(0x2545_F491_4F6C_DD1D));
     let base = base();
     let (mut count, mut answered) = (0usize, 0usize);
     let mut run = |path: &Path, f: &mut dyn FnMut(&Path) -> bool| {

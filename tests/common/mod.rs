@@ -4,6 +4,7 @@
 
 pub mod check;
 pub mod gearbox_gen;
+pub mod mutants;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
