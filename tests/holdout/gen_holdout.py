@@ -35,7 +35,7 @@ severity, true mean speed and the nameplate (nominal) speed.
 Output: per machine a directory with float32 WAV + gearvib sidecar (`NAME.wav.json`), or int16 WAV without
 sidecar (a plain data-logger file), two channels (accelerometer m/s^2, tachometer V).
 
-Usage: gen_holdout.py [--out /tmp/holdout] [--machines m1,m2,...] [--quick]
+Usage: gen_holdout.py [--out /tmp/holdout] [--machines m1,m2,...] [--quick] [--fresh]
 """
 
 import argparse
@@ -61,6 +61,18 @@ MACHINES = [
     dict(name="m7-z29z71", zp=29, zw=71, fs=40000.0, f1=24.0, T=12.0, fmt="f32", seed=707, panel=True),
     dict(name="m8-z15z52", zp=15, zw=52, fs=25600.0, f1=35.0, T=10.0, fmt="i16", seed=808, panel=True),
     dict(name="m9-z22z49", zp=22, zw=49, fs=51200.0, f1=16.0, T=16.0, fmt="f32", seed=909, panel=True),
+]
+
+# a fresh set (`--fresh`), made after every threshold above was set, to see how the diagnosis does on
+# machines none of them was tuned on (twenty-sixth session): new geometries, rates, speeds and seeds; a fan of
+# 10 blades on a 20-tooth pinion puts its second harmonic on the mesh, one on a 31-tooth pinion its third
+# harmonic at order 30 beside it
+FRESH_MACHINES = [
+    dict(name="m10-z20z33", zp=20, zw=33, fs=24000.0, f1=33.0, T=12.0, fmt="f32", seed=1111),
+    dict(name="m11-z24z37", zp=24, zw=37, fs=51200.0, f1=12.5, T=16.0, fmt="i16", seed=1212),
+    dict(name="m12-z17z47", zp=17, zw=47, fs=32000.0, f1=21.0, T=12.0, fmt="f32", seed=1313, panel=True),
+    dict(name="m13-z31z43", zp=31, zw=43, fs=44100.0, f1=19.0, T=12.0, fmt="f32", seed=1414),
+    dict(name="m14-z18z29", zp=18, zw=29, fs=20000.0, f1=39.0, T=10.0, fmt="i16", seed=1515, panel=True),
 ]
 
 # faults per machine; gear "A" / "B" alternate by machine index so both gears get every kind
@@ -573,13 +585,15 @@ def main():
     ap.add_argument("--out", default="/tmp/holdout")
     ap.add_argument("--machines", default=None, help="comma-separated machine names or indices (1-based)")
     ap.add_argument("--quick", action="store_true", help="6 s recordings (a smoke test)")
+    ap.add_argument("--fresh", action="store_true", help="the fresh set (m10-m14) instead of m1-m9")
     a = ap.parse_args()
-    sel = list(range(len(MACHINES)))
+    machines = FRESH_MACHINES if a.fresh else MACHINES
+    sel = list(range(len(machines)))
     if a.machines:
         want = a.machines.split(",")
-        sel = [i for i, m in enumerate(MACHINES) if m["name"] in want or str(i + 1) in want or m["name"][:2] in want]
+        sel = [i for i, m in enumerate(machines) if m["name"] in want or str(i + 1) in want or m["name"].split("-")[0] in want]
     for i in sel:
-        generate_machine(i, MACHINES[i], a.out, a.quick)
+        generate_machine(i, machines[i], a.out, a.quick)
     return 0
 
 

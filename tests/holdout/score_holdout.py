@@ -300,7 +300,7 @@ def report(jobs, mdirs):
     print()
     print("per machine, faults flagged F|S / on the right gear (of 8), healthy flagged F|S after the '+', by mode:")
     mnames = [os.path.basename(m) for m in mdirs]
-    print("%-16s " % "mode" + " ".join("%10s" % m[:9] for m in mnames))
+    print("%-16s " % "mode" + " ".join("%10s" % m[:10] for m in mnames))
     for mode in modes:
         row = []
         for m in mnames:
@@ -342,7 +342,7 @@ def report(jobs, mdirs):
     keys = sorted(truths)
     for key in keys:
         t = truths[key]
-        label = "%s/%s%s" % (key[0][:2], key[1], "" if t["tooth"] is None else " t%d" % t["tooth"])
+        label = "%s/%s%s" % (key[0].split("-")[0], key[1], "" if t["tooth"] is None else " t%d" % t["tooth"])
         cells = []
         for mode in modes:
             js = [j for j in jobs if j["mode"] == mode and (j["machine"], j["name"]) == key]

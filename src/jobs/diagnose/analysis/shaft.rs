@@ -51,16 +51,17 @@ pub(super) fn follow_shaft(
     let Checked { tacho, ref channels, fs, .. } = *checked;
     let nominal = nominal_speed(path, rec, channels, o, fs, geometry, fft, warnings)?;
     let known_z = o.teeth.map(|t| t.0).or_else(|| geometry.and_then(|g| g.mesh_order)).or(nominal.mesh_order);
+    let given = o.shaft_hz.zip(fs).map(|(hz, fs)| fs / hz);
     let mesh_from_lag = nominal.mesh_order.is_some();
     let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
-        None => track(path, rec, channels, o, known_z, nominal.map, warnings)?,
+        None => track(path, rec, channels, o, known_z, nominal.map, given, warnings)?,
         Some(alt) => {
             // two starts (the given speed, the weak comb's best): the comb's when its followed line stands
             // clearly higher
             let mut given_warnings = Vec::new();
-            let first = track(path, rec, channels, o, known_z, nominal.map, &mut given_warnings)?;
+            let first = track(path, rec, channels, o, known_z, nominal.map, given, &mut given_warnings)?;
             let mut alt_warnings = Vec::new();
-            let second = track(path, rec, channels, o, known_z, alt, &mut alt_warnings)?;
+            let second = track(path, rec, channels, o, known_z, alt, given, &mut alt_warnings)?;
             let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
             if line(&second) >= line(&first) + CLEARER_START_DB {
                 warnings.extend(alt_warnings);

@@ -383,7 +383,12 @@ fn align_origin(map: &AngleMap, tacho: &AngleMap) -> AngleMap {
 /// Follows the shaft angle through the recording. With a tachometer its pulses are the angle. Otherwise the
 /// phase of the first mesh harmonic is tracked on each analysed channel (the mesh order from the teeth, the
 /// baseline, or the harmonic family of a constant-speed TSA) and the channel where the line stands out
-/// most is used; when no channel allows it, the constant nominal speed stays, with a warning.
+/// most is used; when no channel allows it, the constant nominal speed stays, with a warning. With a given
+/// speed (`given`: its revolution, samples) the followed angle's mean must lie within the speed tolerance
+/// of it as well as near the nominal start: the start may be a comb's speed a few percent from the given
+/// one, and a line followed a few percent further is another machine line (a 10-blade fan's third
+/// harmonic at order 30 beside a 31-tooth mesh, 5.2 % from the given speed, was followed and used).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn track(
     path: &Path,
     rec: &Recording,
@@ -391,6 +396,7 @@ pub(super) fn track(
     o: &Options,
     known_z: Option<usize>,
     nominal: AngleMap,
+    given: Option<f64>,
     warnings: &mut Vec<String>,
 ) -> Result<Tracked, Error> {
     if o.tacho_channel.is_some() {
@@ -413,7 +419,10 @@ pub(super) fn track(
     }
     // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
     let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
-    let within = |t: &angle::Tracked| (t.map.mean_period_samples() / period - 1.0).abs() <= max_shift;
+    let within = |t: &angle::Tracked| {
+        let mean = t.map.mean_period_samples();
+        (mean / period - 1.0).abs() <= max_shift && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance)
+    };
     // a weak line, or one the phase-locked loop lost: the whole comb is followed too, and its angle kept
     // when the loop holds it and the single line was lost or stands lower
     let weak = !matches!(&best, Some(Ok(t)) if within(t) && t.locked && t.line_snr_db >= COMB_FALLBACK_DB);
@@ -430,10 +439,16 @@ pub(super) fn track(
         }
     }
     Ok(match best {
-        Some(Ok(t)) if (t.map.mean_period_samples() / period - 1.0).abs() > max_shift => {
+        Some(Ok(t)) if !within(&t) => {
+            let mean = t.map.mean_period_samples();
             warnings.push(format!(
-                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed: it followed another line, so the TSA assumes a constant speed",
-                100.0 * (period / t.map.mean_period_samples() - 1.0)
+                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed{}: it followed another line, so the TSA assumes a constant speed",
+                100.0 * (period / mean - 1.0),
+                given.map_or(String::new(), |g| format!(
+                    " ({:+.1} % from the given one, tolerance +-{:.1} %)",
+                    100.0 * (g / mean - 1.0),
+                    100.0 * o.speed_tolerance
+                ))
             ));
             (nominal, Tracking::Constant, None, Some(z))
         }
@@ -475,7 +490,7 @@ fn track_with_tachometer(
     let Some(z) = known_z else { return Ok((nominal, Tracking::Tachometer, None, None)) };
     let mut quiet = Vec::new();
     let without = Options { tacho_channel: None, ..o.clone() };
-    let tracked = track(path, rec, channels, &without, Some(z), nominal.clone(), &mut quiet)?;
+    let tracked = track(path, rec, channels, &without, Some(z), nominal.clone(), None, &mut quiet)?;
     Ok(match tracked {
         // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip a
         // cycle in noise, which a pulse train never does)
