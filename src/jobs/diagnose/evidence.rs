@@ -172,7 +172,10 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
         VerdictGear::Wheel => (Shaft::Wheel, Shaft::Pinion, wheel, pinion),
         _ => return true,
     };
-    if d.verdict.state < VerdictState::Suspect || theirs.0 <= own.0.max(0.0) {
+    if d.verdict.state < VerdictState::Suspect
+        || theirs.0 <= own.0.max(0.0)
+        || theirs.1 < PATTERN_BEYOND_HEALTHY * theirs.2
+    {
         return true;
     }
     let impulse =
@@ -213,6 +216,15 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     place_tooth(d);
     true
 }
+
+/// How many times its healthy figure (what the baseline's files show among themselves) the other gear's
+/// pattern change must reach for [`pattern_evidence`] to move a verdict to it: the healthy figure comes
+/// from two files, or one file's halves, so a few percent over it is within its own uncertainty. A quarter
+/// over, as `verdict`'s margin between two gears' moves (an engineering choice, checked on the three
+/// generators' scorecards): the moves that went to the wrong gear stood at 1.08-1.18 times the healthy
+/// figure (the fresh set's worn 17/47 pinion in three profile modes, an eccentric wheel, a healthy
+/// recording), the right ones at 1.32 and above but one (a 10 % wheel crack at 1.09 against one sibling).
+pub const PATTERN_BEYOND_HEALTHY: f64 = 1.25;
 
 /// Adds the change of each gear's average against the baseline's as evidence (computed by
 /// `baseline::Reference::local_change` into `d.local_change`): a gear whose average changed at one tooth by
