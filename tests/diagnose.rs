@@ -587,6 +587,7 @@ fn nothing_unscored_is_called_healthy() {
 /// Nothing unscored is called healthy: white noise said to be a 14/39 pair at 1800 rpm has no mesh comb
 /// to confirm the speed and no mesh line to follow, so its averages (on a speed that a motor's slip could
 /// put 5 % off) cannot clear the machine: not judged, exit code 3, the reason naming the unconfirmed speed.
+/// Without the teeth likewise, the reason saying that no tooth mesh stands out.
 #[test]
 fn noise_with_a_given_speed_is_not_judged_healthy() {
     let dir = temp_dir("noise-given-speed");
@@ -603,6 +604,13 @@ fn noise_with_a_given_speed_is_not_judged_healthy() {
     assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(reasons.contains("given speed was not confirmed"), "{reasons}");
+    // without the teeth the mesh order is only the noise's strongest harmonic family, whose line cannot be
+    // followed: nothing shows a gear in the averages (it was called healthy on a family of order 49)
+    let run = gearvib(&["diagnose", &rec, "--rpm", "1800", "--json"]);
+    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands out"), "{}", d["verdict"]);
 }
 
 /// A tachometer beside a given speed (issue 26, item 4): the sidecar's pulses give the speed (the

@@ -143,6 +143,7 @@ pub(super) fn follow_shaft(
         .doubt
         .or(rests_on_nothing)
         .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o))
+        .or_else(|| no_mesh_found(known_z, tracked_z, &profile, o))
         .or_else(|| unfollowed_estimate(nominal.source, &profile))
         .or_else(|| {
             let zp = o.teeth.map(|t| t.0).filter(|_| nominal.source == SpeedSource::Estimated)?;
@@ -222,6 +223,26 @@ fn unconfirmed_speed(comb_db: Option<f64>, profile: &SpeedProfile, o: &Options) 
         "the given speed was not confirmed: {comb} and the mesh line could not be followed, so the averages run on the given speed as it is, which a motor's slip can put up to {:.1} % off; give a tachometer channel or the measured speed",
         100.0 * o.speed_tolerance
     ))
+}
+
+/// Why averages on a given speed without the teeth cannot clear the machine: the mesh order (`tracked_z`)
+/// was only the strongest harmonic family of the average (no teeth given, none from a baseline: `known_z`
+/// is `None`) and its line could not be followed, so nothing shows that the averages hold a gear at all.
+/// Pure noise at 10 kHz with `--rpm 1800` took a family of order 49 standing 5.5 dB over its band and was
+/// called healthy.
+fn no_mesh_found(
+    known_z: Option<usize>,
+    tracked_z: Option<usize>,
+    profile: &SpeedProfile,
+    o: &Options,
+) -> Option<String> {
+    let z = tracked_z?;
+    (o.shaft_hz.is_some() && o.tacho_channel.is_none() && known_z.is_none() && profile.tracking == Tracking::Constant)
+        .then(|| {
+            format!(
+                "no tooth mesh stands out at the given speed: the mesh order {z} is only the strongest harmonic family of the average and its line could not be followed, so the averages may hold no gear and cannot clear the machine; give the teeth (or a tachometer channel)"
+            )
+        })
 }
 
 /// Largest relative distance of an estimated mesh frequency from a multiple of the mains frequency for it
