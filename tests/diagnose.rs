@@ -613,6 +613,29 @@ fn noise_with_a_given_speed_is_not_judged_healthy() {
     assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands out"), "{}", d["verdict"]);
 }
 
+/// Nothing unscored is called healthy with a tachometer either: white noise beside a 30 Hz pulse train,
+/// said to be a 14/39 pair, has its speed from the pulses but no tooth mesh in its averages (the mesh
+/// orders hold no line on the synchronous spectrum): not judged, exit code 3, the reason saying so. It was
+/// called healthy.
+#[test]
+fn noise_beside_a_tachometer_is_not_judged_healthy() {
+    let dir = temp_dir("noise-tacho");
+    let fs = 10_000;
+    let mut rng = Rng::new(11);
+    let mut csv = String::from("time [s],dq/dt [m/s],tacho [V]\n");
+    for i in 0..10 * fs {
+        let t = i as f64 / fs as f64;
+        let pulse = if (t * 30.0).fract() < 0.1 { 5.0 } else { 0.0 };
+        csv.push_str(&format!("{t:.5},{:.6e},{pulse}\n", 1e-3 * rng.centered()));
+    }
+    let rec = write(&dir, "noise-tacho.csv", &csv);
+    let run = gearvib(&["diagnose", &rec, "--channel", "1", "--tacho-channel", "2", "--teeth", "14,39", "--json"]);
+    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands in the vibration"), "{}", d["verdict"]);
+}
+
 /// A tachometer beside a given speed (issue 26, item 4): the sidecar's pulses give the speed (the
 /// bundled scene turns at 30 Hz, its tachometer rising once per revolution), the given speed is the
 /// nominal one, and a given speed 10 % off (beyond the 5 % tolerance) is warned about by name; a named

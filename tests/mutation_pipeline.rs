@@ -303,11 +303,12 @@ fn two_thousand_pipeline_mutants_fail_cleanly() {
     assert!(answered >= count / 5, "{answered} of {count} answered");
     eprintln!("{count} pipeline mutants, {answered} answered, the others refused with their file named");
 
-    // a handful through the binary: exit 0 or 2, one stderr line on 2, never a panic
+    // a handful through the binary: exit 0, 2, or 3 (not judged: a damaged tachometer's angle can leave
+    // no tooth mesh in the averages), one stderr line on 2, never a panic
     for name in ["tacho3.wav", "wav7.wav", "csv5.csv", "side2.wav", "flags4.wav", "tacho11.wav"] {
         let p = dir.join(name);
         let r = gearvib(&["diagnose", p.to_str().unwrap(), "--tacho-channel", "2", "--teeth", "14,39", "--json"]);
-        assert!(r.code == 0 || r.code == 2, "{name}: exit {}: {}", r.code, r.stderr);
+        assert!(matches!(r.code, 0 | 2 | 3), "{name}: exit {}: {}", r.code, r.stderr);
         assert!(!r.stderr.contains("panicked") && !r.stderr.contains("RUST_BACKTRACE"), "{name}: {}", r.stderr);
         if r.code == 2 {
             assert_eq!(r.stderr.lines().count(), 1, "{name}: {}", r.stderr);

