@@ -411,6 +411,42 @@ fn a_run_up_is_quasi_static_and_its_order_map_follows_the_steady_state_at_each_s
     assert!((a / b - 1.0).abs() > 0.2, "{a} {b}");
 }
 
+/// A recording of a shaft at `f0` Hz whose speed wanders by the sinusoids `wander` ((relative amplitude,
+/// Hz) each), `seconds` long at `fs`: each sample is `noise` times a centred random number (seed `seed`)
+/// plus `lines(angle)` of the shaft's angle (radians). Written as a CSV with a time column to
+/// `dir/name`; returns its path and the true mean speed (Hz).
+fn wandering_csv(
+    dir: &Path,
+    name: &str,
+    (fs, f0, seconds): (f64, f64, f64),
+    wander: &[(f64, f64)],
+    (seed, noise): (u64, f64),
+    lines: impl Fn(f64) -> f64,
+) -> (String, f64) {
+    let mut rng = Rng::new(seed);
+    let mut theta = 0.0f64;
+    let mut csv = String::from("time [s],accel [m/s^2]\n");
+    for i in 0..(fs * seconds) as usize {
+        let t = i as f64 / fs;
+        let f = f0 * (1.0 + wander.iter().map(|&(a, w)| a * (std::f64::consts::TAU * w * t).sin()).sum::<f64>());
+        let v = noise * rng.centered() + lines(std::f64::consts::TAU * theta);
+        csv.push_str(&format!("{t},{v}\n"));
+        theta += f / fs;
+    }
+    (write(dir, name, &csv), theta / seconds)
+}
+
+/// A mesh of `z` teeth, harmonics 1-8 of amplitude `a(k)` with first sidebands `sb(k)`, at shaft angle `th`.
+fn mesh_lines(z: f64, th: f64, amplitudes: impl Fn(usize) -> (f64, f64)) -> f64 {
+    (1..=8)
+        .map(|k| {
+            let (a, sb) = amplitudes(k);
+            let m = k as f64 * z;
+            a * (m * th).sin() + sb * ((m + 1.0) * th).sin() + sb * ((m - 1.0) * th).sin()
+        })
+        .sum()
+}
+
 /// A nominal speed 2.5 % off on a machine whose first four mesh harmonics lie under the noise while a
 /// resonance lifts harmonics 6-8 (as on the hold-out generator's machines): the speed is measured on the
 /// lifted harmonics and followed, within 0.2 % of the true mean. The truth is the signal's own angle,
@@ -423,29 +459,10 @@ fn a_run_up_is_quasi_static_and_its_order_map_follows_the_steady_state_at_each_s
 fn a_nominal_speed_is_measured_on_resonance_lifted_mesh_harmonics() {
     let dir = temp_dir("tracking-lifted");
     let (fs, f0, z, seconds) = (20_000.0, 22.0, 19.0, 8.0);
-    let mut rng = Rng::new(2024);
-    let mut theta = 0.0f64;
-    let mut x = Vec::new();
-    for i in 0..(fs * seconds) as usize {
-        let t = i as f64 / fs;
-        let f = f0
-            * (1.0 + 0.012 * (std::f64::consts::TAU * 0.4 * t).sin() + 0.005 * (std::f64::consts::TAU * 1.3 * t).sin());
-        let th = std::f64::consts::TAU * theta;
-        let mut v = 2.0 * rng.centered();
-        for k in 1..=8 {
-            let m = k as f64 * z;
-            let (a, sb) = if k >= 6 { (0.3, 0.1) } else { (0.005, 0.002) };
-            v += a * (m * th).sin() + sb * ((m + 1.0) * th).sin() + sb * ((m - 1.0) * th).sin();
-        }
-        x.push(v);
-        theta += f / fs;
-    }
-    let true_mean = theta / seconds;
-    let mut csv = String::from("time [s],accel [m/s^2]\n");
-    for (i, v) in x.iter().enumerate() {
-        csv.push_str(&format!("{},{v}\n", i as f64 / fs));
-    }
-    let path = write(&dir, "lifted.csv", &csv);
+    let (path, true_mean) =
+        wandering_csv(&dir, "lifted.csv", (fs, f0, seconds), &[(0.012, 0.4), (0.005, 1.3)], (2024, 2.0), |th| {
+            mesh_lines(z, th, |k| if k >= 6 { (0.3, 0.1) } else { (0.005, 0.002) })
+        });
     let rpm = format!("{}", 60.0 * f0 * 1.025);
     let d = &diagnose(&[path], &["--teeth", "19,53", "--rpm", &rpm])[0];
     let measured = d["shaft_hz"]["pinion"].as_f64().unwrap();
@@ -470,32 +487,14 @@ fn a_nominal_speed_is_measured_on_resonance_lifted_mesh_harmonics() {
 fn a_fan_line_beside_the_mesh_does_not_take_the_speed_out_of_its_window() {
     let dir = temp_dir("tracking-fan");
     let (fs, f0, z, seconds) = (44_100.0, 19.0, 31.0, 10.0);
-    let mut rng = Rng::new(7);
-    let mut theta = 0.0f64;
-    let mut x = Vec::new();
-    for i in 0..(fs * seconds) as usize {
-        let t = i as f64 / fs;
-        let f = f0
-            * (1.0 + 0.008 * (std::f64::consts::TAU * 0.3 * t).sin() + 0.004 * (std::f64::consts::TAU * 1.1 * t).sin());
-        let th = std::f64::consts::TAU * theta;
-        let mut v = 0.5 * rng.centered();
-        for k in 1..=8 {
-            let m = k as f64 * z;
-            let (a, sb) = if k >= 5 { (0.3, 0.05) } else { (0.05, 0.01) };
-            v += a * (m * th).sin() + sb * ((m + 1.0) * th).sin() + sb * ((m - 1.0) * th).sin();
-        }
-        for (h, a) in [(30.0, 0.9), (60.0, 0.6), (90.0, 0.5), (120.0, 0.4)] {
-            v += a * (h * th + 0.7).sin();
-        }
-        x.push(v);
-        theta += f / fs;
-    }
-    let true_mean = theta / seconds;
-    let mut csv = String::from("time [s],accel [m/s^2]\n");
-    for (i, v) in x.iter().enumerate() {
-        csv.push_str(&format!("{},{v}\n", i as f64 / fs));
-    }
-    let path = write(&dir, "fan.csv", &csv);
+    let (path, true_mean) =
+        wandering_csv(&dir, "fan.csv", (fs, f0, seconds), &[(0.008, 0.3), (0.004, 1.1)], (7, 0.5), |th| {
+            let fan: f64 = [(30.0, 0.9), (60.0, 0.6), (90.0, 0.5), (120.0, 0.4)]
+                .iter()
+                .map(|&(h, a)| a * (h * th + 0.7).sin())
+                .sum();
+            mesh_lines(z, th, |k| if k >= 5 { (0.3, 0.05) } else { (0.05, 0.01) }) + fan
+        });
     let rpm = format!("{}", 60.0 * true_mean * 1.021);
     let d = &diagnose(&[path], &["--teeth", "31,43", "--rpm", &rpm])[0];
     let measured = d["shaft_hz"]["pinion"].as_f64().unwrap();
