@@ -12,6 +12,19 @@ fn diag_json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap()
 }
 
+/// `diagnose ARGS --json` of one recording that must come out not judged: exit code 3 and the state said;
+/// its JSON line.
+fn not_judged_json(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["diagnose"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    let run = gearvib(&all);
+    assert_eq!(run.code, 3, "{args:?}: {}{}", run.stdout, run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{args:?}: {}", d["verdict"]);
+    d
+}
+
 fn real(name: &str) -> String {
     repo(&format!("data/realdata/{name}.csv"))
 }
@@ -598,18 +611,12 @@ fn noise_with_a_given_speed_is_not_judged_healthy() {
         csv.push_str(&format!("{:.5},{:.6e}\n", i as f64 / fs as f64, 1e-3 * rng.centered()));
     }
     let rec = write(&dir, "noise.csv", &csv);
-    let run = gearvib(&["diagnose", &rec, "--rpm", "1800", "--teeth", "14,39", "--json"]);
-    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
-    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    let d = not_judged_json(&[&rec, "--rpm", "1800", "--teeth", "14,39"]);
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(reasons.contains("given speed was not confirmed"), "{reasons}");
     // without the teeth the mesh order is only the noise's strongest harmonic family, whose line cannot be
     // followed: nothing shows a gear in the averages (it was called healthy on a family of order 49)
-    let run = gearvib(&["diagnose", &rec, "--rpm", "1800", "--json"]);
-    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
-    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    let d = not_judged_json(&[&rec, "--rpm", "1800"]);
     assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands out"), "{}", d["verdict"]);
 }
 
@@ -629,10 +636,7 @@ fn noise_beside_a_tachometer_is_not_judged_healthy() {
         csv.push_str(&format!("{t:.5},{:.6e},{pulse}\n", 1e-3 * rng.centered()));
     }
     let rec = write(&dir, "noise-tacho.csv", &csv);
-    let run = gearvib(&["diagnose", &rec, "--channel", "1", "--tacho-channel", "2", "--teeth", "14,39", "--json"]);
-    assert_eq!(run.code, 3, "{}{}", run.stdout, run.stderr);
-    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-    assert_eq!(d["verdict"]["state"], "not_judged", "{d}");
+    let d = not_judged_json(&[&rec, "--channel", "1", "--tacho-channel", "2", "--teeth", "14,39"]);
     assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands in the vibration"), "{}", d["verdict"]);
 }
 
@@ -703,20 +707,7 @@ fn an_undeclared_tachometer_is_taken_when_the_teeth_or_the_speed_confirm_it() {
 fn teeth_the_sidebands_contradict_leave_the_machine_not_judged() {
     let bare = temp_dir("wrong-speed").join("cracked-bare.wav");
     std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
-    let run = gearvib(&[
-        "diagnose",
-        &bare.to_string_lossy(),
-        "--channel",
-        "1",
-        "--rpm",
-        "2400",
-        "--teeth",
-        "14,39",
-        "--json",
-    ]);
-    assert_eq!(run.code, 3, "{}", run.stderr);
-    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-    assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+    let d = not_judged_json(&[&bare.to_string_lossy(), "--channel", "1", "--rpm", "2400", "--teeth", "14,39"]);
     assert!(
         d["speed_doubt"].as_str().unwrap().contains("the given wheel teeth (39) do not fit"),
         "{}",
@@ -734,11 +725,7 @@ fn a_fraction_of_the_speed_given_leaves_the_machine_not_judged() {
     let bare = temp_dir("fraction-speed").join("cracked-bare.wav");
     std::fs::copy(rec("cracked-pinion-tooth3"), &bare).unwrap();
     for (rpm, nth) in [("900", "second"), ("600", "third")] {
-        let args = ["diagnose", &bare.to_string_lossy(), "--channel", "1", "--rpm", rpm, "--teeth", "14,39", "--json"];
-        let run = gearvib(&args);
-        assert_eq!(run.code, 3, "{rpm} rpm: {}", run.stderr);
-        let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-        assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+        let d = not_judged_json(&[&bare.to_string_lossy(), "--channel", "1", "--rpm", rpm, "--teeth", "14,39"]);
         let doubt = d["speed_doubt"].as_str().unwrap();
         assert!(doubt.contains(&format!("every {nth} order")) && doubt.contains("near 30.0000 Hz"), "{doubt}");
     }

@@ -244,6 +244,13 @@ pub struct Scatter {
     pub blocks: usize,
 }
 
+impl Scatter {
+    /// The noise energy the mean of the blocks holds at the sidebands: one block's over the block count.
+    pub fn of_mean(self) -> f64 {
+        self.energy / self.blocks as f64
+    }
+}
+
 /// The [`Scatter`] of `blocks` (order spectra of one gear, on one angle origin) at the first-order sidebands
 /// of a gear of `z` teeth. `None` from fewer than 2 blocks or z < 3.
 pub fn sideband_scatter(blocks: &[OrderSpectrum], z: usize) -> Option<Scatter> {

@@ -70,9 +70,7 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
         // envelope line at one order stays where it is for a speed a few percent off
         _ if d.speed_doubt.is_some() && rise_db >= ENVELOPE_MOVE_DB && !matches!(line.shaft, Shaft::Named(_)) => {
             let was = d.verdict.gear;
-            d.verdict.gear = gear;
-            d.verdict.deciding = Some(line.shaft);
-            (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+            move_verdict(d, line.shaft);
             d.verdict.cross_talk.clear();
             d.verdict.reasons.insert(0, reason);
             d.verdict.reasons.insert(
@@ -88,7 +86,7 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
         _ if !matches!(line.shaft, Shaft::Named(_))
             && line.over_floor_db >= ENVELOPE_MOVE_DB
             && own_rise.is_some_and(|own| rise_db - own >= ENVELOPE_OUTRISE_DB)
-            && !own_impulse(d) =>
+            && !holds_impulse(d, d.verdict.gear) =>
         {
             let was = d.verdict.gear;
             let own = own_rise.unwrap_or(f64::NAN);
@@ -96,9 +94,7 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
                 "the {was}'s indicators moved, without an impulse in its own average, while the {}'s envelope order 1 rose {rise_db:.1} dB and the {was}'s {own:.1} dB: read as the {}'s fault seen in the {was}'s average",
                 line.shaft, line.shaft
             ));
-            d.verdict.gear = gear;
-            d.verdict.deciding = Some(line.shaft);
-            (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+            move_verdict(d, line.shaft);
             d.verdict.reasons.insert(0, reason);
             d.verdict.reasons.insert(
                 1,
@@ -118,12 +114,19 @@ fn rise_over(now_db: f64, baseline_db: f64) -> f64 {
     now_db - baseline_db.max(0.0)
 }
 
-/// Whether the verdict gear's own average holds an impulse: FM4 or M6A at or over its suspect limit
-/// against the baseline (a local fault keeps its impulse whole in its own gear's average).
-fn own_impulse(d: &Diagnosis) -> bool {
-    d.scores.iter().any(|s| {
-        VerdictGear::from(s.gear) == d.verdict.gear && s.indicator.local() && s.decides && s.spreads >= s.suspect_at
-    })
+/// Whether `gear`'s own average holds an impulse: FM4 or M6A at or over its suspect limit against the
+/// baseline (a local fault keeps its impulse whole in its own gear's average).
+fn holds_impulse(d: &Diagnosis, gear: VerdictGear) -> bool {
+    d.scores
+        .iter()
+        .any(|s| VerdictGear::from(s.gear) == gear && s.indicator.local() && s.decides && s.spreads >= s.suspect_at)
+}
+
+/// Puts the verdict on shaft `to`'s gear, that shaft deciding; the tooth named for the other gear goes.
+fn move_verdict(d: &mut Diagnosis, to: Shaft) {
+    d.verdict.gear = VerdictGear::from(to);
+    d.verdict.deciding = Some(to);
+    (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
 }
 
 /// Rise of a shaft's first envelope order over the baseline's (dB) that moves a verdict to that shaft's gear
@@ -178,9 +181,7 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     {
         return true;
     }
-    let impulse =
-        d.scores.iter().any(|s| s.gear == gear && s.indicator.local() && s.decides && s.spreads >= s.suspect_at);
-    if impulse {
+    if holds_impulse(d, VerdictGear::from(gear)) {
         return true;
     }
     let moved: Vec<&str> = {
@@ -205,10 +206,7 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     d.verdict.cross_talk.push(format!(
         "the {gear}'s indicators moved, but its own pattern changed less than the {other}'s: read as the {other}'s change seen in the {gear}'s average"
     ));
-    d.verdict.gear = VerdictGear::from(other);
-    d.verdict.deciding = Some(other);
-    d.verdict.tooth = None;
-    d.verdict.tooth_origin = None;
+    move_verdict(d, other);
     d.verdict.reasons.insert(0, reason);
     if let Some(g) = d.gears.iter().find(|g| g.gear == other && g.channel == theirs.3) {
         d.indicators = g.indicators.clone();

@@ -77,15 +77,18 @@ pub(super) fn follow_shaft(
             }
         }
     };
+    // the first channel's synchronous spectrum on an angle, up to 4.5 mesh orders (the mesh's first four
+    // harmonics with their sidebands): what the checks of the angle read
+    let x = &rec.channels[channels[0] - 1];
+    let sync_of = |map: &AngleMap, z: usize| SyncSpectrum::new(x, map, 4.5 * z as f64);
     let (map, rests_on_nothing) = match (o.shaft_hz, known_z, tacho, tracking) {
         (Some(_), Some(z), None, Tracking::MeshPhase) => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);
-            let x = &rec.channels[channels[0] - 1];
-            let spectrum = SyncSpectrum::new(x, &map, 4.5 * z as f64);
+            let spectrum = sync_of(&map, z);
             let (map, spectrum) =
                 match spectrum.as_ref().and_then(|s| mesh_not_sideband(x, &map, s, (z, zw), o, fs, warnings)) {
                     Some(scaled) => {
-                        let spectrum = SyncSpectrum::new(x, &scaled, 4.5 * z as f64);
+                        let spectrum = sync_of(&scaled, z);
                         (scaled, spectrum)
                     }
                     None => (map, spectrum),
@@ -95,24 +98,18 @@ pub(super) fn follow_shaft(
             (map, misfit)
         }
         (_, _, Some(_), Tracking::Tachometer) => {
-            let no_mesh = tracked_z.or(known_z).and_then(|z| {
-                SyncSpectrum::new(&rec.channels[channels[0] - 1], &map, 4.5 * z as f64)
-                    .and_then(|s| no_mesh_lines(&s, z))
-            });
+            let no_mesh = tracked_z.or(known_z).and_then(|z| sync_of(&map, z).and_then(|s| no_mesh_lines(&s, z)));
             (map, no_mesh)
         }
         (None, Some(z), None, Tracking::MeshPhase) if nominal.source == SpeedSource::Estimated => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);
-            let bare = SyncSpectrum::new(&rec.channels[channels[0] - 1], &map, 4.5 * z as f64)
-                .and_then(|s| no_shaft_lines(&s, (z, zw)));
+            let bare = sync_of(&map, z).and_then(|s| no_shaft_lines(&s, (z, zw)));
             (map, bare)
         }
         _ => (map, None),
     };
     let (map, refined_gain) = match (tracking, tracked_z) {
-        (Tracking::MeshPhase | Tracking::MeshPhaseTachometerOrigin, Some(z)) => {
-            refine_by_average(&rec.channels[channels[0] - 1], map, z)
-        }
+        (Tracking::MeshPhase | Tracking::MeshPhaseTachometerOrigin, Some(z)) => refine_by_average(x, map, z),
         _ => (map, None),
     };
     // the tachometer's pulses are in the angle map now and are never analysed: free them

@@ -33,7 +33,7 @@ pub(super) fn local_reference(fft: &mut Fft, files: &[Vec<&Block>], z: usize) ->
             .iter()
             .map(|f| {
                 let (mean, scatter) = aligned_blocks(f, &reference, z);
-                (mean, scatter.map(|s| s.energy / s.blocks as f64))
+                (mean, scatter.map(Scatter::of_mean))
             })
             .unzip();
         reference = tsa_change::mean(&slices(&aligned));
@@ -127,7 +127,9 @@ pub(super) fn local_change_of(
     r: &GearReference,
     one_file: bool,
 ) -> Option<LocalChange> {
-    let healthy = r.local_healthy.iter().copied().fold(f64::NAN, f64::max);
+    // the largest of the baseline files' figures (NaN when there are none)
+    let largest = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    let healthy = largest(&r.local_healthy);
     if r.residual_mean.len() < 2 || !healthy.is_finite() {
         return None;
     }
@@ -150,14 +152,14 @@ pub(super) fn local_change_of(
     let c = tsa_change::concentration(fft, &mean, &reference, z)?;
     let change = tsa_change::sideband_change(&mean, &reference, z);
     let sidebands = change.map_or(f64::NAN, |c| c.change / c.own);
-    let sidebands_healthy = r.sidebands_healthy.iter().copied().fold(f64::NAN, f64::max);
-    let sidebands_beyond_noise = r.sidebands_beyond_noise.iter().copied().fold(f64::NAN, f64::max);
+    let sidebands_healthy = largest(&r.sidebands_healthy);
+    let sidebands_beyond_noise = largest(&r.sidebands_beyond_noise);
     // the growth the recording's own noise and the baseline's explain: a healthy recording grows by the
     // baseline files' change beyond their noise plus that. The files' growth among themselves holds their
     // own noise instead (a single file's halves twice a whole recording's): the lower of the two limits
     let margin = if one_file { ONE_FILE_NOISE_MARGIN } else { 1.0 };
     let noise = match (change, scatter, r.sidebands_noise) {
-        (Some(c), Some(s), Some(rn)) => margin * SidebandNoise { x: s.energy / s.blocks as f64, r: rn }.growth(c),
+        (Some(c), Some(s), Some(rn)) => margin * SidebandNoise { x: s.of_mean(), r: rn }.growth(c),
         _ => f64::NAN,
     };
     // (`sidebands_limit` of NaN is the first path's floor, so the noise path is taken only when both parts
@@ -169,7 +171,7 @@ pub(super) fn local_change_of(
         files_limit
     };
     let pattern = tsa_change::pattern_change(&mean, &reference, z).unwrap_or(f64::NAN);
-    let pattern_healthy = r.pattern_healthy.iter().copied().fold(f64::NAN, f64::max);
+    let pattern_healthy = largest(&r.pattern_healthy);
     let n = tsa_change::points(mean.len().min(reference.len()), z);
     let tooth =
         tsa_change::difference(fft, &mean, &reference, n).and_then(|d| super::super::tooth::impulse_tooth(&d, z));
