@@ -620,6 +620,25 @@ fn noise_with_a_given_speed_is_not_judged_healthy() {
     assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands out"), "{}", d["verdict"]);
 }
 
+/// The same samples in another scale are no fault: the bundled healthy recording written as a CSV of its
+/// raw 16-bit counts (3.3e5 times its physical values) but labelled m/s, against the WAV itself as
+/// baseline, was FAULTY on NA4* and the spectral change. A level 40 dB or more from the baseline's is a
+/// scale mismatch, said by name, and the level-dependent indicators do not decide: the verdict must not be
+/// faulty (the level-free ones see the same samples).
+#[test]
+fn the_same_samples_in_another_scale_are_no_fault() {
+    let healthy = rec("healthy");
+    let r = gearvib::io::read_recording(std::path::Path::new(&healthy)).unwrap();
+    let mut csv = String::from("dq/dt [m/s]\n");
+    for v in r.channels[0].iter() {
+        csv.push_str(&format!("{}\n", (f64::from(*v) * 327_680.0).round()));
+    }
+    let counts = write(&temp_dir("scale-mismatch"), "healthy-counts.csv", &csv);
+    let d = diag_json(&[&counts, "--fs", "10000", "--rpm", "1800", "--teeth", "14,39", "--baseline", &healthy]);
+    assert_ne!(d["verdict"]["state"], "faulty", "{}", d["verdict"]);
+    assert!(d["warnings"].to_string().contains("scale mismatch"), "{}", d["warnings"]);
+}
+
 /// Nothing unscored is called healthy with a tachometer either: white noise beside a 30 Hz pulse train,
 /// said to be a 14/39 pair, has its speed from the pulses but no tooth mesh in its averages (the mesh
 /// orders hold no line on the synchronous spectrum): not judged, exit code 3, the reason saying so. It was
