@@ -108,6 +108,9 @@ struct Trigger {
     /// fault keeps it whole in its own gear's average and smears it in the other's, where it raises the
     /// energy measures (ER, FM0, NA4*, spectral change) instead.
     local: bool,
+    /// A measure of the sidebands at the gear's own shaft spacing (SBR, SER, SI): a modulation once per
+    /// its own revolution, which the other gear's average does not hold in whole orders.
+    sideband: bool,
 }
 
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
@@ -149,6 +152,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
         out.push(Trigger {
             state,
             local: sc.indicator.local(),
+            sideband: sc.indicator.sideband(),
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}{cap}",
@@ -218,6 +222,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
             out.push(Trigger {
                 state,
                 local: key.local(),
+                sideband: false,
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
@@ -279,11 +284,14 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
     let absolute_only = Thresholds { faulty_count: usize::MAX, ..t.clone() };
     let t = if reference.is_none() { &absolute_only } else { t };
     let (per_gear, not_judged) = gear_triggers(d, reference, t, levels);
-    let worst = worst_gear(&per_gear, t, d.speed_doubt.is_none());
+    let trusted = d.speed_doubt.is_none();
+    let worst = worst_gear(&per_gear, t, trusted).map(|w| if trusted { own_sidebands(&per_gear, w) } else { w });
+    // the worst state of any gear (the gear named may be another: `own_sidebands`)
+    let state_all = per_gear.iter().map(|g| gear_state(&g.triggers, t)).max().unwrap_or(VerdictState::Healthy);
     let mut reasons = Vec::new();
     let mut cross_talk = Vec::new();
     let (state, gear) = match worst {
-        Some(w) if gear_state(&w.triggers, t) > VerdictState::Healthy => {
+        Some(w) if state_all > VerdictState::Healthy => {
             // the deciding gear's reasons, strongest first; the other shafts' triggers are its cross-talk
             // (a local fault is synchronous with its own gear, so its own average keeps it whole while the
             // other gear's average holds it smeared)
@@ -301,7 +309,7 @@ pub fn judge_levels(d: &mut Diagnosis, reference: Option<&Reference>, t: &Thresh
             if let Some(g) = d.gears.iter().find(|g| g.gear == w.gear && g.channel == w.channel) {
                 d.indicators = g.indicators.clone();
             }
-            (gear_state(&w.triggers, t), VerdictGear::from(w.gear))
+            (state_all, VerdictGear::from(w.gear))
         }
         _ if !not_judged.is_empty() || d.gears.is_empty() => {
             if d.gears.is_empty() {
@@ -423,6 +431,25 @@ fn worst_gear<'a>(per_gear: &'a [GearTriggers], t: &Thresholds, speed_trusted: b
     })
 }
 
+/// The gear a verdict names when no average holds an impulse: the worst gear `w` (by [`worst_gear`]),
+/// unless its triggers are energy measures alone (ER, FM0, NA4*, spectral change: both averages of a pair
+/// hold the same mesh harmonics, so these move on both for a change of either gear) while exactly one other
+/// gear's own sidebands (SBR, SER, SI: at its shaft spacing, which the other average does not hold in whole
+/// orders) moved; that gear is named, and the verdict keeps the worst state. The fresh set's worn 18/29
+/// pinion (its first sidebands 4 times the baseline's, SER and SBR over their limits) was put on the wheel,
+/// FAULTY on the wheel's ER alone (6-8 spreads, the pinion's 4.2-4.4), against two siblings.
+fn own_sidebands<'a>(per_gear: &'a [GearTriggers], w: &'a GearTriggers) -> &'a GearTriggers {
+    let any = |g: &GearTriggers, f: fn(&Trigger) -> bool| g.triggers.iter().any(f);
+    if per_gear.iter().any(|g| any(g, |x| x.local)) || any(w, |x| x.sideband) {
+        return w;
+    }
+    let mut moved = per_gear.iter().filter(|g| g.gear != w.gear && any(g, |x| x.sideband));
+    match (moved.next(), moved.next()) {
+        (Some(one), None) => one,
+        _ => w,
+    }
+}
+
 /// What the other gears' triggers are beside the deciding gear `w`'s: its fault smeared over their
 /// revolutions (cross-talk, not a second fault), with why `w` was chosen (`unit` of the ratios).
 fn cross_talk_notes(per_gear: &[GearTriggers], w: &GearTriggers, unit: &str) -> Vec<String> {
@@ -435,9 +462,14 @@ fn cross_talk_notes(per_gear: &[GearTriggers], w: &GearTriggers, unit: &str) -> 
             let other = g.gear;
             let strongest = g.triggers.iter().max_by(|a, b| a.ratio.total_cmp(&b.ratio));
             let (local, max) = weight(&g.triggers);
+            let sidebands = |x: &GearTriggers| x.triggers.iter().any(|t| t.sideband);
             let why = if own_local > 0.0 {
                 format!(
                     "the {gear}'s own average holds the impulse (FM4/M6A {own_local:.1} {unit}, the {other}'s {local:.1})"
+                )
+            } else if sidebands(w) && !sidebands(g) {
+                format!(
+                    "the {gear}'s own sidebands moved (at its shaft spacing, which the {other}'s average does not hold in whole orders), the {other}'s did not: the energy measures both averages share moved with them"
                 )
             } else {
                 format!("the {gear}'s indicators moved further ({own_max:.1} {unit}, the {other}'s {max:.1})")
@@ -531,7 +563,7 @@ mod tests {
     use super::*;
 
     fn trigger(ratio: f64, local: bool) -> Trigger {
-        Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local }
+        Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local, sideband: false }
     }
 
     fn gear(gear: Shaft, triggers: Vec<Trigger>) -> GearTriggers {
@@ -574,6 +606,30 @@ mod tests {
             gear(Shaft::Wheel, vec![trigger(1.86, true)]),
         ];
         assert_eq!(worst_gear(&spall, &t, true).map(|g| g.gear), Some(Shaft::Pinion));
+    }
+
+    /// No impulse anywhere: a wheel FAULTY on ER alone (6 spreads) beside a pinion whose own sidebands moved
+    /// (SER) with its ER names the pinion (the fresh set's worn 18/29 pinion); not when an average holds an
+    /// impulse, when the worst gear's own sidebands moved too, or when two other gears' did.
+    #[test]
+    fn own_sidebands_name_the_gear_when_energy_measures_alone_decided() {
+        let t = Thresholds::default();
+        let energy = |ratio: f64, state: VerdictState| Trigger { state, ..trigger(ratio, false) };
+        let sideband = |ratio: f64| Trigger { state: VerdictState::Suspect, sideband: true, ..trigger(ratio, false) };
+        let worn = |wheel: Vec<Trigger>| {
+            [gear(Shaft::Pinion, vec![energy(4.4, VerdictState::Suspect), sideband(4.4)]), gear(Shaft::Wheel, wheel)]
+        };
+        let named = |g: &[GearTriggers]| {
+            let w = worst_gear(g, &t, true).unwrap();
+            (w.gear, own_sidebands(g, w).gear)
+        };
+        let faulty_er = || energy(6.0, VerdictState::Faulty);
+        assert_eq!(named(&worn(vec![faulty_er()])), (Shaft::Wheel, Shaft::Pinion));
+        assert_eq!(named(&worn(vec![faulty_er(), trigger(3.6, true)])).1, Shaft::Wheel);
+        assert_eq!(named(&worn(vec![faulty_er(), sideband(3.5)])).1, Shaft::Wheel);
+        let [pinion, wheel] = worn(vec![faulty_er()]);
+        let three = [pinion, wheel, gear(Shaft::Named("output"), vec![sideband(3.5)])];
+        assert_eq!(named(&three).1, Shaft::Wheel);
     }
 
     fn score(indicator: Indicator, spreads: f64) -> Score {

@@ -189,6 +189,12 @@ impl Indicator {
         matches!(self, Self::Sbr)
     }
 
+    /// Whether the indicator measures the sidebands at the gear's own shaft spacing around its mesh harmonics
+    /// (SBR, SER, SI): a modulation once per the gear's revolution.
+    pub fn sideband(self) -> bool {
+        matches!(self, Self::Sbr | Self::Ser | Self::Si)
+    }
+
     /// Whether the indicator sees a local fault (one or a few teeth): a peak in the difference signal.
     pub fn local(self) -> bool {
         matches!(self, Self::Fm4 | Self::M6a)
