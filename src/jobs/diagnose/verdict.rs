@@ -43,7 +43,8 @@ pub struct Thresholds {
     pub m6a_absolute: Limits,
     /// NA4 without a baseline (3 nominal).
     pub na4_absolute: Limits,
-    /// Number of indicators at their first limit that together make a recording faulty against a baseline.
+    /// Number of indicators at their first limit that together make a recording faulty against a baseline
+    /// (a supporting one, SBR, not counted: [`Indicator::supporting`]).
     /// Without one the count does not apply: FM4, M6A and NA4 are moments of nearly the same signal, so
     /// several at their first limit are one piece of evidence, not corroboration (healthy generated
     /// machines whose gears carry manufacturing errors put all three at it together), and only one
@@ -111,6 +112,9 @@ struct Trigger {
     /// A measure of the sidebands at the gear's own shaft spacing (SBR, SER, SI): a modulation once per
     /// its own revolution, which the other gear's average does not hold in whole orders.
     sideband: bool,
+    /// An indicator that alone makes a gear at most suspect (SBR): it does not count towards
+    /// `Thresholds::faulty_count` either.
+    supporting: bool,
 }
 
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
@@ -153,6 +157,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             state,
             local: sc.indicator.local(),
             sideband: sc.indicator.sideband(),
+            supporting: sc.indicator.supporting(),
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}{cap}",
@@ -223,6 +228,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
                 state,
                 local: key.local(),
                 sideband: false,
+                supporting: false,
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
@@ -234,7 +240,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
 /// The state a gear's triggers give: the worst single one, or faulty when `faulty_count` fire together.
 fn gear_state(triggers: &[Trigger], t: &Thresholds) -> VerdictState {
     let top = triggers.iter().map(|x| x.state).max().unwrap_or(VerdictState::Healthy);
-    if triggers.len() >= t.faulty_count { VerdictState::Faulty } else { top }
+    if triggers.iter().filter(|x| !x.supporting).count() >= t.faulty_count { VerdictState::Faulty } else { top }
 }
 
 /// Why a gear could not be judged, or `None` when it could: against a baseline, every deciding indicator
@@ -563,7 +569,7 @@ mod tests {
     use super::*;
 
     fn trigger(ratio: f64, local: bool) -> Trigger {
-        Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local, sideband: false }
+        Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local, sideband: false, supporting: false }
     }
 
     fn gear(gear: Shaft, triggers: Vec<Trigger>) -> GearTriggers {
@@ -630,6 +636,19 @@ mod tests {
         let [pinion, wheel] = worn(vec![faulty_er()]);
         let three = [pinion, wheel, gear(Shaft::Named("output"), vec![sideband(3.5)])];
         assert_eq!(named(&three).1, Shaft::Wheel);
+    }
+
+    /// Two indicators at their suspect limit make a gear faulty against a baseline, but SBR (supporting: a load
+    /// fluctuating near the shaft's rate raises it on a healthy gear) is not one of the two: FM0 and SBR of
+    /// the first generator's healthy 18/31 wheel against one sibling (4.5 and 4.3 spreads) are suspect.
+    #[test]
+    fn a_supporting_indicator_is_not_counted_towards_faulty() {
+        let t = Thresholds::default();
+        let suspect = |supporting: bool| Trigger { state: VerdictState::Suspect, supporting, ..trigger(4.4, false) };
+        assert_eq!(gear_state(&[suspect(false), suspect(true)], &t), VerdictState::Suspect);
+        assert_eq!(gear_state(&[suspect(false), suspect(false)], &t), VerdictState::Faulty);
+        assert_eq!(gear_state(&[suspect(false), suspect(false), suspect(true)], &t), VerdictState::Faulty);
+        assert_eq!(gear_state(&[suspect(true)], &t), VerdictState::Suspect);
     }
 
     fn score(indicator: Indicator, spreads: f64) -> Score {

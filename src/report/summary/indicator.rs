@@ -181,10 +181,11 @@ impl Indicator {
         matches!(self, Self::Na4Star | Self::Si | Self::SpectralChange)
     }
 
-    /// Whether the indicator alone makes a gear at most suspect: SBR reads a once-per-revolution modulation,
-    /// which a load fluctuating near the shaft's rate puts on a healthy gear too (a healthy two-stage
-    /// recording of the test generator, its output shaft modulated so, stood 5-6 spreads over its
-    /// baseline), so with no other indicator beside it, it calls for a look, not a stop.
+    /// Whether the indicator alone makes a gear at most suspect, and does not count towards the indicators
+    /// that together make it faulty: SBR reads a once-per-revolution modulation, which a load fluctuating
+    /// near the shaft's rate puts on a healthy gear too (a healthy two-stage recording of the test
+    /// generator, its output shaft modulated so, stood 5-6 spreads over its baseline; a healthy 18/31 wheel
+    /// against one sibling 4.3 spreads, beside its FM0), so it calls for a look, not a stop.
     pub fn supporting(self) -> bool {
         matches!(self, Self::Sbr)
     }
