@@ -560,5 +560,40 @@ pub fn teeth_candidates<T: Sample>(
     Ok(out)
 }
 
+/// Coherence of the synchronous content between the two halves of `y`, a record resampled on a shaft's
+/// angle at `period` points per (supposed) revolution: the halves' averages over their whole revolutions
+/// are compared order by order, as sum Re(A_k conj(B_k)) / sqrt(sum |A_k|^2 sum |B_k|^2) over the orders
+/// below a quarter of `period`, once over the orders not divisible by `d` and once over those that are
+/// (order 0 left out). Content synchronous with the revolution reads near 1 (the same line in both halves),
+/// noise near 0. When the revolution holds `d` turns of the shaft, the orders not divisible by `d` hold no
+/// synchronous content while the others do. `None` with fewer than 8 revolutions.
+pub fn halves_coherence(fft: &mut Fft, y: &[f64], period: usize, d: usize) -> Option<(f64, f64)> {
+    let revs = y.len() / period.max(1);
+    if revs < 8 || period < 8 || d < 2 {
+        return None;
+    }
+    let half = revs / 2;
+    let mut average = |from: usize| {
+        let mut a = vec![0.0; period];
+        for r in y[from * period..(from + half) * period].chunks_exact(period) {
+            a.iter_mut().zip(r).for_each(|(s, v)| *s += v / half as f64);
+        }
+        let mut out = Vec::new();
+        fft.forward(&mut a, &mut out);
+        out
+    };
+    let (a, b) = (average(0), average(half));
+    let coherence = |keep: &dyn Fn(usize) -> bool| {
+        let (mut cross, mut ea, mut eb) = (0.0, 0.0, 0.0);
+        for k in (1..period / 4).filter(|&k| keep(k)) {
+            cross += a[k].0 * b[k].0 + a[k].1 * b[k].1;
+            ea += a[k].0 * a[k].0 + a[k].1 * a[k].1;
+            eb += b[k].0 * b[k].0 + b[k].1 * b[k].1;
+        }
+        if ea > 0.0 && eb > 0.0 { cross / (ea * eb).sqrt() } else { 0.0 }
+    };
+    Some((coherence(&|k| k % d != 0), coherence(&|k| k % d == 0)))
+}
+
 #[cfg(test)]
 mod tests;

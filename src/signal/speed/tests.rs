@@ -163,3 +163,38 @@ fn mesh_comb_is_not_taken_by_an_impulsive_faults_sideband_family() {
         assert!(db > 20.0, "{db}");
     }
 }
+
+/// The halves of a record repeating every P/2 points agree at the even orders of a P-point revolution and
+/// hold only noise at the odd ones (coherence near 0: 256 orders of noise give a spread of about 1/16); a
+/// record whose revolution is P agrees at both. The noise is about as strong as the lines together.
+#[test]
+fn halves_coherence_tells_a_revolution_holding_two_turns() {
+    let period: usize = 512;
+    let revs: usize = 64;
+    let mut draw = uniform_noise(7);
+    // uniform on +-0.85: variance 0.24, the six lines' together 0.27
+    let noise: Vec<f64> = (0..period * revs).map(|_| 1.7 * draw()).collect();
+    let line = |k: f64, t: f64, phase: f64| (2.0 * PI * k * t + phase).sin();
+    let record = |orders: &[f64]| -> Vec<f64> {
+        (0..period * revs)
+            .map(|i| {
+                let t = i as f64 / period as f64;
+                orders.iter().enumerate().map(|(j, &k)| 0.3 * line(k, t, j as f64)).sum::<f64>() + noise[i]
+            })
+            .collect()
+    };
+    let mut fft = Fft::new();
+    // every line at an even order: the shaft turns twice per supposed revolution
+    let twice = record(&[2.0, 4.0, 10.0, 20.0, 22.0, 40.0]);
+    let (odd, even) = halves_coherence(&mut fft, &twice, period, 2).unwrap();
+    assert!(odd.abs() < 0.25 && even > 0.8, "two turns: odd {odd}, even {even}");
+    // odd orders too: a true revolution
+    let once = record(&[1.0, 2.0, 9.0, 10.0, 11.0, 20.0]);
+    let (odd, even) = halves_coherence(&mut fft, &once, period, 2).unwrap();
+    assert!(odd > 0.8 && even > 0.8, "one turn: odd {odd}, even {even}");
+    // and a third: every line at a multiple of 3
+    let thrice = record(&[3.0, 9.0, 30.0, 33.0]);
+    let (other, third) = halves_coherence(&mut fft, &thrice, period, 3).unwrap();
+    assert!(other.abs() < 0.25 && third > 0.8, "three turns: {other}, {third}");
+    assert!(halves_coherence(&mut fft, &twice[..7 * period], period, 2).is_none());
+}
