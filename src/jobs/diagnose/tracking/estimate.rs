@@ -334,8 +334,8 @@ pub(super) fn shaft_from_comb(
         _ => None,
     };
     let turns = turns.map(|t| {
-        let why = format!(
-            "the estimated revolution may hold {} turns of the shaft: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), so the shaft may turn {} times as fast ({}); averages on the wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",
+        let said = format!(
+            "the estimated revolution may hold {} turns of the shaft: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), so the shaft may turn {} times as fast ({})",
             t.count,
             t.count,
             t.kept,
@@ -343,19 +343,22 @@ pub(super) fn shaft_from_comb(
             t.count,
             hz(period / t.count as f64)
         );
-        note.push_str(&format!("; {}", why.split("; averages").next().unwrap_or_default()));
-        why
+        note.push_str(&format!("; {said}"));
+        format!(
+            "{said}; averages on the wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel"
+        )
     });
     Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true, close_second, turns })
 }
 
 /// Coherence between the record's halves (`speed::halves_coherence`) at the orders a revolution of several
 /// turns lacks, under which they hold no synchronous content: on the tachometer's angle the right
-/// revolutions of 273 generated recordings (the hold-out, fresh and first generators, 18 machines) kept
-/// 0.76-1.0 at their odd orders, and a revolution of two true ones read -0.5 to 0.3 on 138 of 154.
+/// revolutions of 273 generated recordings (the hold-out, fresh and first generators, 21 machines) kept
+/// 0.76-1.0 at their odd orders, and a revolution of two true ones read -0.5 to 0.3 on 138 of the 154
+/// hold-out and fresh recordings.
 pub(super) const NO_SYNCHRONOUS: f64 = 0.4;
 /// Coherence the orders a revolution of several turns keeps must reach: the angle follows a line of the
-/// machine, its averages hold the machine (0.83-1.0 at the even orders on the same recordings).
+/// machine, its averages hold the machine (0.83-1.0 at the even orders of the hold-out and fresh recordings).
 pub(super) const SYNCHRONOUS: f64 = 0.8;
 /// Coherence a shorter revolution must keep at its orders that are not multiples of its cycles of the
 /// followed line (the shaft's own lines: runout, the teeth's errors, sidebands): on a signal that repeats
