@@ -117,9 +117,7 @@ fn rise_over(now_db: f64, baseline_db: f64) -> f64 {
 /// Whether `gear`'s own average holds an impulse: FM4 or M6A at or over its suspect limit against the
 /// baseline (a local fault keeps its impulse whole in its own gear's average).
 fn holds_impulse(d: &Diagnosis, gear: VerdictGear) -> bool {
-    d.scores
-        .iter()
-        .any(|s| VerdictGear::from(s.gear) == gear && s.indicator.local() && s.decides && s.spreads >= s.suspect_at)
+    d.scores.iter().any(|s| VerdictGear::from(s.gear) == gear && s.indicator.local() && s.over_suspect())
 }
 
 /// Puts the verdict on shaft `to`'s gear, that shaft deciding; the tooth named for the other gear goes.
@@ -185,12 +183,8 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
         return true;
     }
     let moved: Vec<&str> = {
-        let mut v: Vec<&str> = d
-            .scores
-            .iter()
-            .filter(|s| s.gear == gear && s.decides && s.spreads >= s.suspect_at)
-            .map(|s| s.indicator.label())
-            .collect();
+        let mut v: Vec<&str> =
+            d.scores.iter().filter(|s| s.gear == gear && s.over_suspect()).map(|s| s.indicator.label()).collect();
         v.dedup();
         v
     };

@@ -52,7 +52,7 @@ pub(super) fn place_tooth(d: &mut Diagnosis) {
 
 /// The deciding scores of `gear` over their suspect limit.
 fn over_suspect<'a>(scores: &'a [Score], gear: &'a Shaft) -> impl Iterator<Item = &'a Score> {
-    scores.iter().filter(move |s| s.gear == *gear && s.decides && s.spreads >= s.suspect_at)
+    scores.iter().filter(move |s| s.gear == *gear && s.over_suspect())
 }
 
 /// Whether `gear`'s own indicators moved as a fault of some tooth moves them: a deciding score over its

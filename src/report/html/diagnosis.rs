@@ -125,7 +125,7 @@ pub fn diagnosis_section(
             rows: Vec::new(),
         };
         for s in &d.scores {
-            let hit = s.decides && s.spreads >= s.suspect_at;
+            let hit = s.over_suspect();
             t.rows.push((
                 vec![
                     s.gear.name().to_string(),

@@ -118,6 +118,13 @@ pub struct Score {
     pub decides: bool,
 }
 
+impl Score {
+    /// Whether the indicator takes part in the verdict and stands at or over its suspect limit.
+    pub fn over_suspect(&self) -> bool {
+        self.decides && self.spreads >= self.suspect_at
+    }
+}
+
 /// Where one gear's average changed against the baseline's: the phase-aligned difference of its residual
 /// signal from the baseline's mean residual, how much of that difference's energy one tooth pitch holds, and
 /// how much its first-order mesh sidebands grew.

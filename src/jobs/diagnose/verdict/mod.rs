@@ -142,7 +142,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
     let mut out = Vec::new();
     for sc in &scores {
         let (name, why) = (sc.indicator.label(), sc.indicator.meaning());
-        if !sc.decides || sc.spreads < sc.suspect_at {
+        if !sc.over_suspect() {
             continue;
         }
         let (state, cap) = match (sc.spreads >= sc.faulty_at, sc.indicator.supporting()) {
@@ -177,11 +177,6 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
     out
 }
 
-/// Whether a score stands at or over its suspect limit and decides.
-fn over(s: &Score) -> bool {
-    s.decides && s.spreads >= s.suspect_at
-}
-
 /// SI rose alone: when SI is the only indicator of a gear's average (`gear`, `channel`) over its limit, while the first sidebands of
 /// all its mesh harmonics did not grow (SBR under its limit, the local change's sideband growth under its
 /// own), the returned warning says what the verdict then rests on.
@@ -193,7 +188,7 @@ fn over(s: &Score) -> bool {
 /// shaft, its phase new in each recording) SI alone put four wheel faults on the pinion, and the verdicts it
 /// started and other evidence put on the wheel were right twice: SI still decides, with this caveat.
 fn lone_si(gear: Shaft, channel: usize, scores: &[Score], changes: &[LocalChange]) -> Option<String> {
-    let mut moved = scores.iter().filter(|s| over(s));
+    let mut moved = scores.iter().filter(|s| s.over_suspect());
     let si = moved.next().filter(|s| s.indicator == Indicator::Si && moved.next().is_none())?;
     let sbr_moved = scores.iter().any(|s| s.indicator == Indicator::Sbr && s.spreads >= s.suspect_at);
     let grew = changes.iter().any(|c| c.gear == gear && c.channel == channel && c.sidebands >= c.sidebands_limit);
@@ -565,146 +560,4 @@ pub fn cap_at_suspect(d: &mut Diagnosis, why: String) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn trigger(ratio: f64, local: bool) -> Trigger {
-        Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local, sideband: false, supporting: false }
-    }
-
-    fn gear(gear: Shaft, triggers: Vec<Trigger>) -> GearTriggers {
-        GearTriggers { gear, channel: 1, triggers }
-    }
-
-    /// Between two faulty gears, the one whose indicators moved clearly further (25 %) takes the verdict
-    /// even when only the other's average holds an impulse; within that margin, or on a doubtful speed,
-    /// the impulse decides, and a higher state always does.
-    #[test]
-    fn a_gear_that_moved_clearly_further_outranks_an_impulse() {
-        let t = Thresholds::default();
-        let worn = |pinion: f64| {
-            [
-                gear(Shaft::Pinion, vec![trigger(pinion, false), trigger(1.5, false)]),
-                gear(Shaft::Wheel, vec![trigger(2.2, true), trigger(1.6, true)]),
-            ]
-        };
-        assert_eq!(worst_gear(&worn(2.9), &t, true).map(|g| g.gear), Some(Shaft::Pinion));
-        assert_eq!(worst_gear(&worn(2.6), &t, true).map(|g| g.gear), Some(Shaft::Wheel));
-        // on a doubtful speed (averages possibly smeared) the impulse decides
-        assert_eq!(worst_gear(&worn(2.9), &t, false).map(|g| g.gear), Some(Shaft::Wheel));
-        let suspect_only = [
-            gear(Shaft::Pinion, vec![Trigger { state: VerdictState::Suspect, ..trigger(9.0, false) }]),
-            gear(Shaft::Wheel, vec![trigger(1.2, true), trigger(1.1, false)]),
-        ];
-        assert_eq!(worst_gear(&suspect_only, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
-        // both averages hold an impulse and their strongest indicators moved about as far: the clearly
-        // stronger impulse decides (a generated broken wheel tooth: spectral change 14.5 and 13.4 times
-        // its limit on the pinion and the wheel, FM4 1.05 and 4.5 times)
-        let broken = [
-            gear(Shaft::Pinion, vec![trigger(14.5, false), trigger(1.05, true)]),
-            gear(Shaft::Wheel, vec![trigger(13.4, false), trigger(4.5, true)]),
-        ];
-        assert_eq!(worst_gear(&broken, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
-        assert_eq!(worst_gear(&broken, &t, false).map(|g| g.gear), Some(Shaft::Wheel));
-        // an impulse only 1.6 times stronger does not decide: the strongest indicator does
-        let spall = [
-            gear(Shaft::Pinion, vec![trigger(2.28, false), trigger(1.14, true)]),
-            gear(Shaft::Wheel, vec![trigger(1.86, true)]),
-        ];
-        assert_eq!(worst_gear(&spall, &t, true).map(|g| g.gear), Some(Shaft::Pinion));
-    }
-
-    /// No impulse anywhere: a wheel FAULTY on ER alone (6 spreads) beside a pinion whose own sidebands moved
-    /// (SER) with its ER names the pinion (the fresh set's worn 18/29 pinion); not when an average holds an
-    /// impulse, when the worst gear's own sidebands moved too, or when two other gears' did.
-    #[test]
-    fn own_sidebands_name_the_gear_when_energy_measures_alone_decided() {
-        let t = Thresholds::default();
-        let energy = |ratio: f64, state: VerdictState| Trigger { state, ..trigger(ratio, false) };
-        let sideband = |ratio: f64| Trigger { state: VerdictState::Suspect, sideband: true, ..trigger(ratio, false) };
-        let worn = |wheel: Vec<Trigger>| {
-            [gear(Shaft::Pinion, vec![energy(4.4, VerdictState::Suspect), sideband(4.4)]), gear(Shaft::Wheel, wheel)]
-        };
-        let named = |g: &[GearTriggers]| {
-            let w = worst_gear(g, &t, true).unwrap();
-            (w.gear, own_sidebands(g, w).gear)
-        };
-        let faulty_er = || energy(6.0, VerdictState::Faulty);
-        assert_eq!(named(&worn(vec![faulty_er()])), (Shaft::Wheel, Shaft::Pinion));
-        assert_eq!(named(&worn(vec![faulty_er(), trigger(3.6, true)])).1, Shaft::Wheel);
-        assert_eq!(named(&worn(vec![faulty_er(), sideband(3.5)])).1, Shaft::Wheel);
-        let [pinion, wheel] = worn(vec![faulty_er()]);
-        let three = [pinion, wheel, gear(Shaft::Named("output"), vec![sideband(3.5)])];
-        assert_eq!(named(&three).1, Shaft::Wheel);
-    }
-
-    /// Two indicators at their suspect limit make a gear faulty against a baseline, but SBR (supporting: a load
-    /// fluctuating near the shaft's rate raises it on a healthy gear) is not one of the two: FM0 and SBR of
-    /// the first generator's healthy 18/31 wheel against one sibling (4.5 and 4.3 spreads) are suspect.
-    #[test]
-    fn a_supporting_indicator_is_not_counted_towards_faulty() {
-        let t = Thresholds::default();
-        let suspect = |supporting: bool| Trigger { state: VerdictState::Suspect, supporting, ..trigger(4.4, false) };
-        assert_eq!(gear_state(&[suspect(false), suspect(true)], &t), VerdictState::Suspect);
-        assert_eq!(gear_state(&[suspect(false), suspect(false)], &t), VerdictState::Faulty);
-        assert_eq!(gear_state(&[suspect(false), suspect(false), suspect(true)], &t), VerdictState::Faulty);
-        assert_eq!(gear_state(&[suspect(true)], &t), VerdictState::Suspect);
-    }
-
-    fn score(indicator: Indicator, spreads: f64) -> Score {
-        Score {
-            gear: Shaft::Pinion,
-            channel: 1,
-            indicator,
-            value: 0.12,
-            blocks: 32,
-            baseline_centre: 0.05,
-            baseline_spread: 0.24,
-            scale: crate::report::summary::Scale::Log,
-            baseline_range: [0.02, 0.07],
-            baseline_blocks: 32,
-            spreads,
-            suspect_at: 3.43,
-            faulty_at: 5.6,
-            decides: true,
-        }
-    }
-
-    fn sidebands_grew(by: f64) -> LocalChange {
-        LocalChange {
-            gear: Shaft::Pinion,
-            channel: 1,
-            value: 1.0,
-            healthy: 1.0,
-            limit: 3.0,
-            alignment: 0.9,
-            tooth: None,
-            sidebands: by,
-            sidebands_healthy: 0.1,
-            sidebands_beyond_noise: 0.1,
-            sidebands_noise: 0.05,
-            sidebands_limit: 1.0,
-            pattern: 0.1,
-            pattern_healthy: 0.2,
-        }
-    }
-
-    /// SI over its limit with nothing beside it (the hold-out's 19/53 pinion: SI 3.8 spreads from a fan
-    /// harmonic at order 20, SBR 0.5 and the sideband growth 0.55 of their limits) carries the caveat; SI
-    /// beside SBR or a grown sideband family, or beside another indicator, does not.
-    #[test]
-    fn si_alone_is_said_to_rest_on_two_lines() {
-        let (si, sbr, er) = (score(Indicator::Si, 3.8), score(Indicator::Sbr, 1.7), score(Indicator::Er, 1.0));
-        let quiet = [sidebands_grew(0.55)];
-        let caveat = lone_si(Shaft::Pinion, 1, &[si.clone(), sbr.clone(), er.clone()], &quiet);
-        assert!(caveat.is_some_and(|w| w.contains("SI 0.12 rose 3.8 spreads") && w.contains("uncertain")));
-        let sbr_over = score(Indicator::Sbr, 3.5);
-        assert!(lone_si(Shaft::Pinion, 1, &[si.clone(), sbr_over], &quiet).is_none());
-        assert!(lone_si(Shaft::Pinion, 1, &[si.clone(), sbr.clone()], &[sidebands_grew(1.2)]).is_none());
-        let er_over = score(Indicator::Er, 4.0);
-        assert!(lone_si(Shaft::Pinion, 1, &[si.clone(), er_over], &quiet).is_none());
-        // the growth of the other gear's sidebands is no support
-        let wheel = LocalChange { gear: Shaft::Wheel, ..sidebands_grew(5.0) };
-        assert!(lone_si(Shaft::Pinion, 1, &[si, sbr], &[wheel]).is_some());
-    }
-}
+mod tests;
