@@ -597,20 +597,31 @@ fn nothing_unscored_is_called_healthy() {
     assert!(d["verdict"]["reasons"][0].as_str().unwrap().contains("not a number"));
 }
 
+/// 10 s of white noise at 10 kHz (1e-3 m/s, seed `seed`) as a CSV with a time column, beside a 5 V pulse
+/// train at `tacho_hz` (high for a tenth of each period) when given; written to a fresh directory `name`.
+fn noise_csv(name: &str, seed: u64, tacho_hz: Option<f64>) -> String {
+    let fs = 10_000;
+    let mut rng = Rng::new(seed);
+    let mut csv =
+        String::from(if tacho_hz.is_some() { "time [s],dq/dt [m/s],tacho [V]\n" } else { "time [s],dq/dt [m/s]\n" });
+    for i in 0..10 * fs {
+        let t = i as f64 / fs as f64;
+        csv.push_str(&format!("{t:.5},{:.6e}", 1e-3 * rng.centered()));
+        if let Some(f) = tacho_hz {
+            csv.push_str(if (t * f).fract() < 0.1 { ",5" } else { ",0" });
+        }
+        csv.push('\n');
+    }
+    write(&temp_dir(name), &format!("{name}.csv"), &csv)
+}
+
 /// Nothing unscored is called healthy: white noise said to be a 14/39 pair at 1800 rpm has no mesh comb
 /// to confirm the speed and no mesh line to follow, so its averages (on a speed that a motor's slip could
 /// put 5 % off) cannot clear the machine: not judged, exit code 3, the reason naming the unconfirmed speed.
 /// Without the teeth likewise, the reason saying that no tooth mesh stands out.
 #[test]
 fn noise_with_a_given_speed_is_not_judged_healthy() {
-    let dir = temp_dir("noise-given-speed");
-    let fs = 10_000;
-    let mut rng = Rng::new(7);
-    let mut csv = String::from("time [s],dq/dt [m/s]\n");
-    for i in 0..10 * fs {
-        csv.push_str(&format!("{:.5},{:.6e}\n", i as f64 / fs as f64, 1e-3 * rng.centered()));
-    }
-    let rec = write(&dir, "noise.csv", &csv);
+    let rec = noise_csv("noise-given-speed", 7, None);
     let d = not_judged_json(&[&rec, "--rpm", "1800", "--teeth", "14,39"]);
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(reasons.contains("given speed was not confirmed"), "{reasons}");
@@ -645,16 +656,7 @@ fn the_same_samples_in_another_scale_are_no_fault() {
 /// called healthy.
 #[test]
 fn noise_beside_a_tachometer_is_not_judged_healthy() {
-    let dir = temp_dir("noise-tacho");
-    let fs = 10_000;
-    let mut rng = Rng::new(11);
-    let mut csv = String::from("time [s],dq/dt [m/s],tacho [V]\n");
-    for i in 0..10 * fs {
-        let t = i as f64 / fs as f64;
-        let pulse = if (t * 30.0).fract() < 0.1 { 5.0 } else { 0.0 };
-        csv.push_str(&format!("{t:.5},{:.6e},{pulse}\n", 1e-3 * rng.centered()));
-    }
-    let rec = write(&dir, "noise-tacho.csv", &csv);
+    let rec = noise_csv("noise-tacho", 11, Some(30.0));
     let d = not_judged_json(&[&rec, "--channel", "1", "--tacho-channel", "2", "--teeth", "14,39"]);
     assert!(d["verdict"]["reasons"].to_string().contains("no tooth mesh stands in the vibration"), "{}", d["verdict"]);
 }
