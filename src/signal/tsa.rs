@@ -408,6 +408,27 @@ pub fn decompose_many(
     Decomposition { amplitudes, regular_energy, residual, difference }
 }
 
+/// Splits one revolution `x` of a gear's average into the part that repeats `n` times per revolution and
+/// the rest: `(own, shared)` with `own + shared = x`, `shared` holding the orders k that are multiples of
+/// `n` (the time-domain fold: shared(t) = (1/n) sum_j x(t + j/n rev)), `own` the others. A pair whose teeth
+/// share the factor g = gcd(z_p, z_w) meshes the same tooth pairs every z_w / g pinion revolutions: the
+/// pinion's lines fall on the wheel's orders that are multiples of z_w / g and nowhere else, so what the
+/// other gear puts into an average lies in `shared` (n = z / g of the averaged gear), and only `own` is
+/// the gear's alone.
+pub fn split_period(fft: &mut Fft, x: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let l = x.len();
+    if n <= 1 || l < 2 {
+        return (vec![0.0; l], x.to_vec());
+    }
+    let mut spec = Vec::new();
+    fft.forward(&mut x.to_vec(), &mut spec);
+    let part = |shared: bool| -> Vec<(f64, f64)> {
+        spec.iter().enumerate().map(|(k, &c)| if k.is_multiple_of(n) == shared { c } else { (0.0, 0.0) }).collect()
+    };
+    let (own, shared) = (part(false), part(true));
+    (fft.inverse(&own, l), fft.inverse(&shared, l))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -531,5 +552,23 @@ mod tests {
         let x = vec![0.0; 1000];
         let e = tsa(&x, &AngleMap::constant(300.0, 0.0, 1000), 1.0, 256, 8).unwrap_err();
         assert!(e.to_string().contains("8 revolutions"), "{e}");
+    }
+
+    #[test]
+    fn split_period_matches_the_time_domain_fold() {
+        // an impulse once per revolution plus a line at order 7 over 3 x 256 points: the part repeating
+        // three times per revolution is the mean of the three shifted thirds (the fold), the rest its
+        // complement; checked against that direct fold, not the transform
+        let (l, n) = (768usize, 3usize);
+        let x: Vec<f64> =
+            (0..l).map(|i| if i == 100 { 5.0 } else { 0.0 } + (2.0 * PI * 7.0 * i as f64 / l as f64).cos()).collect();
+        let (own, shared) = split_period(&mut Fft::new(), &x, n);
+        for i in 0..l {
+            let fold = (0..n).map(|j| x[(i + j * l / n) % l]).sum::<f64>() / n as f64;
+            assert!((shared[i] - fold).abs() < 1e-9, "shared at {i}: {} against the fold {fold}", shared[i]);
+            assert!((own[i] + shared[i] - x[i]).abs() < 1e-9);
+        }
+        // the impulse: 2/3 of it its own at its place, a third at each of the three places in `shared`
+        assert!((own[100] - (5.0 * 2.0 / 3.0 + (2.0 * PI * 700.0 / l as f64).cos())).abs() < 1e-9);
     }
 }

@@ -194,6 +194,29 @@ pub fn concentration(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], 
     (median > 0.0 && top.is_finite()).then_some(Concentration { ratio: top / median, tooth: tooth + 1 })
 }
 
+/// Where the change `x - s reference` (s the least-squares scale) lies between the orders that are not
+/// multiples of `n` and those that are: the first's share of its energy over the share (n - 1) / n that
+/// they hold of a change spread evenly over the orders (a local fault's, or noise). About 1 for a change
+/// of the gear's own; near 0 for a change that repeats n times per revolution, which on a pair whose
+/// teeth share a factor is the other gear's (`signal::tsa::split_period`). `None` for `n` under 2 or
+/// nothing to compare.
+pub fn own_share(x: &[(f64, f64)], reference: &[(f64, f64)], n: usize) -> Option<f64> {
+    let len = x.len().min(reference.len());
+    if n < 2 || len < 2 * n {
+        return None;
+    }
+    let s = scale(&x[..len], &reference[..len])?;
+    let (mut own, mut all) = (0.0, 0.0);
+    for k in 1..len {
+        let e = (x[k].0 - s * reference[k].0).powi(2) + (x[k].1 - s * reference[k].1).powi(2);
+        all += e;
+        if !k.is_multiple_of(n) {
+            own += e;
+        }
+    }
+    (all > 0.0 && all.is_finite()).then(|| own / all * n as f64 / (n - 1) as f64)
+}
+
 /// How much the first-order sidebands (orders k z +- 1, every mesh harmonic k) changed: the energy of the
 /// difference `x - s reference` (s the least-squares scale) at those orders over the energy of `s reference`
 /// there. A change once per revolution of the gear (an eccentric gear, wear that differs from tooth to tooth)
@@ -490,5 +513,28 @@ pub(crate) mod tests {
         // too few blocks or teeth: nothing to say
         assert!(sideband_scatter(&noisy_blocks(1, 60, a, 7), 10).is_none());
         assert!(sideband_scatter(&noisy_blocks(5, 60, a, 7), 2).is_none());
+    }
+
+    #[test]
+    fn own_share_tells_a_change_of_the_gear_from_one_repeating_n_times() {
+        // the same healthy pattern on both sides; an impulse added once per revolution (its orders all
+        // equal) or three times per revolution (only every third order): shares of 1 and 0 by construction
+        let orders = 300usize;
+        let pattern: OrderSpectrum = (0..=orders)
+            .map(|k| if k == 0 { (0.0, 0.0) } else { ((k as f64).sin(), (k as f64 * 0.7).cos()) })
+            .collect();
+        let with = |every: usize| -> OrderSpectrum {
+            pattern
+                .iter()
+                .enumerate()
+                .map(|(k, c)| if k > 0 && k % every == 0 { (c.0 + 0.5, c.1) } else { *c })
+                .collect()
+        };
+        let once = own_share(&with(1), &pattern, 3).unwrap();
+        let thrice = own_share(&with(3), &pattern, 3).unwrap();
+        // the least-squares scale takes a little of the added change into the pattern: within 5 %
+        assert!((once - 1.0).abs() < 0.05, "own change read as {once}");
+        assert!(thrice < 0.05, "a change every third order read as {thrice}");
+        assert!(own_share(&with(1), &pattern, 1).is_none());
     }
 }

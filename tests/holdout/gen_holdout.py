@@ -35,7 +35,7 @@ severity, true mean speed and the nameplate (nominal) speed.
 Output: per machine a directory with float32 WAV + gearvib sidecar (`NAME.wav.json`), or int16 WAV without
 sidecar (a plain data-logger file), two channels (accelerometer m/s^2, tachometer V).
 
-Usage: gen_holdout.py [--out /tmp/holdout] [--machines m1,m2,...] [--quick] [--fresh]
+Usage: gen_holdout.py [--out /tmp/holdout] [--machines m1,m2,...] [--quick] [--fresh | --common]
 """
 
 import argparse
@@ -73,6 +73,17 @@ FRESH_MACHINES = [
     dict(name="m12-z17z47", zp=17, zw=47, fs=32000.0, f1=21.0, T=12.0, fmt="f32", seed=1313, panel=True),
     dict(name="m13-z31z43", zp=31, zw=43, fs=44100.0, f1=19.0, T=12.0, fmt="f32", seed=1414),
     dict(name="m14-z18z29", zp=18, zw=29, fs=20000.0, f1=39.0, T=10.0, fmt="i16", seed=1515, panel=True),
+]
+
+# a third set (`--common`, twenty-eighth session): ratios with a common factor, which no set above has. A
+# gear pair whose teeth share a factor repeats its tooth pairs every few revolutions, and with a whole
+# ratio the wheel's orders fall on pinion orders: 20/40 and 18/54 (whole ratios 2 and 3), 24/36 (pairs
+# repeat every 3 pinion revolutions) and 23/23 (1:1, where no period tells the two gears apart)
+COMMON_MACHINES = [
+    dict(name="m15-z20z40", zp=20, zw=40, fs=25600.0, f1=24.0, T=12.0, fmt="f32", seed=1616),
+    dict(name="m16-z18z54", zp=18, zw=54, fs=48000.0, f1=30.0, T=12.0, fmt="i16", seed=1717, panel=True),
+    dict(name="m17-z24z36", zp=24, zw=36, fs=32000.0, f1=16.0, T=14.0, fmt="f32", seed=1818),
+    dict(name="m18-z23z23", zp=23, zw=23, fs=40000.0, f1=20.0, T=12.0, fmt="f32", seed=1919, panel=True),
 ]
 
 # faults per machine; gear "A" / "B" alternate by machine index so both gears get every kind
@@ -586,8 +597,9 @@ def main():
     ap.add_argument("--machines", default=None, help="comma-separated machine names or indices (1-based)")
     ap.add_argument("--quick", action="store_true", help="6 s recordings (a smoke test)")
     ap.add_argument("--fresh", action="store_true", help="the fresh set (m10-m14) instead of m1-m9")
+    ap.add_argument("--common", action="store_true", help="the common-factor set (m15-m18) instead of m1-m9")
     a = ap.parse_args()
-    machines = FRESH_MACHINES if a.fresh else MACHINES
+    machines = COMMON_MACHINES if a.common else FRESH_MACHINES if a.fresh else MACHINES
     sel = list(range(len(machines)))
     if a.machines:
         want = a.machines.split(",")

@@ -337,7 +337,7 @@ def report(jobs, mdirs):
         print("%-16s " % mode + " ".join("%13s" % x for x in row))
     print()
     print("every recording: state/gear/tooth per mode (F faulty, S suspect, H healthy, N not judged, E error;")
-    print("p/w gear named, u unknown; digits: tooth named; * wrong gear; speed error in % of the true mean when > 2.5 %)")
+    print("p/w gear named, e 'pinion or wheel' (a 1:1 pair), u unknown; digits: tooth named; * wrong gear; speed error in % of the true mean when > 2.5 %)")
     print("%-32s " % "recording" + " ".join("%14s" % m for m in modes))
     keys = sorted(truths)
     for key in keys:
@@ -353,7 +353,7 @@ def report(jobs, mdirs):
             c = {"faulty": "F", "suspect": "S", "healthy": "H", "not_judged": "N"}.get(r["state"], "E")
             if r["state"] in ("faulty", "suspect"):
                 g = r["gear"] or "?"
-                c += g[0]
+                c += "e" if g == "pinion or wheel" else g[0]
                 if t["gear"] is not None and r["gear"] != t["gear"]:
                     c += "*"
                 if r["tooth"] is not None:

@@ -406,6 +406,7 @@ mod tests {
             sidebands_limit: 8.0,
             pattern: 0.05,
             pattern_healthy: 0.1,
+            own_share: None,
         };
         Diagnosis {
             file: "x.wav".into(),

@@ -17,6 +17,7 @@ mod evidence;
 mod machine;
 pub mod profile;
 mod recording;
+mod shared_period;
 mod teeth;
 mod tooth;
 mod tracking;
@@ -386,7 +387,8 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     }
     history.apply(&mut d);
     if let Some(r) = &p.reference {
-        d.local_change = d.gears.iter().filter_map(|g| r.local_change(g)).collect();
+        let gears = &d.gears;
+        d.local_change = gears.iter().filter_map(|g| r.local_change(g, shared_period::shared_step(gears, g))).collect();
     }
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
     let pattern_decided = evidence::pattern_evidence(&mut d);
@@ -399,8 +401,9 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         }
         None => evidence::envelope_absolute(&mut d),
     }
-    if let Some(m) = &p.opts.machine {
-        machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref());
+    match &p.opts.machine {
+        Some(m) => machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref()),
+        None => shared_period::shared_period_evidence(&mut d),
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);

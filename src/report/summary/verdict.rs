@@ -44,6 +44,9 @@ pub enum VerdictGear {
     /// The teeth were not given, so the gear cannot be named.
     #[serde(rename = "unknown (teeth not given)")]
     Unknown,
+    /// A pair of equal teeth (1:1): both gears turn at one speed, so no period tells which one is faulty.
+    #[serde(rename = "pinion or wheel")]
+    Either,
     /// No gear (healthy).
     #[serde(rename = "none")]
     None,
@@ -65,6 +68,7 @@ impl VerdictGear {
             Self::Pinion => "pinion",
             Self::Wheel => "wheel",
             Self::Unknown => "unknown (teeth not given)",
+            Self::Either => "pinion or wheel",
             Self::None => "none",
             Self::Sun => "sun",
             Self::Planet => "planet",
@@ -171,6 +175,12 @@ pub struct LocalChange {
     /// The largest of the same between the baseline's own files (NaN from one file, or a profile written
     /// before it).
     pub pattern_healthy: f64,
+    /// On a pair whose teeth share a factor g: the change's energy at the orders the gear does not share
+    /// with the other gear (not multiples of z / g) over the share those orders hold of an even change
+    /// (`signal::tsa_change::own_share`): about 1 for the gear's own change, near 0 for the other gear's.
+    /// Absent on coprime teeth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub own_share: Option<f64>,
 }
 
 /// The verdict.

@@ -120,12 +120,14 @@ fn aligned_blocks(blocks: &[OrderSpectrum], reference: &[(f64, f64)], z: usize) 
 /// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
 /// onto the recording's angle origin), with the tooth where it is largest. `None` when the reference has no
 /// residual or healthy values, or the recording's residual does not line up with it (correlation under
-/// [`MIN_ALIGNMENT`]).
+/// [`MIN_ALIGNMENT`]). `shared_step` is z / gcd(z, z_other) on a pair whose teeth share a factor (its
+/// orders shared with the other gear are its multiples), else 1.
 pub(super) fn local_change_of(
     fft: &mut Fft,
     g: &GearIndicators,
     r: &GearReference,
     one_file: bool,
+    shared_step: usize,
 ) -> Option<LocalChange> {
     // the largest of the baseline files' figures (NaN when there are none)
     let largest = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
@@ -190,5 +192,6 @@ pub(super) fn local_change_of(
         sidebands_limit,
         pattern,
         pattern_healthy,
+        own_share: tsa_change::own_share(&mean, &reference, shared_step),
     })
 }

@@ -453,10 +453,11 @@ impl Reference {
     }
 
     /// The local change of gear `g` against this baseline (`None` when the baseline lacks the gear or holds no
-    /// residual, as profiles written before it, or when the averages do not line up).
-    pub fn local_change(&self, g: &GearIndicators) -> Option<LocalChange> {
+    /// residual, as profiles written before it, or when the averages do not line up). `shared_step`: z / gcd(z,
+    /// z_other) of a pair whose teeth share a factor, else 1.
+    pub fn local_change(&self, g: &GearIndicators, shared_step: usize) -> Option<LocalChange> {
         let r = self.gears.get(&(g.gear.baseline_key(), g.channel))?;
-        local_change_of(&mut Fft::new(), g, r, self.files == 1)
+        local_change_of(&mut Fft::new(), g, r, self.files == 1, shared_step)
     }
 }
 

@@ -118,6 +118,7 @@ fn sidebands_grew(by: f64) -> LocalChange {
         sidebands_limit: 1.0,
         pattern: 0.1,
         pattern_healthy: 0.2,
+        own_share: None,
     }
 }
 
