@@ -157,8 +157,14 @@ pub const ENVELOPE_OUTRISE_DB: f64 = 10.0;
 /// the other gear, its state kept (the shared indicators say how large the change is, not where).
 ///
 /// Returns whether both gears' pattern changes were known (then they, not the local change's sideband
-/// evidence, decide between the gears: see [`local_change_evidence`]).
+/// evidence, decide between the gears: see [`local_change_evidence`]). Never on a pair whose teeth share
+/// a factor, where each band holds the other gear's lines too.
 pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
+    // on teeth that share a factor the band around a gear's mesh harmonics holds the other gear's lines
+    // too (`shared_period`): its pattern is not its own teeth's, and decides nothing
+    if super::shared_period::teeth_share_a_factor(&d.gears) {
+        return false;
+    }
     // (gear, excess over the healthy files', value, healthy value, channel), the largest excess per gear
     let excess = |shaft: Shaft| {
         d.local_change

@@ -35,19 +35,29 @@ pub const OWN_STANDOUT: f64 = 5.0;
 /// revolution), unless its own orders hold an impulse ([`OWN_IMPULSE`]).
 pub const CHANGE_ELSEWHERE: f64 = 0.35;
 
-/// z / gcd(z, z_other) of a pinion's or wheel's average `g` (its orders that are multiples of it are shared
-/// with the other gear of the pair, on the same channel); 1 on coprime teeth or without the other gear.
-pub(super) fn shared_step(gears: &[GearIndicators], g: &GearIndicators) -> usize {
+/// gcd(z, z_other) of a pinion's or wheel's average `g` and the other gear of the pair on the same channel;
+/// 1 without the other gear.
+fn common_factor(gears: &[GearIndicators], g: &GearIndicators) -> usize {
     let other = match g.gear {
         Shaft::Pinion => Shaft::Wheel,
         Shaft::Wheel => Shaft::Pinion,
         _ => return 1,
     };
-    let Some(o) = gears.iter().find(|o| o.gear == other && o.channel == g.channel) else { return 1 };
-    match gcd(g.mesh_order, o.mesh_order) {
+    gears.iter().find(|o| o.gear == other && o.channel == g.channel).map_or(1, |o| gcd(g.mesh_order, o.mesh_order))
+}
+
+/// z / gcd(z, z_other) of a pinion's or wheel's average `g` (its orders that are multiples of it are shared
+/// with the other gear of the pair, on the same channel); 1 on coprime teeth or without the other gear.
+pub(super) fn shared_step(gears: &[GearIndicators], g: &GearIndicators) -> usize {
+    match common_factor(gears, g) {
         0 | 1 => 1,
         f => g.mesh_order / f,
     }
+}
+
+/// Whether the pair's teeth share a factor (gcd(z_p, z_w) > 1).
+pub(super) fn teeth_share_a_factor(gears: &[GearIndicators]) -> bool {
+    gears.iter().any(|g| g.gear == Shaft::Pinion && common_factor(gears, g) > 1)
 }
 
 /// One gear's difference signal split by the orders it shares with the other gear.
