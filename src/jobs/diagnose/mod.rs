@@ -403,7 +403,10 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     }
     match &p.opts.machine {
         Some(m) => machine::name_verdict(&mut d, m.machine(), &p.opts, p.plots.as_ref(), p.planets.as_deref()),
-        None => shared_period::shared_period_evidence(&mut d),
+        None => {
+            evidence::concentration_evidence(&mut d);
+            shared_period::shared_period_evidence(&mut d);
+        }
     }
     if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);

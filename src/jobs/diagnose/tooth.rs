@@ -8,7 +8,7 @@ use crate::report::summary::{Diagnosis, Score, Shaft, ToothOrigin, VerdictGear, 
 /// the fault to be local and placed on a tooth: over z pitches of Gaussian noise the largest pitch holds
 /// about 1.5-2 times its share (the maximum of z chi-square sums), a crack or a spall 4-10 times; a
 /// distributed fault (wear, eccentricity) spreads over every tooth and is not placed.
-const LOCAL_CONCENTRATION: f64 = 3.0;
+pub(super) const LOCAL_CONCENTRATION: f64 = 3.0;
 
 /// Puts a local fault on its tooth: the deciding gear's difference signal (its average less the mesh
 /// lines) holds one impulse per revolution for a crack, a spall or a broken tooth. Counted from the
