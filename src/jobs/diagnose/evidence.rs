@@ -226,10 +226,9 @@ pub const PATTERN_BEYOND_HEALTHY: f64 = 1.25;
 
 /// How many times the verdict gear's concentration of its difference signal's energy at one tooth
 /// ([`tooth::concentration`]) the other gear's must reach for [`concentration_evidence`] to move the
-/// verdict there. A local
-/// fault is one impulse per revolution in its own gear's average; in the other gear's it falls at
-/// z_other / z_own places per revolution (a 10/89 pair's pinion impulse at about nine of the wheel's), so
-/// its energy spreads over as many pitches. On a sweep of generated machines with a slow wheel (10/89,
+/// verdict there. A local fault is one impulse per revolution in its own gear's average; in the other
+/// gear's it falls at z_other / z_own places per revolution (a 10/89 pair's pinion impulse at about nine
+/// of the wheel's), so its energy spreads over as many pitches. On a sweep of generated machines with a slow wheel (10/89,
 /// 25/71, 31/79: 20-22 wheel revolutions in the record, blocks of two) the pinion's broken teeth and 50 %
 /// cracks stood at 6.3-24 in the pinion's average and 3.4-4.4 in the wheel's, whose NA4* (its blocks of two
 /// revolutions hold the pinion's impulses) had taken the verdict; the wheels' own faults stood at 12-80 in
@@ -269,10 +268,14 @@ pub fn concentration_evidence(d: &mut Diagnosis) {
     let reason = format!(
         "the {other} is named, not the {named}: the {other}'s own average holds an impulse at one tooth (the difference signal's largest tooth pitch holds {theirs:.1} times the mean pitch's energy, the {named}'s {mine:.1}): a local fault is one impulse per revolution in its own gear's average and spread over several places of the other's"
     );
+    // the notes that read the other gear's indicators as this one's cross-talk no longer hold
+    d.verdict.cross_talk.clear();
     d.verdict.cross_talk.push(format!(
         "the {named}'s indicators moved with the {other}'s fault: its impulses fall at several places of the {named}'s revolution (their energy spread over its teeth, {mine:.1} times the mean pitch's at most)"
     ));
+    let indicators = that.indicators.clone();
     move_verdict(d, other);
+    d.indicators = indicators;
     d.verdict.reasons.insert(0, reason);
     place_tooth(d);
 }

@@ -19,7 +19,7 @@ use tooth::place_tooth;
 
 /// Under this fraction of n - 1 (the ratio of the own part's largest value to the shared part's that a
 /// gear's own impulse gives), the verdict gear's impulse is taken for the other gear's: on noise alone the
-/// ratio is about sqrt((n - 1)) (the two parts' energies), 1 to 1.4 of n - 1 for n = 2, 3; its own impulse
+/// ratio is about sqrt(n - 1) (the two parts' energies), 1 to 1.4 of n - 1 for n = 2, 3; its own impulse
 /// gives n - 1; 0.3 leaves room for noise under an impulse of the other gear about three times its level.
 pub const BORN_ELSEWHERE: f64 = 0.3;
 
@@ -130,7 +130,7 @@ pub(super) fn shared_period_evidence(d: &mut Diagnosis) {
         format!(
             "the {named}'s impulse repeats {} times per {named} revolution: it lies in the orders the {named} shares with the {other} ({zt}/{zo} teeth share the factor {g}), where only a fault of the {other}, turning {} times as fast, puts one (the {named}'s own orders hold {:.2} of the n - 1 = {} their own impulse gives)",
             mine.n,
-            num(zo as f64 / zt as f64),
+            num(zt as f64 / zo as f64),
             mine_r,
             mine.n - 1
         )
@@ -147,9 +147,13 @@ pub(super) fn shared_period_evidence(d: &mut Diagnosis) {
     } else {
         return;
     };
+    let indicators = that.indicators.clone();
     d.verdict.gear = VerdictGear::from(other);
     d.verdict.deciding = Some(other);
     (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+    d.indicators = indicators;
+    // the notes that read the other gear's indicators as this one's cross-talk no longer hold
+    d.verdict.cross_talk.clear();
     d.verdict.cross_talk.push(format!("the {named}'s indicators moved with the {other}'s fault: {reason}"));
     d.verdict.reasons.insert(0, format!("the {other} is named, not the {named}: {reason}"));
     place_tooth(d);
