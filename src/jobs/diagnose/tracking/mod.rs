@@ -500,7 +500,14 @@ fn track_with_tachometer(
             (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
         }
         _ => {
-            warnings.extend(quiet.into_iter().map(|w| format!("the tachometer's angle is used: {w}")));
+            // the quiet tracking's warnings end on what a constant-speed average would assume; here the
+            // tachometer's angle is averaged on instead
+            warnings.extend(quiet.into_iter().map(|w| {
+                let w = w
+                    .replace(", so the TSA assumes a constant speed", "")
+                    .replace("; the TSA assumes a constant speed", "");
+                format!("the tachometer's angle is used, not the mesh phase: {w}")
+            }));
             (nominal, Tracking::Tachometer, None, None)
         }
     })
