@@ -402,6 +402,24 @@ pub(super) fn track(
     if o.tacho_channel.is_some() {
         return track_with_tachometer(path, rec, channels, o, known_z, nominal, warnings);
     }
+    let (tracked, unfollowed) = follow_mesh(path, rec, channels, o, known_z, nominal, given)?;
+    if let Some(why) = unfollowed {
+        warnings.push(format!("{why}; the TSA assumes a constant speed"));
+    }
+    Ok(tracked)
+}
+
+/// The mesh-phase part of [`track`]: the followed angle, or the constant nominal one with why the line
+/// could not be followed (what the caller then averages on is its own to say).
+fn follow_mesh(
+    path: &Path,
+    rec: &Recording,
+    channels: &[usize],
+    o: &Options,
+    known_z: Option<usize>,
+    nominal: AngleMap,
+    given: Option<f64>,
+) -> Result<(Tracked, Option<String>), Error> {
     let period = nominal.mean_period_samples();
     let z = match known_z {
         Some(z) => z,
@@ -438,35 +456,33 @@ pub(super) fn track(
             }
         }
     }
+    let constant = (nominal, Tracking::Constant, None, Some(z));
     Ok(match best {
         Some(Ok(t)) if !within(&t) => {
             let mean = t.map.mean_period_samples();
-            warnings.push(format!(
-                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed{}: it followed another line, so the TSA assumes a constant speed",
+            let why = format!(
+                "mesh-phase tracking of order {z} ended {:+.1} % away from the nominal speed{}: it followed another line",
                 100.0 * (period / mean - 1.0),
                 given.map_or(String::new(), |g| format!(
                     " ({:+.1} % from the given one, tolerance +-{:.1} %)",
                     100.0 * (g / mean - 1.0),
                     100.0 * o.speed_tolerance
                 ))
-            ));
-            (nominal, Tracking::Constant, None, Some(z))
+            );
+            (constant, Some(why))
         }
         Some(Ok(t)) if t.line_snr_db >= MIN_TRACKING_SNR_DB => {
-            (t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z))
+            ((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)), None)
         }
         Some(Ok(t)) => {
-            warnings.push(format!(
-                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed; the TSA assumes a constant speed",
+            let why = format!(
+                "the mesh line (order {z}) stands only {:.1} dB above its band: too weak to track the speed",
                 t.line_snr_db
-            ));
-            (nominal, Tracking::Constant, None, Some(z))
+            );
+            (constant, Some(why))
         }
-        Some(Err(e)) => {
-            warnings.push(format!("mesh-phase tracking not possible ({e}); the TSA assumes a constant speed"));
-            (nominal, Tracking::Constant, None, Some(z))
-        }
-        None => (nominal, Tracking::Constant, None, Some(z)),
+        Some(Err(e)) => (constant, Some(format!("mesh-phase tracking not possible ({e})"))),
+        None => (constant, None),
     })
 }
 
@@ -488,9 +504,8 @@ fn track_with_tachometer(
     warnings: &mut Vec<String>,
 ) -> Result<Tracked, Error> {
     let Some(z) = known_z else { return Ok((nominal, Tracking::Tachometer, None, None)) };
-    let mut quiet = Vec::new();
     let without = Options { tacho_channel: None, ..o.clone() };
-    let tracked = track(path, rec, channels, &without, Some(z), nominal.clone(), None, &mut quiet)?;
+    let (tracked, unfollowed) = follow_mesh(path, rec, channels, &without, Some(z), nominal.clone(), None)?;
     Ok(match tracked {
         // the mesh line must stand clear for its angle to replace a tachometer's (a weaker line can slip a
         // cycle in noise, which a pulse train never does)
@@ -500,14 +515,9 @@ fn track_with_tachometer(
             (align_origin(&map, &nominal), Tracking::MeshPhaseTachometerOrigin, snr, z)
         }
         _ => {
-            // the quiet tracking's warnings end on what a constant-speed average would assume; here the
-            // tachometer's angle is averaged on instead
-            warnings.extend(quiet.into_iter().map(|w| {
-                let w = w
-                    .replace(", so the TSA assumes a constant speed", "")
-                    .replace("; the TSA assumes a constant speed", "");
-                format!("the tachometer's angle is used, not the mesh phase: {w}")
-            }));
+            if let Some(why) = unfollowed {
+                warnings.push(format!("the tachometer's angle is used, not the mesh phase: {why}"));
+            }
             (nominal, Tracking::Tachometer, None, None)
         }
     })
