@@ -249,14 +249,8 @@ pub fn concentration_evidence(d: &mut Diagnosis) {
     {
         return;
     }
-    let (named, other) = match d.verdict.gear {
-        VerdictGear::Pinion => (Shaft::Pinion, Shaft::Wheel),
-        VerdictGear::Wheel => (Shaft::Wheel, Shaft::Pinion),
-        _ => return,
-    };
-    let Some(&channel) = d.channels.first() else { return };
-    let of = |s: Shaft| d.gears.iter().find(|g| g.gear == s && g.channel == channel);
-    let (Some(this), Some(that)) = (of(named), of(other)) else { return };
+    let Some((this, that)) = pair_averages(d) else { return };
+    let (named, other) = (this.gear, that.gear);
     let (mine, theirs) = (
         tooth::concentration(&this.difference, this.mesh_order),
         tooth::concentration(&that.difference, that.mesh_order),
@@ -265,18 +259,38 @@ pub fn concentration_evidence(d: &mut Diagnosis) {
     if !concentrated || !holds_impulse(d, VerdictGear::from(other)) {
         return;
     }
-    let reason = format!(
-        "the {other} is named, not the {named}: the {other}'s own average holds an impulse at one tooth (the difference signal's largest tooth pitch holds {theirs:.1} times the mean pitch's energy, the {named}'s {mine:.1}): a local fault is one impulse per revolution in its own gear's average and spread over several places of the other's"
+    let why = format!(
+        "the {other}'s own average holds an impulse at one tooth (the difference signal's largest tooth pitch holds {theirs:.1} times the mean pitch's energy, the {named}'s {mine:.1}): a local fault is one impulse per revolution in its own gear's average and spread over several places of the other's"
     );
-    // the notes that read the other gear's indicators as this one's cross-talk no longer hold
-    d.verdict.cross_talk.clear();
-    d.verdict.cross_talk.push(format!(
-        "the {named}'s indicators moved with the {other}'s fault: its impulses fall at several places of the {named}'s revolution (their energy spread over its teeth, {mine:.1} times the mean pitch's at most)"
-    ));
+    let note = format!(
+        "its impulses fall at several places of the {named}'s revolution (their energy spread over its teeth, {mine:.1} times the mean pitch's at most)"
+    );
     let indicators = that.indicators.clone();
+    name_partner(d, indicators, &why, &note);
+}
+
+/// The averages of a verdict's gear of a pair and of its partner on the deciding channel (the first
+/// analysed), when both are there.
+pub(super) fn pair_averages(d: &Diagnosis) -> Option<(&GearIndicators, &GearIndicators)> {
+    let named = d.verdict.gear.pair_shaft()?;
+    let other = named.partner()?;
+    let channel = *d.channels.first()?;
+    let of = |s: Shaft| d.gears.iter().find(|g| g.gear == s && g.channel == channel);
+    Some((of(named)?, of(other)?))
+}
+
+/// Moves a verdict on the pinion or the wheel to its partner, whose average's `indicators` become the
+/// deciding ones: `why` the partner is named goes first among the reasons, and replaces the cross-talk
+/// notes (they read the partner's indicators as the first gear's cross-talk) with how the first gear's
+/// indicators moved with the partner's fault (`note`); the tooth is placed on the partner.
+pub(super) fn name_partner(d: &mut Diagnosis, indicators: Indicators, why: &str, note: &str) {
+    let Some(named) = d.verdict.gear.pair_shaft() else { return };
+    let Some(other) = named.partner() else { return };
+    d.verdict.cross_talk.clear();
+    d.verdict.cross_talk.push(format!("the {named}'s indicators moved with the {other}'s fault: {note}"));
     move_verdict(d, other);
     d.indicators = indicators;
-    d.verdict.reasons.insert(0, reason);
+    d.verdict.reasons.insert(0, format!("the {other} is named, not the {named}: {why}"));
     place_tooth(d);
 }
 

@@ -15,7 +15,6 @@
 use super::*;
 use crate::report::format::num;
 use crate::system::gcd;
-use tooth::place_tooth;
 
 /// Under this fraction of n - 1 (the ratio of the own part's largest value to the shared part's that a
 /// gear's own impulse gives), the verdict gear's impulse is taken for the other gear's: on noise alone the
@@ -38,11 +37,7 @@ pub const CHANGE_ELSEWHERE: f64 = 0.35;
 /// gcd(z, z_other) of a pinion's or wheel's average `g` and the other gear of the pair on the same channel;
 /// 1 without the other gear.
 fn common_factor(gears: &[GearIndicators], g: &GearIndicators) -> usize {
-    let other = match g.gear {
-        Shaft::Pinion => Shaft::Wheel,
-        Shaft::Wheel => Shaft::Pinion,
-        _ => return 1,
-    };
+    let Some(other) = g.gear.partner() else { return 1 };
     gears.iter().find(|o| o.gear == other && o.channel == g.channel).map_or(1, |o| gcd(g.mesh_order, o.mesh_order))
 }
 
@@ -99,15 +94,8 @@ pub(super) fn shared_period_evidence(d: &mut Diagnosis) {
     if d.verdict.state < VerdictState::Suspect {
         return;
     }
-    let named = match d.verdict.gear {
-        VerdictGear::Pinion => Shaft::Pinion,
-        VerdictGear::Wheel => Shaft::Wheel,
-        _ => return,
-    };
-    let other = if named == Shaft::Pinion { Shaft::Wheel } else { Shaft::Pinion };
-    let Some(&channel) = d.channels.first() else { return };
-    let find = |s: Shaft| d.gears.iter().find(|g| g.gear == s && g.channel == channel);
-    let (Some(this), Some(that)) = (find(named), find(other)) else { return };
+    let Some((this, that)) = evidence::pair_averages(d) else { return };
+    let (named, other, channel) = (this.gear, that.gear, this.channel);
     let g = gcd(this.mesh_order, that.mesh_order);
     if g <= 1 {
         return;
@@ -148,13 +136,5 @@ pub(super) fn shared_period_evidence(d: &mut Diagnosis) {
         return;
     };
     let indicators = that.indicators.clone();
-    d.verdict.gear = VerdictGear::from(other);
-    d.verdict.deciding = Some(other);
-    (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
-    d.indicators = indicators;
-    // the notes that read the other gear's indicators as this one's cross-talk no longer hold
-    d.verdict.cross_talk.clear();
-    d.verdict.cross_talk.push(format!("the {named}'s indicators moved with the {other}'s fault: {reason}"));
-    d.verdict.reasons.insert(0, format!("the {other} is named, not the {named}: {reason}"));
-    place_tooth(d);
+    evidence::name_partner(d, indicators, &reason, &reason);
 }

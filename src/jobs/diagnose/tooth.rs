@@ -2,7 +2,7 @@
 //! local change against the baseline) placed on the tooth whose mesh holds it, counted from the
 //! tachometer's pulse or from the tracked angle's arbitrary start.
 
-use crate::report::summary::{Diagnosis, Score, Shaft, ToothOrigin, VerdictGear, VerdictState};
+use crate::report::summary::{Diagnosis, Score, Shaft, ToothOrigin, VerdictState};
 
 /// How many times its share of the revolution's energy one pitch of the difference signal must hold for
 /// the fault to be local and placed on a tooth: over z pitches of Gaussian noise the largest pitch holds
@@ -18,11 +18,7 @@ pub(super) fn place_tooth(d: &mut Diagnosis) {
     if d.verdict.state < VerdictState::Suspect {
         return;
     }
-    let shaft = match d.verdict.gear {
-        VerdictGear::Pinion => Shaft::Pinion,
-        VerdictGear::Wheel => Shaft::Wheel,
-        _ => return,
-    };
+    let Some(shaft) = d.verdict.gear.pair_shaft() else { return };
     // a verdict that rests on a once-per-revolution modulation alone (SBR) is distributed: no tooth
     if over_suspect(&d.scores, &shaft).next().is_some() && !moved_for_a_tooth(&d.scores, &shaft) {
         return;

@@ -41,6 +41,16 @@ impl Shaft {
         }
     }
 
+    /// The other shaft of the pair: the wheel's for the pinion and the pinion's for the wheel (`None` for
+    /// an estimated or a machine's shaft).
+    pub fn partner(self) -> Option<Self> {
+        match self {
+            Self::Pinion => Some(Self::Wheel),
+            Self::Wheel => Some(Self::Pinion),
+            Self::Estimated | Self::Named(_) => None,
+        }
+    }
+
     /// Name shown to people and in the JSON.
     pub fn name(self) -> &'static str {
         match self {

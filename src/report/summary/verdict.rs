@@ -77,6 +77,17 @@ impl VerdictGear {
     }
 }
 
+impl VerdictGear {
+    /// The shaft of a verdict on the pinion or the wheel of a pair (`None` for any other gear).
+    pub fn pair_shaft(self) -> Option<Shaft> {
+        match self {
+            Self::Pinion => Some(Shaft::Pinion),
+            Self::Wheel => Some(Shaft::Wheel),
+            _ => None,
+        }
+    }
+}
+
 impl From<Shaft> for VerdictGear {
     fn from(s: Shaft) -> Self {
         match s {
