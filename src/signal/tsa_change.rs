@@ -156,6 +156,17 @@ fn scale(x: &[(f64, f64)], reference: &[(f64, f64)]) -> Option<f64> {
     (rr > 0.0 && rr.is_finite()).then(|| xr / rr)
 }
 
+/// The change `x_k - s r_k` at order `k` once the reference is scaled by `s`.
+fn change_at(x: &[(f64, f64)], reference: &[(f64, f64)], s: f64, k: usize) -> (f64, f64) {
+    (x[k].0 - s * reference[k].0, x[k].1 - s * reference[k].1)
+}
+
+/// Energy |x_k - s r_k|^2 of [`change_at`].
+fn change_energy(x: &[(f64, f64)], reference: &[(f64, f64)], s: f64, k: usize) -> f64 {
+    let (re, im) = change_at(x, reference, s, k);
+    re.powi(2) + im.powi(2)
+}
+
 /// The difference `x - s reference` over one revolution at `n` points (`n` a power of two of at least twice
 /// the orders held), s the least-squares scale (so a change of load alone leaves little). `None` when the
 /// reference is empty or all zero.
@@ -163,8 +174,8 @@ pub fn difference(fft: &mut Fft, x: &[(f64, f64)], reference: &[(f64, f64)], n: 
     let len = x.len().min(reference.len()).min(n / 2);
     let s = scale(&x[..len], &reference[..len]).filter(|_| len >= 2)?;
     let mut spec = vec![(0.0, 0.0); n / 2 + 1];
-    for k in 1..len {
-        spec[k] = (x[k].0 - s * reference[k].0, x[k].1 - s * reference[k].1);
+    for (k, c) in spec.iter_mut().enumerate().take(len).skip(1) {
+        *c = change_at(x, reference, s, k);
     }
     Some(fft.inverse(&spec, n))
 }
@@ -208,7 +219,7 @@ pub fn own_share(x: &[(f64, f64)], reference: &[(f64, f64)], n: usize) -> Option
     let s = scale(&x[..len], &reference[..len])?;
     let (mut own, mut all) = (0.0, 0.0);
     for k in 1..len {
-        let e = (x[k].0 - s * reference[k].0).powi(2) + (x[k].1 - s * reference[k].1).powi(2);
+        let e = change_energy(x, reference, s, k);
         all += e;
         if !k.is_multiple_of(n) {
             own += e;
@@ -250,7 +261,7 @@ pub fn sideband_change(x: &[(f64, f64)], reference: &[(f64, f64)], z: usize) -> 
     let s = scale(&x[..len], &reference[..len])?;
     let (mut change, mut own) = (0.0, 0.0);
     for k in sideband_orders(len, z) {
-        change += (x[k].0 - s * reference[k].0).powi(2) + (x[k].1 - s * reference[k].1).powi(2);
+        change += change_energy(x, reference, s, k);
         own += s * s * (reference[k].0.powi(2) + reference[k].1.powi(2));
     }
     (own > 0.0).then_some(SidebandChange { change, own, scale: s })
