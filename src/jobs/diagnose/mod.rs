@@ -372,6 +372,9 @@ fn caught<T>(file: &Path, f: impl FnOnce() -> Result<T, Error>) -> Result<T, Err
     })
 }
 
+/// Said when a gear's average is the baseline's own data ([`baseline::SameData`]).
+const SAME_DATA_WARNING: &str = "a gear's average equals the baseline's to within a quarter of its own noise: the recording is one of the baseline's recordings (or overlaps one), so its change against the baseline is nil and is not measured";
+
 /// Judges one diagnosis (the next in time order): against the baseline when there is one, NA4 over the
 /// ensemble so far, the envelope's evidence, the operating-point cap, the model comparison.
 fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, report: bool) -> Result<Diagnosis, Error> {
@@ -390,7 +393,12 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     history.apply(&mut d);
     if let Some(r) = &p.reference {
         let gears = &d.gears;
-        d.local_change = gears.iter().filter_map(|g| r.local_change(g, shared_period::shared_step(gears, g))).collect();
+        let compared: Vec<_> =
+            gears.iter().filter_map(|g| r.local_change(g, shared_period::shared_step(gears, g))).collect();
+        if compared.iter().any(Result::is_err) {
+            d.warnings.push(SAME_DATA_WARNING.into());
+        }
+        d.local_change = compared.into_iter().filter_map(Result::ok).collect();
     }
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
     let pattern_decided = evidence::pattern_evidence(&mut d);

@@ -114,6 +114,39 @@ pub fn estimate_period<T: Sample>(
     Ok(PeriodEstimate { period_samples: refine(&sum, p0 as f64), confidence, mesh_lag })
 }
 
+/// The shaft revolution inside a repetition `lag` (samples) that [`estimate_period`] took for a tooth-mesh
+/// period and whose line could then not be followed (a lag that is no mesh: two revolutions of a pair
+/// whose short repetitions are all shaft periods, the real rig's healthy 80 % load file repeating at 864
+/// samples, its revolution 432): the whole fraction of the summed autocorrelation's peak near `lag` by the
+/// rule of the hunting period ([`FRACTION_SHARE`], at least 64 samples), refined. `None` when no fraction
+/// repeats so.
+pub fn revolution_within<T: Sample>(fft: &mut Fft, channels: &[&[T]], lag: f64) -> Option<PeriodEstimate> {
+    let n = channels.iter().map(|c| c.len()).min().unwrap_or(0);
+    let lag_max = n / 2;
+    let p = lag.round() as usize;
+    if channels.is_empty() || p < 128 || 2 * p + 4 > lag_max {
+        return None;
+    }
+    let mut sum = vec![0.0; lag_max + 1];
+    for c in channels {
+        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
+            *s += r / channels.len() as f64;
+        }
+    }
+    let dominant = |i: usize| {
+        let w = (i / 10).max(2);
+        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(lag_max));
+        sum[lo..=hi].iter().all(|&v| v <= sum[i])
+    };
+    let w = (p / 50).max(2);
+    let p = (p - w..=p + w).max_by(|a, b| sum[*a].total_cmp(&sum[*b]))?;
+    if !dominant(p) || sum[p] <= 0.0 {
+        return None;
+    }
+    let q = whole_fraction(&sum, p, &dominant)?;
+    Some(PeriodEstimate { period_samples: refine(&sum, q as f64), confidence: sum[q], mesh_lag: None })
+}
+
 /// Lowest share of the period's autocorrelation that each multiple of a whole fraction of it must keep
 /// for the fraction to be the shaft: a pair whose teeth share a factor repeats wholly only after a few
 /// revolutions (the hunting period, on a real rig 0.44 against 0.14-0.21 at each revolution), while a

@@ -453,9 +453,10 @@ impl Reference {
     }
 
     /// The local change of gear `g` against this baseline (`None` when the baseline lacks the gear or holds no
-    /// residual, as profiles written before it, or when the averages do not line up). `shared_step`: z / gcd(z,
-    /// z_other) of a pair whose teeth share a factor, else 1.
-    pub fn local_change(&self, g: &GearIndicators, shared_step: usize) -> Option<LocalChange> {
+    /// residual, as profiles written before it, or when the averages do not line up; `Some(Err(SameData))` when
+    /// the recording's average is the baseline's own data). `shared_step`: z / gcd(z, z_other) of a pair whose
+    /// teeth share a factor, else 1.
+    pub fn local_change(&self, g: &GearIndicators, shared_step: usize) -> Option<Result<LocalChange, SameData>> {
         let r = self.gears.get(&(g.gear.baseline_key(), g.channel))?;
         local_change_of(&mut Fft::new(), g, r, self.files == 1, shared_step)
     }
@@ -509,6 +510,7 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
 }
 
 mod local;
+pub use local::SameData;
 #[cfg(test)]
 use local::SidebandNoise;
 use local::{LocalReference, local_change_of, local_reference};

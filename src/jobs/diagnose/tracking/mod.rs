@@ -90,8 +90,18 @@ pub(super) fn nominal_speed(
                     ),
                 ));
             }
-            // the line cannot be followed: the raw repetition period below is all there is
-            Err(_) => {}
+            // the line cannot be followed: the short lag may be no mesh but a few revolutions (then the
+            // revolution inside it is the period); otherwise the raw repetition period below is all there is
+            Err(_) => {
+                if let Some(inner) = est.mesh_lag.and_then(|m| speed::revolution_within(fft, &views, m)) {
+                    warnings.push(format!(
+                        "the signal's short repetition ({lag:.1} samples) is no tooth mesh (no line follows it): it holds {:.0} revolutions of {:.3} samples, taken as the shaft's",
+                        lag / inner.period_samples,
+                        inner.period_samples
+                    ));
+                    return Ok(from_repetition(&inner, &views, o, geometry, n, warnings));
+                }
+            }
         }
     }
     if est.mesh_lag.is_none() && est.period_samples < MIN_SAMPLES_PER_REV {
