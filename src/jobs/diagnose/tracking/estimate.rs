@@ -152,7 +152,8 @@ pub(super) fn shaft_near(
     if (lag / near - 1.0).abs() > MAX_SPEED_DIFFERENCE {
         return None;
     }
-    let found = shaft_through_mesh(fft, full, lag, min_revs, Some(mesh_order), None).ok()??;
+    let found =
+        shaft_through_mesh(fft, full, lag, min_revs, Some((mesh_order, "the baseline's mesh order")), None).ok()??;
     ((found.period_samples / period - 1.0).abs() <= MAX_SPEED_DIFFERENCE).then_some(found)
 }
 
@@ -402,8 +403,8 @@ fn turns_per_revolution(fft: &mut Fft, y: &[f64], cycles: usize, most: usize) ->
 /// autocorrelation stands above the comb of the mesh ([`speed::whole_cycle_period`]). On the mesh angle a
 /// 1 % speed fluctuation no longer smears the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
 /// smallest divisor of q whose line stands out ([`fundamental_mesh`]), read on the averaged revolution.
-/// With `pinion_teeth` the revolution is that many fundamental cycles (a longer repetition is a hunting
-/// period). Ok(None): the line was followed but no shaft period stands out (a mesh of identical teeth).
+/// With `pinion_teeth` (the count and where it comes from, for the note) the revolution is that many
+/// fundamental cycles (a longer repetition is a hunting period). Ok(None): the line was followed but no shaft period stands out (a mesh of identical teeth).
 ///
 /// # Errors
 /// The line cannot be followed on any channel.
@@ -412,10 +413,12 @@ pub(super) fn shaft_through_mesh(
     channels: &[&[f32]],
     mesh_lag: f64,
     min_revs: usize,
-    pinion_teeth: Option<usize>,
+    pinion_teeth: Option<(usize, &str)>,
     wheel_teeth: Option<usize>,
 ) -> Result<Option<MeshShaft>, crate::signal::SignalError> {
     let p = MESH_CYCLE_POINTS;
+    let whose = pinion_teeth.map_or("", |t| t.1);
+    let pinion_teeth = pinion_teeth.map(|t| t.0);
     let (cycle, y) = follow_line(channels, mesh_lag)?;
     let points = y.len();
     if let (Some(zp), Some(zw)) = (pinion_teeth, wheel_teeth) {
@@ -440,7 +443,7 @@ pub(super) fn shaft_through_mesh(
             mesh_order: None,
             confidence: c.get(zp).map_or(0.0, |&r| r.clamp(0.0, 1.0)),
             note: format!(
-                "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line (the given teeth); give the speed or a tachometer channel when known"
+                "shaft speed from the mesh line ({cycle:.3} samples per cycle, tracked): no shaft period stands out on its angle, so the pinion revolution is taken as {zp} cycles of that line ({whose}); give the speed or a tachometer channel when known"
             ),
             from_comb: false,
             close_second: None,
@@ -466,7 +469,7 @@ pub(super) fn shaft_through_mesh(
         Some(zp) => (
             zp as f64 * q as f64 / z as f64 * cycle,
             None,
-            format!("the pinion revolution is {zp} mesh cycles (the given teeth)"),
+            format!("the pinion revolution is {zp} mesh cycles ({whose})"),
         ),
         None => (q as f64 * cycle, Some(z), format!("it repeats every {q} cycles of the tracked line, mesh order {z}")),
     };

@@ -79,7 +79,8 @@ pub(super) fn nominal_speed(
     // mesh line's own angle, which holds under speed fluctuation where the raw autocorrelation smears
     let mesh_lag = est.mesh_lag.or((est.period_samples < MIN_SAMPLES_PER_REV).then_some(est.period_samples));
     if let (Some(lag), None) = (mesh_lag, geometry.and_then(|g| g.period_samples)) {
-        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, o.teeth.map(|t| t.0), o.teeth.map(|t| t.1)) {
+        let pinion = o.teeth.map(|t| (t.0, "the given teeth"));
+        match shaft_through_mesh(fft, &full, lag, o.min_revolutions, pinion, o.teeth.map(|t| t.1)) {
             Ok(Some(found)) => return Ok(found.nominal(n, warnings)),
             Ok(None) => {
                 return Err(missing_speed(
