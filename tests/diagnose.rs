@@ -161,6 +161,38 @@ fn real_rig_at_60_and_80_percent_load() {
     assert!(state == "suspect" || state == "faulty", "{}", b["verdict"]);
 }
 
+/// A baseline of the rig's 0 % and 90 % load files spans the speeds of every load between (an induction
+/// motor slows by 0.43 % from no load to 90 %): a recording at 80 % load is at one of its operating points,
+/// not capped at suspect as another one. The broken tooth at 80 % and 90 % is faulty against it (both were
+/// suspect "0.44 % slower than in the baseline", its first file), the healthy 60 % and 80 % files healthy;
+/// a learned profile keeps the span.
+#[test]
+fn a_baseline_over_the_loads_holds_the_speeds_between() {
+    let dir = temp_dir("diag-real-span");
+    let profile = dir.join("rig.json");
+    let (h0, h90) = (real("h30hz0"), real("h30hz90"));
+    let learned = gearvib(&["learn", &h0, &h90, "--fs-unknown", "-o", profile.to_str().unwrap()]);
+    assert_eq!(learned.code, 0, "{}", learned.stderr);
+    for via_profile in [false, true] {
+        let judge = |name: &str| {
+            let r = real(name);
+            if via_profile {
+                diag_json(&[&r, "--profile", profile.to_str().unwrap()])
+            } else {
+                diag_json(&[&r, "--fs-unknown", "--baseline", &h0, "--baseline", &h90])
+            }
+        };
+        for (name, want) in
+            [("b30hz80", "faulty"), ("b30hz90", "faulty"), ("h30hz60", "healthy"), ("h30hz80", "healthy")]
+        {
+            let d = judge(name);
+            assert_eq!(d["verdict"]["state"], want, "{name} (profile {via_profile}): {}", d["verdict"]);
+            let all = format!("{} {}", d["verdict"], d["warnings"]);
+            assert!(!all.contains("operating point"), "{name} (profile {via_profile}): {all}");
+        }
+    }
+}
+
 /// Without a baseline the real rig's healthy recordings are kept healthy: their gears' own pattern (FM4 up
 /// to 4.5, M6A 42 at 0 % load) is under the absolute limits, which healthy gears with manufacturing errors
 /// reach (the limits' sources are in `jobs::diagnose::Thresholds`).

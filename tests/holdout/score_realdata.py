@@ -10,9 +10,12 @@ broken tooth, sample rate and teeth unknown, so every run is `diagnose REC --fs-
   healthy-vs-one     h30hzL against h30hz(L-10) and h30hz(L+10) must be healthy
   healthy-vs-two     h30hzL against both neighbouring loads     must be healthy
   broken-vs-two      b30hzL against both neighbouring loads     must be flagged
+  healthy-vs-rest    h30hzL against a profile learned from the nine other loads' healthy files (`learn`)
+                                                                must be healthy
+  broken-vs-rest     b30hzL against that profile                must be flagged
 The files are the same data set's copies in kokikwbt/predictive-maintenance `datasets/gfd/*.csv.gz`,
 decompressed into --data (four of them, and three more loads, are in data/realdata). Nothing is written
-but the table on stdout.
+but the table on stdout (and the profiles, in a temporary directory).
 
 Usage: score_realdata.py --data DIR [--bin target/release/gearvib] [--jobs 2]
 """
@@ -23,6 +26,7 @@ import concurrent.futures as cf
 import json
 import os
 import subprocess
+import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BIN = os.path.join(HERE, "..", "..", "target", "release", "gearvib")
@@ -43,14 +47,28 @@ def cases():
         if len(near) == 2:
             out.append(("healthy-vs-two", f"h30hz{load}", [f"h30hz{m}" for m in near], "keep"))
             out.append(("broken-vs-two", f"b30hz{load}", [f"h30hz{m}" for m in near], "flag"))
+        out.append(("healthy-vs-rest", f"h30hz{load}", [f"profile-without-{load}"], "keep"))
+        out.append(("broken-vs-rest", f"b30hz{load}", [f"profile-without-{load}"], "flag"))
     return out
 
 
-def run(binary, data, case):
+def learn_profiles(binary, data, into):
+    """One profile per load, learned from the other loads' healthy files."""
+    for load in LOADS:
+        rest = [os.path.join(data, f"h30hz{m}.csv") for m in LOADS if m != load]
+        out = os.path.join(into, f"profile-without-{load}.json")
+        subprocess.run([binary, "learn", *rest, "--fs-unknown", "-o", out], capture_output=True, check=True)
+
+
+def run(binary, data, profiles, case):
     """The verdict of one case: (state, gear, first reason, exit code)."""
     _, rec, bases, _ = case
-    cmd = [binary, "diagnose", os.path.join(data, rec + ".csv"), "--fs-unknown", "--json"]
-    for b in bases:
+    cmd = [binary, "diagnose", os.path.join(data, rec + ".csv"), "--json"]
+    if bases and bases[0].startswith("profile-"):
+        cmd += ["--profile", os.path.join(profiles, bases[0] + ".json")]
+    else:
+        cmd.append("--fs-unknown")
+    for b in bases if not (bases and bases[0].startswith("profile-")) else []:
         cmd += ["--baseline", os.path.join(data, b + ".csv")]
     p = subprocess.run(cmd, capture_output=True, text=True)
     try:
@@ -67,8 +85,10 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args()
     all_cases = cases()
-    with cf.ThreadPoolExecutor(a.jobs) as ex:
-        results = list(ex.map(lambda c: run(a.bin, a.data, c), all_cases))
+    with tempfile.TemporaryDirectory() as profiles:
+        learn_profiles(a.bin, a.data, profiles)
+        with cf.ThreadPoolExecutor(a.jobs) as ex:
+            results = list(ex.map(lambda c: run(a.bin, a.data, profiles, c), all_cases))
     tally = collections.OrderedDict()
     for case, (state, gear, reason, code) in zip(all_cases, results):
         kind, rec, bases, want = case

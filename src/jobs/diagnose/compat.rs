@@ -38,6 +38,28 @@ pub struct BaselineFacts {
     pub raw_rms: Vec<f64>,
     /// Its envelope analysis (the recordings are demodulated in the same band).
     pub envelope: Option<Envelope>,
+    /// The slowest and fastest mean speed of all the baseline's recordings, in the measure of
+    /// [`speed_of`] (Hz, or revolutions per sample without a sample rate): a baseline learned over a range
+    /// of loads holds every operating point in it. `None` in profiles written before it (the first
+    /// recording's speed alone).
+    #[serde(default)]
+    pub speed_span: Option<[f64; 2]>,
+}
+
+/// A diagnosis's mean reference-shaft speed: Hz, or revolutions per sample without a sample rate.
+pub fn speed_of(d: &Diagnosis) -> f64 {
+    d.speed_profile.mean_hz.unwrap_or(1.0 / d.shaft_period_samples)
+}
+
+/// The relative difference of `speed` from the span `[lo, hi]`: 0 inside it, else from its nearer end.
+fn beyond_span(speed: f64, [lo, hi]: [f64; 2]) -> f64 {
+    if speed < lo {
+        speed / lo - 1.0
+    } else if speed > hi {
+        speed / hi - 1.0
+    } else {
+        0.0
+    }
 }
 
 impl BaselineFacts {
@@ -53,7 +75,29 @@ impl BaselineFacts {
             sample_rate_hz: b.sample_rate_hz,
             raw_rms: b.raw.iter().map(|m| m.get(&Indicator::Rms).copied().unwrap_or(f64::NAN)).collect(),
             envelope: b.envelope.clone(),
+            speed_span: Some([speed_of(b); 2]),
         }
+    }
+
+    /// The facts of a baseline of several recordings: the first's, with the span of the speeds measured
+    /// on them (by a tachometer or a followed line; a constant speed assumed over a record is no measured
+    /// operating point: the hold-out's 13/37 machine given its teeth only averaged two healthy files on
+    /// speeds 0.5 and 1.1 % off, and a span over them let a third healthy file pass as one of their
+    /// operating points); the first recording's speed alone when fewer than two were measured.
+    pub fn of_all(baselines: &[Diagnosis]) -> Option<Self> {
+        let mut facts = Self::of(baselines.first()?);
+        let measured: Vec<&Diagnosis> = baselines
+            .iter()
+            .filter(|d| d.speed_profile.tracking != crate::report::summary::Tracking::Constant)
+            .collect();
+        if measured.len() < 2 {
+            return Some(facts);
+        }
+        let speeds = measured.iter().map(|d| speed_of(d));
+        let lo = speeds.clone().fold(f64::INFINITY, f64::min);
+        let hi = speeds.fold(f64::NEG_INFINITY, f64::max);
+        facts.speed_span = (lo.is_finite() && hi.is_finite()).then_some([lo, hi]);
+        Some(facts)
     }
 }
 
@@ -78,7 +122,8 @@ pub struct Compatibility {
 /// WAV, and was called FAULTY against it on NA4* and the spectral change.
 const SCALE_MISMATCH: f64 = 100.0;
 
-/// Checks that `d` and the baseline `b` come from the same machine and operating point: same unit and
+/// Checks that `d` and the baseline `b` come from the same machine and operating point (a speed within the
+/// span of the baseline's recordings' speeds is one of its operating points): same unit and
 /// channels (refused), speed within [`MAX_SPEED_DIFFERENCE`] (refused beyond, warned beyond
 /// [`WARN_SPEED_DIFFERENCE`], operating point taken as different beyond
 /// [`OPERATING_POINT_SPEED_DIFFERENCE`] or, when larger, beyond the wander of the speed within either
@@ -113,9 +158,9 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
             b.channels
         )));
     }
-    let speed_d = d.speed_profile.mean_hz.unwrap_or(1.0 / d.shaft_period_samples);
+    // against the span of the baseline's speeds (its first recording's in a profile written before it)
     let speed_b = b.speed_hz.unwrap_or(1.0 / b.shaft_period_samples);
-    let ratio = speed_d / speed_b - 1.0;
+    let ratio = beyond_span(speed_of(d), b.speed_span.unwrap_or([speed_b; 2]));
     if ratio.abs() > MAX_SPEED_DIFFERENCE {
         return Err(refuse(format!(
             "its shaft speed differs by {:+.1} % (at most {} % is accepted: another operating point)",
@@ -134,9 +179,14 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
     let wander = 0.01 * d.speed_profile.fluctuation_percent.max(b.fluctuation_percent);
     let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE.max(wander)).then(|| {
         format!(
-            "the shaft runs {:.2} % {} than in the baseline ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
+            "the shaft runs {:.2} % {} than in the baseline{} ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
             100.0 * ratio.abs(),
             if ratio > 0.0 { "faster" } else { "slower" },
+            match b.speed_span {
+                Some([lo, hi]) if hi > lo && ratio > 0.0 => "'s fastest recording",
+                Some([lo, hi]) if hi > lo => "'s slowest recording",
+                _ => "",
+            },
             (OPERATING_POINT_SPEED_DIFFERENCE * 1e6 / 20.0) as u32,
             100.0 * wander
         )
@@ -164,4 +214,19 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
         }
     }
     Ok(Compatibility { warnings, operating_point, levels_comparable })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::beyond_span;
+
+    #[test]
+    fn a_speed_inside_the_span_is_none_of_its_difference() {
+        assert_eq!(beyond_span(30.05, [30.0, 30.1]), 0.0);
+        // outside, from the nearer end: 1 % above the fastest, 2 % below the slowest
+        assert!((beyond_span(30.401, [30.0, 30.1]) - 0.01).abs() < 1e-12);
+        assert!((beyond_span(29.4, [30.0, 30.1]) + 0.02).abs() < 1e-12);
+        // a one-recording span is its speed
+        assert!((beyond_span(30.3, [30.0, 30.0]) - 0.01).abs() < 1e-12);
+    }
 }

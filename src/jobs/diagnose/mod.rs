@@ -291,12 +291,13 @@ fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Erro
     for b in rest {
         baselines.push(b?);
     }
-    let facts = baselines.first().map(BaselineFacts::of);
-    if let Some(f) = &facts {
+    // each further recording is checked against the first; the facts then hold the span of their speeds
+    if let Some(f) = baselines.first().map(BaselineFacts::of) {
         for b in baselines.iter().skip(1) {
-            compatibility(b, f)?;
+            compatibility(b, &f)?;
         }
     }
+    let facts = BaselineFacts::of_all(&baselines);
     let reference = (!baselines.is_empty()).then(|| baseline::build(&baselines, opts.block_revs())).transpose()?;
     let plots = baselines
         .first()
