@@ -527,5 +527,8 @@ pub fn profile(w: &mut dyn Write, p: &crate::jobs::diagnose::profile::Profile, f
         p.geometry.tsa_points.unwrap_or(0),
         p.geometry.envelope_band.map_or(String::new(), |(a, b)| format!(", envelope band {a:.0}..{b:.0} Hz"))
     )?;
+    for doubt in &p.baseline.speed_doubts {
+        writeln!(w, "warning          {doubt}; no recording judged against this profile is called healthy")?;
+    }
     Ok(())
 }

@@ -44,6 +44,11 @@ pub struct BaselineFacts {
     /// recording's speed alone).
     #[serde(default)]
     pub speed_span: Option<[f64; 2]>,
+    /// The doubts on the speed of the baseline's recordings, each with its file: averages on a speed that
+    /// may be wrong cannot tell a healthy recording from a faulty one, so a recording judged against them
+    /// is never cleared ([`BaselineFacts::doubt`]).
+    #[serde(default)]
+    pub speed_doubts: Vec<String>,
 }
 
 /// A diagnosis's mean reference-shaft speed: Hz, or revolutions per sample without a sample rate.
@@ -76,7 +81,20 @@ impl BaselineFacts {
             raw_rms: b.raw.iter().map(|m| m.get(&Indicator::Rms).copied().unwrap_or(f64::NAN)).collect(),
             envelope: b.envelope.clone(),
             speed_span: Some([speed_of(b); 2]),
+            speed_doubts: b.speed_doubt.iter().map(|why| format!("{}: {why}", b.file)).collect(),
         }
+    }
+
+    /// The doubt a recording judged against this baseline carries when a baseline recording's speed was in
+    /// doubt (the hold-out's 13/37 machine given its teeth only: two healthy files averaged on speeds 0.5 and
+    /// 1.1 % off, each not judged on its own, made a third healthy file faulty against them).
+    pub fn doubt(&self) -> Option<String> {
+        self.speed_doubts.first().map(|first| {
+            format!(
+                "the baseline's averages may rest on a wrong speed ({} of its recordings in doubt; {first}), so they cannot clear the machine; give the speed or a tachometer channel when the baseline is learned",
+                self.speed_doubts.len()
+            )
+        })
     }
 
     /// The facts of a baseline of several recordings: the first's, with the span of the speeds measured
@@ -86,6 +104,8 @@ impl BaselineFacts {
     /// operating points); the first recording's speed alone when fewer than two were measured.
     pub fn of_all(baselines: &[Diagnosis]) -> Option<Self> {
         let mut facts = Self::of(baselines.first()?);
+        facts.speed_doubts =
+            baselines.iter().flat_map(|b| b.speed_doubt.iter().map(|why| format!("{}: {why}", b.file))).collect();
         let measured: Vec<&Diagnosis> = baselines
             .iter()
             .filter(|d| d.speed_profile.tracking != crate::report::summary::Tracking::Constant)
@@ -218,7 +238,37 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
 
 #[cfg(test)]
 mod tests {
-    use super::beyond_span;
+    use super::{BaselineFacts, beyond_span};
+
+    fn facts(doubts: &[&str]) -> BaselineFacts {
+        BaselineFacts {
+            file: "h1.wav".into(),
+            unit: "m/s^2".into(),
+            channels: vec![1],
+            speed_hz: Some(30.0),
+            shaft_period_samples: 1000.0,
+            fluctuation_percent: 0.5,
+            sample_rate_hz: Some(30_000.0),
+            raw_rms: vec![1.0],
+            envelope: None,
+            speed_span: None,
+            speed_doubts: doubts.iter().map(|d| d.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn a_baseline_whose_speed_is_in_doubt_cannot_clear_a_recording() {
+        assert_eq!(facts(&[]).doubt(), None);
+        let d = facts(&["h1.wav: could not be followed", "h2.wav: weak comb"]).doubt().unwrap();
+        assert!(d.contains("2 of its recordings in doubt") && d.contains("h1.wav: could not be followed"), "{d}");
+        assert!(d.contains("cannot clear the machine"), "{d}");
+        // a profile written before the field reads as no doubt
+        let mut json = serde_json::to_value(facts(&[])).unwrap();
+        json.as_object_mut().unwrap().remove("speed_doubts");
+        json.as_object_mut().unwrap().remove("speed_span");
+        let old: BaselineFacts = serde_json::from_value(json).unwrap();
+        assert!(old.speed_doubts.is_empty() && old.speed_span.is_none());
+    }
 
     #[test]
     fn a_speed_inside_the_span_is_none_of_its_difference() {

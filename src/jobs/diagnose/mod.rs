@@ -386,6 +386,9 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.warnings.extend(c.warnings);
         cap = c.operating_point;
         levels = c.levels_comparable;
+        if d.speed_doubt.is_none() {
+            d.speed_doubt = b.doubt();
+        }
     }
     if let (true, Some((spectra, tsas))) = (report, &p.plots) {
         d.baseline_spectra = spectra.clone();

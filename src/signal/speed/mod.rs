@@ -29,6 +29,25 @@ pub fn tacho_pulses<T: Sample>(x: &[T]) -> Result<Vec<f64>, SignalError> {
     Ok(pulses)
 }
 
+/// The normalised autocorrelation of the first `n` samples of each channel up to `lag_max`, averaged over
+/// the channels.
+fn summed_autocorrelation<T: Sample>(fft: &mut Fft, channels: &[&[T]], n: usize, lag_max: usize) -> Vec<f64> {
+    let mut sum = vec![0.0; lag_max + 1];
+    for c in channels {
+        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
+            *s += r / channels.len() as f64;
+        }
+    }
+    sum
+}
+
+/// Whether lag `i` holds the largest value of `sum` within +-10 % of itself (at least 2 lags each side).
+fn dominates(sum: &[f64], i: usize) -> bool {
+    let w = (i / 10).max(2);
+    let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(sum.len() - 1));
+    sum[lo..=hi].iter().all(|&v| v <= sum[i])
+}
+
 /// A repetition period estimated from the signal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeriodEstimate {
@@ -57,18 +76,9 @@ pub fn estimate_period<T: Sample>(
 ) -> Result<PeriodEstimate, SignalError> {
     let n = channels.iter().map(|c| c.len()).min().unwrap_or(0);
     let lag_max = (n / 2).max(max_lag.min(n.saturating_sub(2)));
-    let mut sum = vec![0.0; lag_max + 1];
-    for c in channels {
-        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
-            *s += r / channels.len() as f64;
-        }
-    }
+    let sum = summed_autocorrelation(fft, channels, n, lag_max);
     // a candidate must dominate +-10 % of its lag: ripple from the mesh on a shaft-period lobe is not a period
-    let dominant = |i: usize| {
-        let w = (i / 10).max(2);
-        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(lag_max));
-        sum[lo..=hi].iter().all(|&v| v <= sum[i])
-    };
+    let dominant = |i: usize| dominates(&sum, i);
     let peaks: Vec<usize> = (min_lag.max(2)..max_lag.min(lag_max - 1))
         .filter(|&i| sum[i] > sum[i - 1] && sum[i] >= sum[i + 1] && sum[i] > 0.0 && dominant(i))
         .collect();
@@ -127,17 +137,8 @@ pub fn revolution_within<T: Sample>(fft: &mut Fft, channels: &[&[T]], lag: f64) 
     if channels.is_empty() || p < 128 || 2 * p + 4 > lag_max {
         return None;
     }
-    let mut sum = vec![0.0; lag_max + 1];
-    for c in channels {
-        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
-            *s += r / channels.len() as f64;
-        }
-    }
-    let dominant = |i: usize| {
-        let w = (i / 10).max(2);
-        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(lag_max));
-        sum[lo..=hi].iter().all(|&v| v <= sum[i])
-    };
+    let sum = summed_autocorrelation(fft, channels, n, lag_max);
+    let dominant = |i: usize| dominates(&sum, i);
     let w = (p / 50).max(2);
     let p = (p - w..=p + w).max_by(|a, b| sum[*a].total_cmp(&sum[*b]))?;
     if !dominant(p) || sum[p] <= 0.0 {
@@ -304,12 +305,7 @@ pub fn period_near<T: Sample>(
         return Err(SignalError::TooShort { what: "repetition period".into(), needed: 2 * hi + 4, got: n });
     }
     let lag_max = n / 2;
-    let mut sum = vec![0.0; lag_max + 1];
-    for c in channels {
-        for (s, r) in sum.iter_mut().zip(autocorrelation(fft, &c[..n], lag_max)) {
-            *s += r / channels.len() as f64;
-        }
-    }
+    let sum = summed_autocorrelation(fft, channels, n, lag_max);
     let best = (lo..=hi).max_by(|a, b| sum[*a].total_cmp(&sum[*b])).unwrap_or(lo);
     // a maximum on the window's edge is the flank of a peak outside it, not a period inside
     if best == lo || best == hi || sum[best] <= 0.0 {
