@@ -39,7 +39,7 @@ pub struct BaselineFacts {
     /// Its envelope analysis (the recordings are demodulated in the same band).
     pub envelope: Option<Envelope>,
     /// The slowest and fastest mean speed of all the baseline's recordings, in the measure of
-    /// [`speed_of`] (Hz, or revolutions per sample without a sample rate): a baseline learned over a range
+    /// `speed_of` (Hz, or revolutions per sample without a sample rate): a baseline learned over a range
     /// of loads holds every operating point in it. `None` in profiles written before it (the first
     /// recording's speed alone).
     #[serde(default)]

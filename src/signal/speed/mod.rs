@@ -128,8 +128,8 @@ pub fn estimate_period<T: Sample>(
 /// period and whose line could then not be followed (a lag that is no mesh: two revolutions of a pair
 /// whose short repetitions are all shaft periods, the real rig's healthy 80 % load file repeating at 864
 /// samples, its revolution 432): the whole fraction of the summed autocorrelation's peak near `lag` by the
-/// rule of the hunting period ([`FRACTION_SHARE`], at least 64 samples), refined. `None` when no fraction
-/// repeats so.
+/// rule of the hunting period (each multiple of the fraction a dominant peak keeping a quarter of the
+/// lag's autocorrelation; at least 64 samples), refined. `None` when no fraction repeats so.
 pub fn revolution_within<T: Sample>(fft: &mut Fft, channels: &[&[T]], lag: f64) -> Option<PeriodEstimate> {
     let n = channels.iter().map(|c| c.len()).min().unwrap_or(0);
     let lag_max = n / 2;
