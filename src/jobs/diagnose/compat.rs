@@ -86,8 +86,8 @@ impl BaselineFacts {
     }
 
     /// The doubt a recording judged against this baseline carries when a baseline recording's speed was in
-    /// doubt (the hold-out's 13/37 machine given its teeth only: two healthy files averaged on speeds 0.5 and
-    /// 1.1 % off, each not judged on its own, made a third healthy file faulty against them).
+    /// doubt (the fresh hold-out set's 18/29 machine given its teeth only: its healthy s1, averaged at a
+    /// constant speed that could not be followed, made s2 HEALTHY against it on half its true speed).
     pub fn doubt(&self) -> Option<String> {
         self.speed_doubts.first().map(|first| {
             format!(

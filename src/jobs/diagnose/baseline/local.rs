@@ -120,7 +120,8 @@ fn aligned_blocks(blocks: &[OrderSpectrum], reference: &[(f64, f64)], z: usize) 
 /// The local change of gear `g` (its blocks' mean residual against the baseline's mean residual shifted
 /// onto the recording's angle origin), with the tooth where it is largest. `None` when the reference has no
 /// residual or healthy values, or the recording's residual does not line up with it (correlation under
-/// [`MIN_ALIGNMENT`]); `Some(Err(SameData))` when the recording is the baseline's data ([`SameData`]). `shared_step` is z / gcd(z, z_other) on a pair whose teeth share a factor (its
+/// [`MIN_ALIGNMENT`]); `Some(Err(SameData))` when the recording is the baseline's data ([`SameData`]).
+/// `shared_step` is z / gcd(z, z_other) on a pair whose teeth share a factor (its
 /// orders shared with the other gear are its multiples), else 1.
 pub(super) fn local_change_of(
     fft: &mut Fft,
