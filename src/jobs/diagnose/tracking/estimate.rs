@@ -404,7 +404,8 @@ fn turns_per_revolution(fft: &mut Fft, y: &[f64], cycles: usize, most: usize) ->
 /// 1 % speed fluctuation no longer smears the lag of a hundred revolutions. The tracked line may be a mesh harmonic: the mesh order is the
 /// smallest divisor of q whose line stands out ([`fundamental_mesh`]), read on the averaged revolution.
 /// With `pinion_teeth` (the count and where it comes from, for the note) the revolution is that many
-/// fundamental cycles (a longer repetition is a hunting period). Ok(None): the line was followed but no shaft period stands out (a mesh of identical teeth).
+/// fundamental cycles (a longer repetition is a hunting period). Ok(None): the line was followed but no
+/// shaft period stands out (a mesh of identical teeth).
 ///
 /// # Errors
 /// The line cannot be followed on any channel.
