@@ -193,6 +193,46 @@ fn a_baseline_over_the_loads_holds_the_speeds_between() {
     }
 }
 
+/// A profile learned over four loads of the rig (0, 60, 80, 90 %) keeps the healthy 10 % file: its ER and
+/// FM0 stand where the 0 % file's do, 4.3 spreads over the blocks pooled from all four files, which the
+/// files' own medians span (it was FAULTY on ER). The broken tooth at 80 % stays faulty against the
+/// same profile without its own load's file (20 spreads on the spectral change). The widened spread is
+/// said in the verdict's reason.
+#[test]
+fn a_profile_over_loads_keeps_a_load_its_files_span() {
+    let dir = temp_dir("diag-real-files");
+    let profile = dir.join("loads.json");
+    let learned = gearvib(&[
+        "learn",
+        &real("h30hz0"),
+        &real("h30hz60"),
+        &real("h30hz80"),
+        &real("h30hz90"),
+        "--fs-unknown",
+        "-o",
+        profile.to_str().unwrap(),
+    ]);
+    assert_eq!(learned.code, 0, "{}", learned.stderr);
+    let d = diag_json(&[&real("h30hz10"), "--profile", profile.to_str().unwrap()]);
+    assert_eq!(d["verdict"]["state"], "healthy", "{}", d["verdict"]);
+    let reasons = d["verdict"]["reasons"].to_string();
+    assert!(reasons.contains("widened to how far the baseline's files differ"), "{reasons}");
+    assert!(d["scores"].as_array().unwrap().iter().any(|s| s["spread_from_files"] == true));
+    let learned = gearvib(&[
+        "learn",
+        &real("h30hz0"),
+        &real("h30hz10"),
+        &real("h30hz60"),
+        &real("h30hz90"),
+        "--fs-unknown",
+        "-o",
+        profile.to_str().unwrap(),
+    ]);
+    assert_eq!(learned.code, 0, "{}", learned.stderr);
+    let b = diag_json(&[&real("b30hz80"), "--profile", profile.to_str().unwrap()]);
+    assert_eq!(b["verdict"]["state"], "faulty", "{}", b["verdict"]);
+}
+
 /// Without a baseline the real rig's healthy recordings are kept healthy: their gears' own pattern (FM4 up
 /// to 4.5, M6A 42 at 0 % load) is under the absolute limits, which healthy gears with manufacturing errors
 /// reach (the limits' sources are in `jobs::diagnose::Thresholds`).

@@ -116,6 +116,10 @@ pub struct Score {
     /// Spread of the baseline's blocks (1.4826 x median absolute deviation, at least 5 % of the centre), on
     /// `scale`.
     pub baseline_spread: f64,
+    /// Whether `baseline_spread` was widened because the baseline's files differ among themselves more
+    /// than their blocks do (the suspect limit then lies the median's own scatter over the highest file's
+    /// median).
+    pub spread_from_files: bool,
     /// `log` when the indicator is scored on its natural logarithm (the spread is then of ln value).
     pub scale: Scale,
     /// Smallest and largest baseline block value.

@@ -10,6 +10,13 @@
 //! t_{m-1}(1 - alpha) sqrt(1 + 1/m) spreads, Student's t because the spread itself is estimated from m
 //! blocks (m = 5 gives 8.0 spreads for 1e-3, m = 30 gives 3.5, many blocks 3.09). A median over several
 //! blocks scatters less than one block, so the real rate is lower still.
+//!
+//! Files that differ among themselves more than their blocks do (loads the others were not recorded at)
+//! widen the spread: a healthy file's median is a healthy recording's, so the suspect limit lies at least
+//! s_m = 1.2533 spread / sqrt(n) (the scatter of a median of the recording's n blocks) times the suspect
+//! quantile above the highest file's median h: spread' = max(spread, (h - centre) / t + s_m), t the
+//! suspect limit in spreads. On the real rig a profile of the 0, 60, 80 and 90 % loads called the healthy
+//! 10 % file FAULTY at 4.3 spreads (its ER sits with the 0 % file's); a broken tooth stays 20 spreads up.
 
 use super::{Given, JobError};
 use crate::Error;
@@ -41,6 +48,8 @@ pub fn limits(m: usize) -> (f64, f64) {
     let inflate = (1.0 + 1.0 / m).sqrt();
     (student_t(SUSPECT_Z, m - 1.0) * inflate, student_t(FAULTY_Z, m - 1.0) * inflate)
 }
+/// Scatter of the median of n normal values over one value's, times sqrt(n): sqrt(pi / 2).
+const MEDIAN_SCATTER: f64 = 1.253_314;
 /// Fewest baseline blocks per gear and channel for a distribution.
 pub const MIN_BASELINE_BLOCKS: usize = 4;
 /// Relative floor of the spread (5 % of the centre).
@@ -131,6 +140,10 @@ struct Stat {
     max: f64,
     count: usize,
     scale: Scale,
+    /// The highest of the baseline files' own medians (on the scale), from two files or more: how far a
+    /// healthy recording's median reached (absent from one file and in profiles written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    highest_file: Option<f64>,
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -167,17 +180,40 @@ impl Stat {
             max,
             count: v.len(),
             scale,
+            highest_file: None,
         }
+    }
+
+    /// This distribution with the highest of `files`' medians (each file's values; from two files on).
+    fn with_files(self, files: &[Vec<f64>]) -> Self {
+        let medians = files.iter().map(|f| {
+            let mut t: Vec<f64> = f
+                .iter()
+                .copied()
+                .filter(|x| x.is_finite() && (self.scale == Scale::Linear || *x > 0.0))
+                .map(|x| self.scale.to(x))
+                .collect();
+            median(&mut t)
+        });
+        let highest = medians.filter(|m| m.is_finite()).fold(f64::NAN, f64::max);
+        Self { highest_file: (files.len() >= 2 && highest.is_finite()).then_some(highest), ..self }
+    }
+
+    /// The spread a recording's median of `blocks` blocks is scored in: the blocks' spread, widened when
+    /// the baseline's files differ among themselves more than their blocks do, so that the suspect limit
+    /// (`suspect_at` spreads) lies at least `suspect_at` of the median's own scatter above the highest
+    /// file's median (a median of n values scatters by 1.2533 / sqrt(n) of one value's spread). Returns
+    /// the spread and whether the files widened it.
+    fn scoring_spread(&self, blocks: usize, suspect_at: f64) -> (f64, bool) {
+        let Some(highest) = self.highest_file else { return (self.spread, false) };
+        let of_median = MEDIAN_SCATTER * self.spread / (blocks.max(1) as f64).sqrt();
+        let files = (highest - self.centre) / suspect_at + of_median;
+        if files > self.spread { (files, true) } else { (self.spread, false) }
     }
 
     /// This distribution with its spread at least `least` (in the scale's units).
     fn with_least_spread(self, least: f64) -> Self {
         Self { spread: self.spread.max(least), ..self }
-    }
-
-    /// How many spreads `value` lies above the centre.
-    fn spreads(&self, value: f64) -> f64 {
-        (self.scale.to(value) - self.centre) / self.spread
     }
 }
 
@@ -406,7 +442,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 Indicator::SpectralChange => leave_one_out.clone(),
                 _ => blocks.iter().map(|b| value(b, k)).collect(),
             };
-            let stat = Stat::of(&values, k.scale());
+            let stat = Stat::of(&values, k.scale()).with_files(&by_file(&values, &per_file[&key]));
             let least = if k == Indicator::SpectralChange { SPECTRAL_CHANGE_LEAST_SPREAD_DB } else { 0.0 };
             stats.insert(k, stat.with_least_spread(least));
         }
@@ -435,6 +471,19 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
     let tracked_line_db =
         lines.iter().copied().collect::<Option<Vec<f64>>>().and_then(|v| v.into_iter().reduce(f64::min));
     Ok(Reference { gears, files: baselines.len(), tracked_line_db })
+}
+
+/// `values` (one per pooled block, the files' blocks one after the other) cut back into the files.
+fn by_file(values: &[f64], files: &[Vec<&Block>]) -> Vec<Vec<f64>> {
+    let mut rest = values;
+    files
+        .iter()
+        .map(|f| {
+            let (own, tail) = rest.split_at(f.len().min(rest.len()));
+            rest = tail;
+            own.to_vec()
+        })
+        .collect()
 }
 
 fn slices(v: &[OrderSpectrum]) -> Vec<&[(f64, f64)]> {
@@ -489,6 +538,7 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
             let v = median(&mut values);
             let near_zero = k == Indicator::Si && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
             let (suspect_at, faulty_at) = limits(stat.count);
+            let (spread, spread_from_files) = stat.scoring_spread(values.len(), suspect_at);
             Some(Score {
                 suspect_at,
                 faulty_at,
@@ -498,11 +548,12 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
                 value: v,
                 blocks: values.len(),
                 baseline_centre: stat.scale.from(stat.centre),
-                baseline_spread: stat.spread,
+                baseline_spread: spread,
+                spread_from_files,
                 scale: stat.scale,
                 baseline_range: [stat.min, stat.max],
                 baseline_blocks: stat.count,
-                spreads: stat.spreads(v),
+                spreads: (stat.scale.to(v) - stat.centre) / spread,
                 decides: !near_zero,
             })
         })

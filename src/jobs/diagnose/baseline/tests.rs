@@ -66,7 +66,35 @@ fn spread_has_a_floor() {
     assert!((s.spread - 0.1).abs() < 1e-12);
     // on the log scale the floor is ln 1.05, and 2.1 against 2.0 is one spread
     let s = Stat::of(&[2.0; 9], Scale::Log);
-    assert!((s.spreads(2.1) - 1.0).abs() < 1e-12);
+    assert!(((2.1f64.ln() - s.centre) / s.spread - 1.0).abs() < 1e-12);
+}
+
+/// Nine healthy files, eight alike and one whose indicator sits ten block spreads higher (a load the
+/// others were not recorded at): its own median is a healthy file's, so a recording like it must stay
+/// under the suspect limit, which then lies the median's own scatter above that file's median; a
+/// recording beyond it is still flagged, and blocks pooled from one file are scored on their own spread.
+#[test]
+fn files_that_differ_widen_the_spread_to_the_highest_file() {
+    let file = |centre: f64| -> Vec<f64> { (0..30).map(|i| centre + 0.1 * acklam((i as f64 + 0.5) / 30.0)).collect() };
+    let mut files: Vec<Vec<f64>> = (0..8).map(|_| file(1.0)).collect();
+    files.push(file(2.0));
+    let pooled: Vec<f64> = files.concat();
+    let stat = Stat::of(&pooled, Scale::Linear).with_files(&files);
+    let (suspect_at, _) = limits(stat.count);
+    // without the widening a recording like the ninth file would stand some ten spreads up
+    assert!((2.0 - stat.centre) / stat.spread > 2.0 * suspect_at);
+    let (spread, widened) = stat.scoring_spread(30, suspect_at);
+    assert!(widened);
+    // the suspect limit: the highest file's median (2.0, the quantiles are symmetric) plus suspect_at times
+    // the scatter of a median of 30 values, 1.2533 / sqrt(30) of the block spread
+    let limit = stat.centre + suspect_at * spread;
+    let expected = 2.0 + suspect_at * MEDIAN_SCATTER * stat.spread / 30f64.sqrt();
+    assert!((limit - expected).abs() < 1e-9, "{limit} against {expected}");
+    assert!((2.0 - stat.centre) / spread < suspect_at, "a recording like a healthy file is kept");
+    assert!((2.3 - stat.centre) / spread > suspect_at, "three block spreads beyond every file is flagged");
+    // one file: no file figure, the blocks' spread
+    let one = Stat::of(&files[8], Scale::Linear).with_files(&files[8..]);
+    assert_eq!(one.scoring_spread(30, suspect_at), (one.spread, false));
 }
 
 /// The sideband growth's limit: three times what the baseline's files show among themselves but at least 8

@@ -17,6 +17,7 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
         blocks: 30,
         baseline_centre: 1.0,
         baseline_spread: 0.1,
+        spread_from_files: false,
         scale: Scale::Log,
         baseline_range: [0.8, 1.2],
         baseline_blocks: 30,

@@ -153,6 +153,11 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             ),
             (false, _) => (VerdictState::Suspect, ""),
         };
+        let files = if sc.spread_from_files {
+            " (the spread widened to how far the baseline's files differ among themselves)"
+        } else {
+            ""
+        };
         out.push(Trigger {
             state,
             local: sc.indicator.local(),
@@ -160,7 +165,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             supporting: sc.indicator.supporting(),
             ratio: sc.spreads,
             text: format!(
-                "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above; {why}{cap}",
+                "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above{files}; {why}{cap}",
                 g.gear,
                 g.channel,
                 num(sc.value),
@@ -491,8 +496,17 @@ fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) 
             let lo = d.scores.iter().map(|s| s.suspect_at).fold(f64::INFINITY, f64::min);
             let hi = d.scores.iter().map(|s| s.suspect_at).fold(0.0, f64::max);
             let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
+            let widened = d.scores.iter().filter(|s| s.spread_from_files).count();
+            let files = if widened > 0 {
+                format!(
+                    "; {widened} of the {} on a spread widened to how far the baseline's files differ among themselves",
+                    d.scores.len()
+                )
+            } else {
+                String::new()
+            };
             format!(
-                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s))",
+                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){files})",
                 r.files
             )
         }

@@ -92,6 +92,7 @@ fn score(indicator: Indicator, spreads: f64) -> Score {
         blocks: 32,
         baseline_centre: 0.05,
         baseline_spread: 0.24,
+        spread_from_files: false,
         scale: crate::report::summary::Scale::Log,
         baseline_range: [0.02, 0.07],
         baseline_blocks: 32,
