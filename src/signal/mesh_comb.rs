@@ -57,13 +57,7 @@ impl CombEvidence {
     /// harmonics 5-10 stand, or 1-5 and not 6-8) leaves some multiples level with their neighbours, so
     /// half of them, not every one, must stand. `None` with fewer than two such multiples.
     pub fn multiples_stand_out(&self, f: f64, m: usize) -> Option<f64> {
-        let height = |fk: f64| -> Option<f64> {
-            self.spectra
-                .iter()
-                .filter_map(|s| s.height(fk, search_half(fk * s.n as f64).min(0.4 * f * s.n as f64)))
-                .fold(None, |a: Option<f64>, h| Some(a.map_or(h, |a| a.max(h))))
-                .map(|h| h.max(1e-3).ln())
-        };
+        let height = |fk: f64| self.log_height(fk, f);
         let margins: Vec<f64> = (1..=STANDING_MULTIPLES)
             .map(|j| j * m)
             .take_while(|&k| (k + 1) as f64 * f < 0.45)
@@ -78,6 +72,27 @@ impl CombEvidence {
         // half of them (every one of two or three)
         let n = margins.len();
         (n >= 2).then(|| margins[if n <= 3 { n - 1 } else { (n - 1) / 2 }])
+    }
+}
+
+impl CombEvidence {
+    /// Log height over the local floor (nats of power, at least ln 1e-3) of the line nearest `fk` (cycles
+    /// per sample) on the averaged spectrum, best channel, sought within the line window but under 0.4 of
+    /// the comb's spacing `f`; `None` outside the spectrum.
+    fn log_height(&self, fk: f64, f: f64) -> Option<f64> {
+        self.spectra
+            .iter()
+            .filter_map(|s| s.height(fk, search_half(fk * s.n as f64).min(0.4 * f * s.n as f64)))
+            .fold(None, |a: Option<f64>, h| Some(a.map_or(h, |a| a.max(h))))
+            .map(|h| h.max(1e-3).ln())
+    }
+
+    /// How far (nats of power) the second line of the comb of spacing `f` (cycles per sample) stands over its
+    /// first on the averaged spectrum: a comb of half the mesh frequency holds the mesh as its second line
+    /// and nothing of the gear at its first, while a mesh's own fundamental is a line of the mesh itself.
+    /// `None` outside the spectrum.
+    pub fn second_over_first(&self, f: f64) -> Option<f64> {
+        Some(self.log_height(2.0 * f, f)? - self.log_height(f, f)?)
     }
 }
 

