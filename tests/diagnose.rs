@@ -202,33 +202,21 @@ fn a_baseline_over_the_loads_holds_the_speeds_between() {
 fn a_profile_over_loads_keeps_a_load_its_files_span() {
     let dir = temp_dir("diag-real-files");
     let profile = dir.join("loads.json");
-    let learned = gearvib(&[
-        "learn",
-        &real("h30hz0"),
-        &real("h30hz60"),
-        &real("h30hz80"),
-        &real("h30hz90"),
-        "--fs-unknown",
-        "-o",
-        profile.to_str().unwrap(),
-    ]);
-    assert_eq!(learned.code, 0, "{}", learned.stderr);
+    let learn = |loads: [&str; 4]| {
+        let files: Vec<String> = loads.iter().map(|l| real(&format!("h30hz{l}"))).collect();
+        let mut args: Vec<&str> = vec!["learn"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend(["--fs-unknown", "-o", profile.to_str().unwrap()]);
+        let learned = gearvib(&args);
+        assert_eq!(learned.code, 0, "{}", learned.stderr);
+    };
+    learn(["0", "60", "80", "90"]);
     let d = diag_json(&[&real("h30hz10"), "--profile", profile.to_str().unwrap()]);
     assert_eq!(d["verdict"]["state"], "healthy", "{}", d["verdict"]);
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(reasons.contains("widened to how far the baseline's files differ"), "{reasons}");
     assert!(d["scores"].as_array().unwrap().iter().any(|s| s["spread_from_files"] == true));
-    let learned = gearvib(&[
-        "learn",
-        &real("h30hz0"),
-        &real("h30hz10"),
-        &real("h30hz60"),
-        &real("h30hz90"),
-        "--fs-unknown",
-        "-o",
-        profile.to_str().unwrap(),
-    ]);
-    assert_eq!(learned.code, 0, "{}", learned.stderr);
+    learn(["0", "10", "60", "90"]);
     let b = diag_json(&[&real("b30hz80"), "--profile", profile.to_str().unwrap()]);
     assert_eq!(b["verdict"]["state"], "faulty", "{}", b["verdict"]);
 }

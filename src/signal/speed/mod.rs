@@ -315,8 +315,22 @@ pub fn teeth_candidates<T: Sample>(
 /// noise near 0. When the revolution holds `d` turns of the shaft, the orders not divisible by `d` hold no
 /// synchronous content while the others do. `None` with fewer than 8 revolutions.
 pub fn halves_coherence(fft: &mut Fft, y: &[f64], period: usize, d: usize) -> Option<(f64, f64)> {
+    if d < 2 {
+        return None;
+    }
+    halves_coherence_split(fft, y, period, &|k| k % d != 0)
+}
+
+/// [`halves_coherence`] over the orders `first` keeps and over the others (order 0 left out). `None` with
+/// fewer than 8 revolutions.
+pub fn halves_coherence_split(
+    fft: &mut Fft,
+    y: &[f64],
+    period: usize,
+    first: &dyn Fn(usize) -> bool,
+) -> Option<(f64, f64)> {
     let revs = y.len() / period.max(1);
-    if revs < 8 || period < 8 || d < 2 {
+    if revs < 8 || period < 8 {
         return None;
     }
     let half = revs / 2;
@@ -339,7 +353,7 @@ pub fn halves_coherence(fft: &mut Fft, y: &[f64], period: usize, d: usize) -> Op
         }
         if ea > 0.0 && eb > 0.0 { cross / (ea * eb).sqrt() } else { 0.0 }
     };
-    Some((coherence(&|k| k % d != 0), coherence(&|k| k % d == 0)))
+    Some((coherence(first), coherence(&|k| !first(k))))
 }
 
 #[cfg(test)]

@@ -308,6 +308,13 @@ pub(super) fn shaft_from_comb(
     let lag = 1.0 / (k as f64 * mesh);
     let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
     let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| z_p * k as f64 * cycle);
+    // the revolution may be half a turn of the shaft (a mesh whose even harmonics stand over its odd ones
+    // was taken for a divisor of its second harmonic): then twice it is the revolution
+    let half = match &followed {
+        Some((_, y)) if !on_mains(fp) && fp / 2.0 >= slowest => half_a_turn(fft, y, zp * k, (zp, zw)),
+        _ => None,
+    };
+    let (fp, period, k) = if half.is_some() { (fp / 2.0, 2.0 * period, 2 * k) } else { (fp, period, k) };
     let hz =
         |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
     let listed: Vec<String> =
@@ -322,6 +329,12 @@ pub(super) fn shaft_from_comb(
         },
         listed.join(", ")
     );
+    if let Some(c) = half {
+        note.push_str(&format!(
+            "; the mesh comb first read gave {}, but the record over twice that revolution repeats at its odd orders too (coherence of its halves {c:.2}): that was half a turn",
+            hz(period / 2.0)
+        ));
+    }
     if let (Some(&h), Some(f)) = (hum.first(), fs) {
         note.push_str(&format!("; a comb on the mains (mesh {:.2} Hz) was set aside as hum", z_p * mesh_of(h) * f));
     }
@@ -372,50 +385,6 @@ pub(super) fn shaft_from_comb(
         )
     });
     Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true, close_second, turns })
-}
-
-/// Coherence between the record's halves (`speed::halves_coherence`) at the orders a revolution of several
-/// turns lacks, under which they hold no synchronous content: on the tachometer's angle the right
-/// revolutions of 273 generated recordings (the hold-out, fresh and first generators, 21 machines) kept
-/// 0.76-1.0 at their odd orders, and a revolution of two true ones read -0.5 to 0.3 on 138 of the 154
-/// hold-out and fresh recordings.
-pub(super) const NO_SYNCHRONOUS: f64 = 0.4;
-/// Coherence the orders a revolution of several turns keeps must reach: the angle follows a line of the
-/// machine, its averages hold the machine (0.83-1.0 at the even orders of the hold-out and fresh recordings).
-pub(super) const SYNCHRONOUS: f64 = 0.8;
-/// Coherence a shorter revolution must keep at its orders that are not multiples of its cycles of the
-/// followed line (the shaft's own lines: runout, the teeth's errors, sidebands): on a signal that repeats
-/// with every cycle of the line (a mesh alone on its own angle) a shorter revolution holds nothing there.
-pub(super) const SHAFT_LINES: f64 = 0.5;
-
-/// How many turns of the shaft a revolution may hold, and the coherences that said so.
-#[derive(Clone, Copy, Debug)]
-struct Turns {
-    count: usize,
-    kept: f64,
-    lacking: f64,
-}
-
-/// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
-/// per cycle) may hold d = 2 or 3 turns of the shaft: its orders that are not multiples of d hold no
-/// synchronous content ([`NO_SYNCHRONOUS`]) while those that are do ([`SYNCHRONOUS`]), and the revolution
-/// of cycles / d cycles (a whole number) holds lines of its own beside the followed line's
-/// ([`SHAFT_LINES`]); at most `most` turns (the mesh must stay below the highest frequency sought).
-///
-/// A doubt, not a correction: a true revolution whose pinion carries little content of its own at those
-/// orders reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
-/// not divisible by 3, where the fresh 20/33 machine's true double revolutions read -0.33 to 0.12).
-fn turns_per_revolution(fft: &mut Fft, y: &[f64], cycles: usize, most: usize) -> Option<Turns> {
-    let period = cycles * MESH_CYCLE_POINTS;
-    [2, 3].into_iter().filter(|&d| d <= most && cycles.is_multiple_of(d)).find_map(|d| {
-        let (lacking, kept) = speed::halves_coherence(fft, y, period, d)?;
-        let own = speed::halves_coherence(fft, y, period / d, cycles / d)?.0;
-        (lacking < NO_SYNCHRONOUS && kept >= SYNCHRONOUS && own >= SHAFT_LINES).then_some(Turns {
-            count: d,
-            kept,
-            lacking,
-        })
-    })
 }
 
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
@@ -510,10 +479,14 @@ pub(super) fn shaft_through_mesh(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn shaft(confidence: f64, from_comb: bool, close_second: Option<f64>) -> MeshShaft {
+    pub(in crate::jobs::diagnose::tracking) fn shaft(
+        confidence: f64,
+        from_comb: bool,
+        close_second: Option<f64>,
+    ) -> MeshShaft {
         MeshShaft {
             period_samples: 400.0,
             mesh_order: None,
@@ -538,39 +511,5 @@ mod tests {
         assert!(doubt(shaft(0.6, true, None)).is_none());
         // the autocorrelation's confidence is on another scale: low, it is judged elsewhere
         assert!(doubt(shaft(0.1, false, None)).is_none());
-    }
-
-    /// A record on the followed line's angle, 20 cycles of it per supposed revolution (`MESH_CYCLE_POINTS`
-    /// points per cycle), 64 revolutions, with lines at `orders` of that revolution and noise as strong.
-    fn on_the_line(orders: &[f64]) -> Vec<f64> {
-        let period = 20 * MESH_CYCLE_POINTS;
-        let mut state = 11_u64;
-        (0..period * 64)
-            .map(|i| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let noise = ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
-                let t = i as f64 / period as f64;
-                let lines: f64 = orders.iter().map(|k| 0.3 * (2.0 * std::f64::consts::PI * k * t + k).sin()).sum();
-                lines + 1.5 * noise
-            })
-            .collect()
-    }
-
-    /// The fresh 20/33 machine's case: the comb of half the speed was taken, so the supposed revolution holds
-    /// two turns (every line at an even order: the shaft's own lines 2 and 6, the fan's 20, the mesh's 40)
-    /// and that is said; a true revolution (lines at odd orders too), or a signal that repeats with every
-    /// cycle of the line (lines at multiples of 20 only: no shaft of its own), is not doubted.
-    #[test]
-    fn a_revolution_of_two_turns_is_doubted() {
-        let mut fft = Fft::new();
-        let two = turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 8);
-        assert!(two.is_some_and(|t| t.count == 2 && t.lacking < NO_SYNCHRONOUS), "{two:?}");
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0, 40.0]), 20, 8).is_none());
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[20.0, 40.0, 60.0]), 20, 8).is_none());
-        // a revolution of two turns would put the mesh beyond the highest frequency sought
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 1).is_none());
-        let why = "the estimated revolution may hold 2 turns of the shaft".to_string();
-        let doubted = MeshShaft { turns: Some(why), ..shaft(0.9, true, None) };
-        assert!(doubted.nominal(40_000, &mut Vec::new()).doubt.is_some_and(|d| d.contains("2 turns")));
     }
 }

@@ -6,6 +6,8 @@ use super::*;
 
 mod estimate;
 use estimate::*;
+mod turns;
+use turns::*;
 mod ridges;
 pub(super) use ridges::strongest_low_harmonic;
 use ridges::*;

@@ -1,0 +1,120 @@
+//! Whether a revolution read from a mesh comb holds several turns of the shaft, or half of one: the
+//! coherence of the record's halves at the orders a wrong revolution lacks or gains.
+
+use super::*;
+
+/// Coherence between the record's halves (`speed::halves_coherence`) at the orders a revolution of several
+/// turns lacks, under which they hold no synchronous content: on the tachometer's angle the right
+/// revolutions of 273 generated recordings (the hold-out, fresh and first generators, 21 machines) kept
+/// 0.76-1.0 at their odd orders, and a revolution of two true ones read -0.5 to 0.3 on 138 of the 154
+/// hold-out and fresh recordings.
+pub(super) const NO_SYNCHRONOUS: f64 = 0.4;
+/// Coherence the orders a revolution of several turns keeps must reach: the angle follows a line of the
+/// machine, its averages hold the machine (0.83-1.0 at the even orders of the hold-out and fresh recordings).
+pub(super) const SYNCHRONOUS: f64 = 0.8;
+/// Coherence a shorter revolution must keep at its orders that are not multiples of its cycles of the
+/// followed line (the shaft's own lines: runout, the teeth's errors, sidebands): on a signal that repeats
+/// with every cycle of the line (a mesh alone on its own angle) a shorter revolution holds nothing there.
+pub(super) const SHAFT_LINES: f64 = 0.5;
+
+/// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
+/// per cycle) is half a turn of the pinion (`zp` teeth, meshing with `zw`): over twice its length the
+/// record's halves agree at the odd orders as well as at the even ones (at least [`SHAFT_LINES`] and
+/// [`SYNCHRONOUS`]), the shaft's own lines at its odd orders, which lie between the lines of a shaft
+/// turning twice as fast. The wheel's lines are left out: over two pinion turns the wheel's order j is
+/// order 2 j zp / zw, odd where zw is even and zp odd (a spalled 15/52 wheel's order 26 is order 15 of two
+/// pinion turns, and read 0.96 there). Returns that odd-order coherence. On the fresh 24/37 machine at
+/// twice its speed (the mesh's even harmonics standing over its odd ones) the odd orders read 0.69-0.90;
+/// on every right revolution of the fresh set with the teeth alone, -0.42 to 0.30.
+pub(super) fn half_a_turn(fft: &mut Fft, y: &[f64], cycles: usize, (zp, zw): (usize, usize)) -> Option<f64> {
+    let wheel_line = |n: usize| (n * zw).is_multiple_of(2 * zp);
+    let odd = |n: usize| n % 2 == 1 && !wheel_line(n);
+    let (odd, rest) = speed::halves_coherence_split(fft, y, 2 * cycles * MESH_CYCLE_POINTS, &odd)?;
+    (odd >= SHAFT_LINES && rest >= SYNCHRONOUS).then_some(odd)
+}
+
+/// How many turns of the shaft a revolution may hold, and the coherences that said so.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Turns {
+    pub(super) count: usize,
+    pub(super) kept: f64,
+    pub(super) lacking: f64,
+}
+
+/// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
+/// per cycle) may hold d = 2 or 3 turns of the shaft: its orders that are not multiples of d hold no
+/// synchronous content ([`NO_SYNCHRONOUS`]) while those that are do ([`SYNCHRONOUS`]), and the revolution
+/// of cycles / d cycles (a whole number) holds lines of its own beside the followed line's
+/// ([`SHAFT_LINES`]); at most `most` turns (the mesh must stay below the highest frequency sought).
+///
+/// A doubt, not a correction: a true revolution whose pinion carries little content of its own at those
+/// orders reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
+/// not divisible by 3, where the fresh 20/33 machine's true double revolutions read -0.33 to 0.12).
+pub(super) fn turns_per_revolution(fft: &mut Fft, y: &[f64], cycles: usize, most: usize) -> Option<Turns> {
+    let period = cycles * MESH_CYCLE_POINTS;
+    [2, 3].into_iter().filter(|&d| d <= most && cycles.is_multiple_of(d)).find_map(|d| {
+        let (lacking, kept) = speed::halves_coherence(fft, y, period, d)?;
+        let own = speed::halves_coherence(fft, y, period / d, cycles / d)?.0;
+        (lacking < NO_SYNCHRONOUS && kept >= SYNCHRONOUS && own >= SHAFT_LINES).then_some(Turns {
+            count: d,
+            kept,
+            lacking,
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record on the followed line's angle, 20 cycles of it per supposed revolution (`MESH_CYCLE_POINTS`
+    /// points per cycle), 64 revolutions, with lines at `orders` of that revolution and noise as strong.
+    fn on_the_line(orders: &[f64]) -> Vec<f64> {
+        let period = 20 * MESH_CYCLE_POINTS;
+        let mut state = 11_u64;
+        (0..period * 64)
+            .map(|i| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let noise = ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+                let t = i as f64 / period as f64;
+                let lines: f64 = orders.iter().map(|k| 0.3 * (2.0 * std::f64::consts::PI * k * t + k).sin()).sum();
+                lines + 1.5 * noise
+            })
+            .collect()
+    }
+
+    /// The fresh 20/33 machine's case: the comb of half the speed was taken, so the supposed revolution holds
+    /// two turns (every line at an even order: the shaft's own lines 2 and 6, the fan's 20, the mesh's 40)
+    /// and that is said; a true revolution (lines at odd orders too), or a signal that repeats with every
+    /// cycle of the line (lines at multiples of 20 only: no shaft of its own), is not doubted.
+    #[test]
+    fn a_revolution_of_two_turns_is_doubted() {
+        let mut fft = Fft::new();
+        let two = turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 8);
+        assert!(two.is_some_and(|t| t.count == 2 && t.lacking < NO_SYNCHRONOUS), "{two:?}");
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0, 40.0]), 20, 8).is_none());
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[20.0, 40.0, 60.0]), 20, 8).is_none());
+        // a revolution of two turns would put the mesh beyond the highest frequency sought
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 1).is_none());
+        let why = "the estimated revolution may hold 2 turns of the shaft".to_string();
+        let doubted = MeshShaft { turns: Some(why), ..super::super::estimate::tests::shaft(0.9, true, None) };
+        assert!(doubted.nominal(40_000, &mut Vec::new()).doubt.is_some_and(|d| d.contains("2 turns")));
+    }
+
+    /// The fresh 24/37 machine's case the other way round: the comb of twice the speed was taken, so the
+    /// supposed revolution is half a turn, and over twice it the shaft's own lines stand at the odd orders
+    /// (orders 0.5 and 1.5 of the supposed revolution); a true revolution holds nothing there. A 20/56
+    /// wheel's order 7 lies at order 2.5 of a true pinion revolution, an odd order of two of them: left
+    /// out, as the wheel's (with a 57-tooth wheel no wheel order lands there, and the line reads as the
+    /// pinion's own).
+    #[test]
+    fn half_a_turn_is_told_by_the_odd_orders_of_twice_it() {
+        let mut fft = Fft::new();
+        let half = half_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 20.0]), 20, (20, 56));
+        assert!(half.is_some_and(|c| c >= SHAFT_LINES), "{half:?}");
+        assert!(half_a_turn(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0]), 20, (20, 56)).is_none());
+        let wheel = on_the_line(&[1.0, 2.5, 3.0, 20.0]);
+        assert!(half_a_turn(&mut fft, &wheel, 20, (20, 56)).is_none(), "the wheel's line is left out");
+        assert!(half_a_turn(&mut fft, &wheel, 20, (20, 57)).is_some(), "no wheel line there: the pinion's");
+    }
+}
