@@ -329,31 +329,51 @@ pub fn halves_coherence_split(
     period: usize,
     first: &dyn Fn(usize) -> bool,
 ) -> Option<(f64, f64)> {
-    let revs = y.len() / period.max(1);
-    if revs < 8 || period < 8 {
-        return None;
-    }
-    let half = revs / 2;
-    let mut average = |from: usize| {
-        let mut a = vec![0.0; period];
-        for r in y[from * period..(from + half) * period].chunks_exact(period) {
-            a.iter_mut().zip(r).for_each(|(s, v)| *s += v / half as f64);
+    let h = Halves::of(fft, y, period)?;
+    Some((h.coherence(first), h.coherence(&|k| !first(k))))
+}
+
+/// The order spectra of the averages of the two halves of a record resampled at `period` points per
+/// (supposed) revolution, over their whole revolutions: [`halves_coherence`]'s parts, for several sets
+/// of orders at the cost of one pair of transforms.
+pub struct Halves {
+    a: Vec<(f64, f64)>,
+    b: Vec<(f64, f64)>,
+    period: usize,
+}
+
+impl Halves {
+    /// The halves of `y`; `None` with fewer than 8 revolutions.
+    pub fn of(fft: &mut Fft, y: &[f64], period: usize) -> Option<Self> {
+        let revs = y.len() / period.max(1);
+        if revs < 8 || period < 8 {
+            return None;
         }
-        let mut out = Vec::new();
-        fft.forward(&mut a, &mut out);
-        out
-    };
-    let (a, b) = (average(0), average(half));
-    let coherence = |keep: &dyn Fn(usize) -> bool| {
+        let half = revs / 2;
+        let mut average = |from: usize| {
+            let mut a = vec![0.0; period];
+            for r in y[from * period..(from + half) * period].chunks_exact(period) {
+                a.iter_mut().zip(r).for_each(|(s, v)| *s += v / half as f64);
+            }
+            let mut out = Vec::new();
+            fft.forward(&mut a, &mut out);
+            out
+        };
+        Some(Self { a: average(0), b: average(half), period })
+    }
+
+    /// sum Re(A_k conj(B_k)) / sqrt(sum |A_k|^2 sum |B_k|^2) over the orders k below a quarter of the period
+    /// that `keep` keeps (0 when they hold nothing).
+    pub fn coherence(&self, keep: &dyn Fn(usize) -> bool) -> f64 {
+        let (a, b) = (&self.a, &self.b);
         let (mut cross, mut ea, mut eb) = (0.0, 0.0, 0.0);
-        for k in (1..period / 4).filter(|&k| keep(k)) {
+        for k in (1..self.period / 4).filter(|&k| keep(k)) {
             cross += a[k].0 * b[k].0 + a[k].1 * b[k].1;
             ea += a[k].0 * a[k].0 + a[k].1 * a[k].1;
             eb += b[k].0 * b[k].0 + b[k].1 * b[k].1;
         }
         if ea > 0.0 && eb > 0.0 { cross / (ea * eb).sqrt() } else { 0.0 }
-    };
-    Some((coherence(first), coherence(&|k| !first(k))))
+    }
 }
 
 #[cfg(test)]

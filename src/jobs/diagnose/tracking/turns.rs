@@ -21,16 +21,30 @@ pub(super) const SHAFT_LINES: f64 = 0.5;
 /// per cycle) is half a turn of the pinion (`zp` teeth, meshing with `zw`): over twice its length the
 /// record's halves agree at the odd orders as well as at the even ones (at least [`SHAFT_LINES`] and
 /// [`SYNCHRONOUS`]), the shaft's own lines at its odd orders, which lie between the lines of a shaft
-/// turning twice as fast. The wheel's lines are left out: over two pinion turns the wheel's order j is
-/// order 2 j zp / zw, odd where zw is even and zp odd (a spalled 15/52 wheel's order 26 is order 15 of two
-/// pinion turns, and read 0.96 there). Returns that odd-order coherence. On the fresh 24/37 machine at
-/// twice its speed (the mesh's even harmonics standing over its odd ones) the odd orders read 0.69-0.90;
-/// on every right revolution of the fresh set with the teeth alone, -0.42 to 0.30.
+/// turning twice as fast. Two kinds of odd orders are not the pinion's own:
+/// - the wheel's lines: over two pinion turns the wheel's order j is order 2 j zp / zw, odd where zw is
+///   even and zp odd (a spalled 15/52 wheel's order 26 is order 15 of two pinion turns, and read 0.96
+///   there); left out;
+/// - the multiples of one odd order q: when twice the revolution holds q turns of the shaft, its lines are
+///   there alone (the first generator's broken 21/37 pinion, its revolution read as 3.5 turns: 0.80 at the
+///   odd orders, 0.33 without the multiples of 7). The agreement must hold without the multiples of each
+///   odd q up to zp.
+///
+/// Returns the least odd-order coherence. On the fresh 24/37 machine at twice its speed (the mesh's even
+/// harmonics standing over its odd ones) the odd orders read 0.65-0.91 with any q left out; on every
+/// right revolution of the fresh set with the teeth alone, -0.42 to 0.30.
 pub(super) fn half_a_turn(fft: &mut Fft, y: &[f64], cycles: usize, (zp, zw): (usize, usize)) -> Option<f64> {
+    let h = speed::Halves::of(fft, y, 2 * cycles * MESH_CYCLE_POINTS)?;
     let wheel_line = |n: usize| (n * zw).is_multiple_of(2 * zp);
     let odd = |n: usize| n % 2 == 1 && !wheel_line(n);
-    let (odd, rest) = speed::halves_coherence_split(fft, y, 2 * cycles * MESH_CYCLE_POINTS, &odd)?;
-    (odd >= SHAFT_LINES && rest >= SYNCHRONOUS).then_some(odd)
+    if h.coherence(&|n| !odd(n) && n > 0) < SYNCHRONOUS {
+        return None;
+    }
+    let least = (3..=zp.max(3))
+        .step_by(2)
+        .map(|q| h.coherence(&|n| odd(n) && !n.is_multiple_of(q)))
+        .fold(h.coherence(&odd), f64::min);
+    (least >= SHAFT_LINES).then_some(least)
 }
 
 /// How many turns of the shaft a revolution may hold, and the coherences that said so.
@@ -105,8 +119,9 @@ mod tests {
     /// supposed revolution is half a turn, and over twice it the shaft's own lines stand at the odd orders
     /// (orders 0.5 and 1.5 of the supposed revolution); a true revolution holds nothing there. A 20/56
     /// wheel's order 7 lies at order 2.5 of a true pinion revolution, an odd order of two of them: left
-    /// out, as the wheel's (with a 57-tooth wheel no wheel order lands there, and the line reads as the
-    /// pinion's own).
+    /// out, as the wheel's, while the pinion's own lines beside it still tell half a turn. Lines at
+    /// orders 3.5 and 10.5 alone (orders 7 and 21 of twice the revolution) are a shaft turning 7 times in
+    /// it, not the pinion's own.
     #[test]
     fn half_a_turn_is_told_by_the_odd_orders_of_twice_it() {
         let mut fft = Fft::new();
@@ -115,6 +130,11 @@ mod tests {
         assert!(half_a_turn(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0]), 20, (20, 56)).is_none());
         let wheel = on_the_line(&[1.0, 2.5, 3.0, 20.0]);
         assert!(half_a_turn(&mut fft, &wheel, 20, (20, 56)).is_none(), "the wheel's line is left out");
-        assert!(half_a_turn(&mut fft, &wheel, 20, (20, 57)).is_some(), "no wheel line there: the pinion's");
+        let own = on_the_line(&[0.5, 1.0, 1.5, 2.5, 20.0]);
+        assert!(half_a_turn(&mut fft, &own, 20, (20, 56)).is_some(), "the pinion's own lines beside the wheel's");
+        // twice the revolution holds 7 turns: its odd lines (orders 7 and 21 of it) are multiples of 7 alone
+        let seven = on_the_line(&[1.0, 3.5, 10.5, 20.0]);
+        assert!(half_a_turn(&mut fft, &seven, 20, (20, 57)).is_none(), "the lines of a revolution of 7 turns");
+        assert!(half_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 3.5, 20.0]), 20, (20, 57)).is_some());
     }
 }
