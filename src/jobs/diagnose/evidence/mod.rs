@@ -58,12 +58,7 @@ pub fn envelope_evidence(d: &mut Diagnosis, baseline: &Envelope) {
     match d.verdict.state {
         VerdictState::Healthy | VerdictState::NotJudged => {
             d.verdict.state = VerdictState::Suspect;
-            d.verdict.gear = gear;
-            d.verdict.reasons.insert(0, reason);
-            // a machine's shaft: its gear is named from there (`machine::name_verdict`)
-            if matches!(line.shaft, Shaft::Named(_)) {
-                d.verdict.deciding = Some(line.shaft);
-            }
+            name_on(d, line.shaft, reason);
         }
         _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
         // on a doubtful speed the averages may be smeared over the wrong gear's revolutions, while an
@@ -118,6 +113,16 @@ fn rise_over(now_db: f64, baseline_db: f64) -> f64 {
 /// baseline (a local fault keeps its impulse whole in its own gear's average).
 fn holds_impulse(d: &Diagnosis, gear: VerdictGear) -> bool {
     d.scores.iter().any(|s| VerdictGear::from(s.gear) == gear && s.indicator.local() && s.over_suspect())
+}
+
+/// Puts the verdict on `shaft`'s gear with `reason` first; a machine's shaft also decides how its gear is
+/// named (`machine::name_verdict`).
+fn name_on(d: &mut Diagnosis, shaft: Shaft, reason: String) {
+    d.verdict.gear = VerdictGear::from(shaft);
+    d.verdict.reasons.insert(0, reason);
+    if matches!(shaft, Shaft::Named(_)) {
+        d.verdict.deciding = Some(shaft);
+    }
 }
 
 /// Puts the verdict on shaft `to`'s gear, that shaft deciding; the tooth named for the other gear goes.
@@ -364,22 +369,13 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                     "the {}'s indicators moved too, but its own orders did not change against the baseline's while the {}'s did: read as the {}'s fault seen in the {}'s average",
                     d.verdict.gear, shaft, shaft, d.verdict.gear
                 ));
-                d.verdict.gear = gear;
-                d.verdict.tooth = None;
-                d.verdict.tooth_origin = None;
-                d.verdict.reasons.insert(0, reason);
-                if matches!(shaft, Shaft::Named(_)) {
-                    d.verdict.deciding = Some(shaft);
-                }
+                (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+                name_on(d, shaft, reason);
                 place_tooth(d);
             }
             VerdictState::Healthy | VerdictState::NotJudged if i == 0 => {
                 d.verdict.state = VerdictState::Suspect;
-                d.verdict.gear = gear;
-                d.verdict.reasons.insert(0, reason);
-                if matches!(shaft, Shaft::Named(_)) {
-                    d.verdict.deciding = Some(shaft);
-                }
+                name_on(d, shaft, reason);
                 place_tooth(d);
             }
             _ if d.verdict.gear == gear => d.verdict.reasons.insert(1.min(d.verdict.reasons.len()), reason),
