@@ -190,6 +190,16 @@ impl Indicator {
         matches!(self, Self::Sbr)
     }
 
+    /// Whether the indicator is a ratio of what is not the mesh to the mesh lines (FM0: the average's
+    /// peak-to-peak over the sum of its mesh-harmonic amplitudes; ER: the difference signal's RMS over the
+    /// regular signal's): a weaker mesh (a lighter load, another operating point) raises them together, so
+    /// two of them at their limit are one piece of evidence, not corroboration. A healthy 18/31 wheel of the
+    /// test generator against one sibling (tests/unseen_machines.rs, more machines, with the tachometer)
+    /// stood at FM0 6.5 and ER 5.4 spreads, nothing else moved, and was called faulty on the two.
+    pub fn mesh_ratio(self) -> bool {
+        matches!(self, Self::Fm0 | Self::Er)
+    }
+
     /// Whether the indicator measures the sidebands at the gear's own shaft spacing around its mesh harmonics
     /// (SBR, SER, SI): a modulation once per the gear's revolution.
     pub fn sideband(self) -> bool {

@@ -164,3 +164,24 @@ fn an_impulse_at_one_tooth_of_the_other_gear_names_it() {
     assert_eq!(judged(difference(10, &spread[..1], 0.5), difference(89, &[40], 6.0), true), VerdictGear::Wheel);
     assert_eq!(judged(one, many, false), VerdictGear::Wheel);
 }
+
+/// The shared indicators put the verdict on the pinion; the wheel's pattern changed 1.31 times its healthy
+/// figure (as the hold-out 21/64 machine's worn wheel case, gears swapped). While the pinion's own pattern
+/// is repeated by its healthy files (figure 0.1), the verdict moves to the wheel; once the pinion's healthy
+/// files differ by more than the pattern's whole energy (1.34: nothing repeated), its change cannot be read
+/// and the patterns decide nothing: the verdict stays where the indicators put it.
+#[test]
+fn an_unrepeated_pattern_decides_nothing() {
+    let mut moved = suspect_pinion(0.5, 0.0);
+    moved.local_change[1].pattern = 0.228;
+    moved.local_change[1].pattern_healthy = 0.173;
+    assert!(pattern_evidence(&mut moved), "both patterns are known");
+    assert_eq!(moved.verdict.gear, VerdictGear::Wheel, "{:?}", moved.verdict.reasons);
+    let mut kept = suspect_pinion(0.5, 0.0);
+    kept.local_change[1].pattern = 0.228;
+    kept.local_change[1].pattern_healthy = 0.173;
+    kept.local_change[0].pattern = 1.362;
+    kept.local_change[0].pattern_healthy = 1.342;
+    assert!(!pattern_evidence(&mut kept), "the pinion's pattern is not known");
+    assert_eq!(kept.verdict.gear, VerdictGear::Pinion, "{:?}", kept.verdict.reasons);
+}

@@ -44,7 +44,8 @@ pub struct Thresholds {
     /// NA4 without a baseline (3 nominal).
     pub na4_absolute: Limits,
     /// Number of indicators at their first limit that together make a recording faulty against a baseline
-    /// (a supporting one, SBR, not counted: [`Indicator::supporting`]).
+    /// (a supporting one, SBR, not counted: [`Indicator::supporting`]; the mesh ratios FM0 and ER counted
+    /// as one: [`Indicator::mesh_ratio`]).
     /// Without one the count does not apply: FM4, M6A and NA4 are moments of nearly the same signal, so
     /// several at their first limit are one piece of evidence, not corroboration (healthy generated
     /// machines whose gears carry manufacturing errors put all three at it together), and only one
@@ -115,6 +116,9 @@ struct Trigger {
     /// An indicator that alone makes a gear at most suspect (SBR): it does not count towards
     /// `Thresholds::faulty_count` either.
     supporting: bool,
+    /// A ratio of what is not the mesh to the mesh lines (FM0, ER: [`Indicator::mesh_ratio`]): several of
+    /// them count as one towards `Thresholds::faulty_count`.
+    mesh_ratio: bool,
 }
 
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
@@ -163,6 +167,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             local: sc.indicator.local(),
             sideband: sc.indicator.sideband(),
             supporting: sc.indicator.supporting(),
+            mesh_ratio: sc.indicator.mesh_ratio(),
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above{files}; {why}{cap}",
@@ -229,6 +234,7 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
                 local: key.local(),
                 sideband: false,
                 supporting: false,
+                mesh_ratio: false,
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
@@ -237,10 +243,14 @@ fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
     out
 }
 
-/// The state a gear's triggers give: the worst single one, or faulty when `faulty_count` fire together.
+/// The state a gear's triggers give: the worst single one, or faulty when `faulty_count` pieces of
+/// evidence fire together (supporting indicators left out, the mesh ratios FM0 and ER counted as one).
 fn gear_state(triggers: &[Trigger], t: &Thresholds) -> VerdictState {
     let top = triggers.iter().map(|x| x.state).max().unwrap_or(VerdictState::Healthy);
-    if triggers.iter().filter(|x| !x.supporting).count() >= t.faulty_count { VerdictState::Faulty } else { top }
+    let counted = triggers.iter().filter(|x| !x.supporting);
+    let ratios = counted.clone().filter(|x| x.mesh_ratio).count().min(1);
+    let pieces = counted.filter(|x| !x.mesh_ratio).count() + ratios;
+    if pieces >= t.faulty_count { VerdictState::Faulty } else { top }
 }
 
 /// Why a gear could not be judged, or `None` when it could: against a baseline, every deciding indicator

@@ -1,7 +1,15 @@
 use super::*;
 
 fn trigger(ratio: f64, local: bool) -> Trigger {
-    Trigger { state: VerdictState::Faulty, ratio, text: String::new(), local, sideband: false, supporting: false }
+    Trigger {
+        state: VerdictState::Faulty,
+        ratio,
+        text: String::new(),
+        local,
+        sideband: false,
+        supporting: false,
+        mesh_ratio: false,
+    }
 }
 
 fn gear(gear: Shaft, triggers: Vec<Trigger>) -> GearTriggers {
@@ -81,6 +89,22 @@ fn a_supporting_indicator_is_not_counted_towards_faulty() {
     assert_eq!(gear_state(&[suspect(false), suspect(false)], &t), VerdictState::Faulty);
     assert_eq!(gear_state(&[suspect(false), suspect(false), suspect(true)], &t), VerdictState::Faulty);
     assert_eq!(gear_state(&[suspect(true)], &t), VerdictState::Suspect);
+}
+
+/// FM0 and ER are both ratios of what is not the mesh to the mesh lines, and a weaker mesh raises them
+/// together: at their suspect limits they are one piece of evidence (the same healthy 18/31 wheel against
+/// one sibling, with the tachometer: FM0 6.5 and ER 5.4 spreads, suspect), while one of them beside an
+/// indicator of another kind (FM4, NA4*) makes two, and either beyond its faulty limit is faulty alone.
+#[test]
+fn the_mesh_ratios_count_as_one_towards_faulty() {
+    let t = Thresholds::default();
+    let suspect = |mesh_ratio: bool| Trigger { state: VerdictState::Suspect, mesh_ratio, ..trigger(5.0, false) };
+    assert_eq!(gear_state(&[suspect(true), suspect(true)], &t), VerdictState::Suspect);
+    assert_eq!(gear_state(&[suspect(true), suspect(false)], &t), VerdictState::Faulty);
+    assert_eq!(gear_state(&[suspect(true), suspect(true), suspect(false)], &t), VerdictState::Faulty);
+    let faulty_ratio = Trigger { mesh_ratio: true, ..trigger(12.0, false) };
+    assert_eq!(gear_state(&[faulty_ratio], &t), VerdictState::Faulty);
+    assert!(Indicator::Fm0.mesh_ratio() && Indicator::Er.mesh_ratio() && !Indicator::Na4Star.mesh_ratio());
 }
 
 fn score(indicator: Indicator, spreads: f64) -> Score {
