@@ -56,21 +56,26 @@ pub(super) fn follow_shaft(
     let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
         None => track(path, rec, channels, o, known_z, nominal.map, given, warnings)?,
         Some(alt) => {
-            // two starts (the given speed and its weak comb's best, or a weak repetition and the baseline's
-            // speed): the second when its followed line stands clearly higher
+            // two starts (the given speed and its weak comb's best, or the recording's own estimate and the
+            // baseline's speed): the second when its followed line stands clearly higher
             let mut given_warnings = Vec::new();
             let first = track(path, rec, channels, o, known_z, nominal.map, given, &mut given_warnings)?;
             let mut alt_warnings = Vec::new();
             let second = track(path, rec, channels, o, known_z, alt, given, &mut alt_warnings)?;
             let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
-            if line(&second) >= line(&first) + CLEARER_START_DB {
+            // without a speed, the same line followed from both starts (means within SAME_LINE) keeps the
+            // recording's own start: the baseline's speed is there for a line its own start missed
+            let same_line = o.shaft_hz.is_none()
+                && line(&first).is_finite()
+                && (first.0.mean_period_samples() / second.0.mean_period_samples() - 1.0).abs() <= SAME_LINE;
+            if !same_line && line(&second) >= line(&first) + CLEARER_START_DB {
                 warnings.extend(alt_warnings);
                 // (with a given speed the second start is its weak comb's best; without one, the baseline's
-                // speed beside a weak repetition of the recording's own)
+                // speed beside the recording's own estimate)
                 let (second_start, first_start) = if o.shaft_hz.is_some() {
                     ("the comb's best speed", "the given speed")
                 } else {
-                    ("the baseline's speed", "the recording's weak repetition")
+                    ("the baseline's speed", "the recording's own estimate")
                 };
                 warnings.push(format!(
                     "the tracking from {second_start} followed a line {:.1} dB over its band, the one from {first_start} {}: the start from {second_start} is kept",
@@ -173,6 +178,10 @@ pub(super) fn follow_shaft(
         given,
     })
 }
+
+/// Largest relative difference of two followed angles' mean speeds for them to be the same line (a
+/// tracked mean is good to about 1e-4; lines of another source stand a percent or more away).
+const SAME_LINE: f64 = 1e-3;
 
 /// How much higher (dB) the line followed from a weak comb's best speed must stand than the one followed
 /// from the given speed for the comb's start to be kept: lines of 6-7 dB differ by a dB between two
