@@ -55,7 +55,7 @@ pub(super) fn follow_shaft(
     let mesh_from_lag = nominal.mesh_order.is_some();
     let (map, tracking, line_snr_db, tracked_z) = match nominal.alternative {
         None => track(path, rec, channels, o, known_z, nominal.map, given, warnings)?,
-        Some(alt) => {
+        Some((alt, what)) => {
             // two starts (the given speed and its weak comb's best, or the recording's own estimate and the
             // baseline's speed): the second when its followed line stands clearly higher
             let mut given_warnings = Vec::new();
@@ -64,19 +64,13 @@ pub(super) fn follow_shaft(
             let second = track(path, rec, channels, o, known_z, alt, given, &mut alt_warnings)?;
             let line = |t: &Tracked| t.2.filter(|_| t.1 == Tracking::MeshPhase).unwrap_or(f64::NEG_INFINITY);
             // without a speed, the same line followed from both starts (means within SAME_LINE) keeps the
-            // recording's own start: the baseline's speed is there for a line its own start missed
+            // first start: the second is there for a line the first missed
             let same_line = o.shaft_hz.is_none()
                 && line(&first).is_finite()
                 && (first.0.mean_period_samples() / second.0.mean_period_samples() - 1.0).abs() <= SAME_LINE;
             if !same_line && line(&second) >= line(&first) + CLEARER_START_DB {
                 warnings.extend(alt_warnings);
-                // (with a given speed the second start is its weak comb's best; without one, the baseline's
-                // speed beside the recording's own estimate)
-                let (second_start, first_start) = if o.shaft_hz.is_some() {
-                    ("the comb's best speed", "the given speed")
-                } else {
-                    ("the baseline's speed", "the recording's own estimate")
-                };
+                let (second_start, first_start) = what.names();
                 warnings.push(format!(
                     "the tracking from {second_start} followed a line {:.1} dB over its band, the one from {first_start} {}: the start from {second_start} is kept",
                     line(&second),

@@ -46,6 +46,7 @@ pub(super) fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, 
         from_comb: false,
         close_second: second.map(|c| c.score / top.score),
         turns: None,
+        comb_peak: None,
     })
 }
 
@@ -83,6 +84,12 @@ pub(super) struct MeshShaft {
     pub(super) close_second: Option<f64>,
     /// Why the revolution may hold several turns of the shaft ([`turns_per_revolution`]), when it may.
     pub(super) turns: Option<String>,
+    /// The mesh comb's own peak (revolution, samples), when the line followed from it refined the speed
+    /// by more than [`MAX_TRACKING_SHIFT_ESTIMATED`]: a second start for the tracking. The followed line's
+    /// mean covers the part of the record where it was held, and on the hold-out 16/45 healthy pinion it
+    /// moved the comb's 17.36 Hz (true mean 17.32) to 17.46 Hz, the top of the speed's range, from where
+    /// the mesh line's angle ended 0.8 % away and was dropped.
+    pub(super) comb_peak: Option<f64>,
 }
 
 /// Confidence of a speed estimated from the teeth (the mesh comb's) under which no verdict of health rests
@@ -127,7 +134,7 @@ impl MeshShaft {
             mesh_order: self.mesh_order,
             doubt,
             unconfirmed_comb_db: None,
-            alternative: None,
+            alternative: self.comb_peak.map(|p| (AngleMap::constant(p, 0.0, n), SecondStart::CombPeak)),
         }
     }
 }
@@ -314,7 +321,10 @@ pub(super) fn shaft_from_comb(
         Some((_, y)) if !on_mains(fp) && fp / 2.0 >= slowest => half_a_turn(fft, y, zp * k, (zp, zw)),
         _ => None,
     };
-    let (fp, period, k) = if half.is_some() { (fp / 2.0, 2.0 * period, 2 * k) } else { (fp, period, k) };
+    let peak = z_p / mesh;
+    let (fp, period, k, peak) =
+        if half.is_some() { (fp / 2.0, 2.0 * period, 2 * k, 2.0 * peak) } else { (fp, period, k, peak) };
+    let comb_peak = (followed.is_some() && (period / peak - 1.0).abs() > MAX_TRACKING_SHIFT_ESTIMATED).then_some(peak);
     let hz =
         |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
     let listed: Vec<String> =
@@ -384,7 +394,16 @@ pub(super) fn shaft_from_comb(
             "{said}; averages on the wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel"
         )
     });
-    Some(MeshShaft { period_samples: period, mesh_order: None, confidence, note, from_comb: true, close_second, turns })
+    Some(MeshShaft {
+        period_samples: period,
+        mesh_order: None,
+        confidence,
+        note,
+        from_comb: true,
+        close_second,
+        turns,
+        comb_peak,
+    })
 }
 
 /// The shaft of a mesh-dominated recording whose speed may vary: the line repeating every `mesh_lag`
@@ -440,6 +459,7 @@ pub(super) fn shaft_through_mesh(
             from_comb: false,
             close_second: None,
             turns: None,
+            comb_peak: None,
         }));
     };
     let confidence = c[q];
@@ -475,6 +495,7 @@ pub(super) fn shaft_through_mesh(
         from_comb: false,
         close_second: None,
         turns: None,
+        comb_peak: None,
     }))
 }
 
@@ -495,7 +516,21 @@ pub(super) mod tests {
             from_comb,
             close_second,
             turns: None,
+            comb_peak: None,
         }
+    }
+
+    /// A comb whose followed line moved the speed off the comb's own peak keeps that peak as the
+    /// tracking's second start, at the peak's revolution; without one there is none.
+    #[test]
+    fn the_comb_peak_is_a_second_start() {
+        let n = 40_000;
+        let nominal = MeshShaft { comb_peak: Some(404.0), ..shaft(0.9, true, None) }.nominal(n, &mut Vec::new());
+        let (map, what) = nominal.alternative.expect("a second start");
+        assert_eq!(what, SecondStart::CombPeak);
+        assert!((map.mean_period_samples() - 404.0).abs() < 1e-9, "{}", map.mean_period_samples());
+        assert!((nominal.map.mean_period_samples() - 400.0).abs() < 1e-9);
+        assert!(shaft(0.9, true, None).nominal(n, &mut Vec::new()).alternative.is_none());
     }
 
     /// No verdict of health rests on an estimated speed whose runner-up stands close (the hold-out's 13-tooth

@@ -9,8 +9,10 @@ use estimate::*;
 mod turns;
 use turns::*;
 mod ridges;
+mod starts;
 pub(super) use ridges::strongest_low_harmonic;
 use ridges::*;
+use starts::*;
 
 /// The speed before tracking: revolution starts from the tachometer, or a constant nominal speed (given,
 /// or estimated from the repetition period).
@@ -28,10 +30,9 @@ pub(super) struct Nominal {
     /// A given speed whose mesh comb was sought and not found (its height over the spectrum, dB): unless the
     /// tracking then follows the mesh line, the averages rest on the nameplate speed as it is.
     pub(super) unconfirmed_comb_db: Option<f64>,
-    /// A second start for the tracking: the best speed of a mesh comb that stands too low to confirm the
-    /// given speed ([`START_COMB_DB`] to [`MIN_COMB_DB`]); kept when the line followed from it stands
-    /// clearly higher than the one followed from the given speed (the analysis stage decides).
-    pub(super) alternative: Option<AngleMap>,
+    /// A second start for the tracking and what it is ([`SecondStart`]); kept when the line followed from
+    /// it stands clearly higher than the one followed from `map` (the analysis stage decides).
+    pub(super) alternative: Option<(AngleMap, SecondStart)>,
 }
 
 impl Nominal {
@@ -123,24 +124,6 @@ pub(super) fn nominal_speed(
     Ok(with_baseline_start(from_repetition(&est, &views, o, geometry, n, warnings), o, geometry, n))
 }
 
-/// An estimated speed with a baseline beside it: the recording's own estimate is one start for the
-/// tracking, the baseline's speed the second, and the line followed clearly higher is kept (the analysis
-/// stage decides: a start whose line is not followed loses to one whose line is). The fresh 31/43
-/// machine's weak repetition lay 3 % off where the baseline's speed led to the mesh line; the hold-out
-/// 27/35 pinion crack's mesh comb read 1.8 % off and its line was not followed from there; the hold-out
-/// 13/37 wheel crack's weak repetition was right and the baseline's speed 1.2 % from it. Only with the
-/// mesh order known (the teeth or the baseline's), and when the two starts differ.
-fn with_baseline_start(mut nominal: Nominal, o: &Options, geometry: Option<&Geometry>, n: usize) -> Nominal {
-    let mesh_known = o.teeth.is_some() || geometry.and_then(|g| g.mesh_order).is_some();
-    let own = nominal.map.mean_period_samples();
-    if let Some(p) = geometry.and_then(|g| g.period_samples).filter(|&p| {
-        mesh_known && nominal.alternative.is_none() && (p / own - 1.0).abs() > MAX_TRACKING_SHIFT_ESTIMATED
-    }) {
-        nominal.alternative = Some(AngleMap::constant(p, 0.0, n));
-    }
-    nominal
-}
-
 /// A given speed `hz` (with the sample rate `fs`; checked against the record by [`nominal_speed`]), sought
 /// on the mesh comb when the teeth are given (the comb's speed, or a second start for the tracking).
 fn given_speed(
@@ -161,7 +144,7 @@ fn given_speed(
     };
     Ok(Nominal {
         unconfirmed_comb_db,
-        alternative: alternative.map(|p| AngleMap::constant(p, 0.0, n)),
+        alternative: alternative.map(|p| (AngleMap::constant(p, 0.0, n), SecondStart::WeakComb)),
         ..Nominal::plain(AngleMap::constant(period, 0.0, n), SpeedSource::Given, 1.0)
     })
 }
@@ -207,29 +190,6 @@ fn estimated_on_lines(
         }
     };
     est.map(Err).map_err(|e| bad(path, e))
-}
-
-/// The baseline's revolution `period` (samples) as the start of the tracking, where the recording's own
-/// evidence finds no speed near it (neither the mesh comb nor a repetition): the mesh line is then sought
-/// where the baseline's was, and the speed is the followed line's when the tracking ends within the
-/// speed's own wander of the start ([`track`]); otherwise the averages assume the baseline's speed and the
-/// verdict says that the angle could not be followed. On the fresh hold-out 31/43 machine the mesh comb
-/// of a healthy recording read seven times the speed and nothing repeated near the baseline's period, so
-/// the recording was refused ("no repetition period found"). The confidence is 0: the speed is only as
-/// good as the line followed, and the tracking line says how well that was.
-fn from_the_baseline(period: f64, mesh_order: Option<usize>, o: &Options, fs: Option<f64>) -> MeshShaft {
-    let hz = fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
-    MeshShaft {
-        period_samples: period,
-        mesh_order: if o.teeth.is_some() { None } else { mesh_order },
-        confidence: 0.0,
-        note: format!(
-            "shaft speed: neither the mesh comb nor a repetition near the baseline's revolution stands out: the mesh line is followed from the baseline's speed ({hz}); give the speed or a tachometer channel when known"
-        ),
-        from_comb: false,
-        close_second: None,
-        turns: None,
-    }
 }
 
 /// The nominal angle on a repetition period `est`: with the teeth and no baseline, the pinion revolution
