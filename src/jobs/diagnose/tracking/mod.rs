@@ -177,7 +177,7 @@ fn estimated_on_lines(
             }
             match (speed::period_near(fft, views, p, 0.03), mesh_order) {
                 (Err(_), Some(_)) => {
-                    return Ok(Ok(from_the_baseline(p, geometry.and_then(|g| g.mesh_order), o, fs)));
+                    return Ok(Ok(from_the_baseline(p, fs)));
                 }
                 (near, _) => near,
             }

@@ -52,12 +52,13 @@ pub(super) fn with_baseline_start(mut nominal: Nominal, o: &Options, geometry: O
 /// verdict says that the angle could not be followed. On the fresh hold-out 31/43 machine the mesh comb
 /// of a healthy recording read seven times the speed and nothing repeated near the baseline's period, so
 /// the recording was refused ("no repetition period found"). The confidence is 0: the speed is only as
-/// good as the line followed, and the tracking line says how well that was.
-pub(super) fn from_the_baseline(period: f64, mesh_order: Option<usize>, o: &Options, fs: Option<f64>) -> MeshShaft {
+/// good as the line followed, and the tracking line says how well that was. No mesh order of its own: the
+/// tracking takes the given teeth's or the baseline's.
+pub(super) fn from_the_baseline(period: f64, fs: Option<f64>) -> MeshShaft {
     let hz = fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
     MeshShaft {
         period_samples: period,
-        mesh_order: if o.teeth.is_some() { None } else { mesh_order },
+        mesh_order: None,
         confidence: 0.0,
         note: format!(
             "shaft speed: neither the mesh comb nor a repetition near the baseline's revolution stands out: the mesh line is followed from the baseline's speed ({hz}); give the speed or a tachometer channel when known"
