@@ -318,19 +318,8 @@ pub fn halves_coherence(fft: &mut Fft, y: &[f64], period: usize, d: usize) -> Op
     if d < 2 {
         return None;
     }
-    halves_coherence_split(fft, y, period, &|k| k % d != 0)
-}
-
-/// [`halves_coherence`] over the orders `first` keeps and over the others (order 0 left out). `None` with
-/// fewer than 8 revolutions.
-pub fn halves_coherence_split(
-    fft: &mut Fft,
-    y: &[f64],
-    period: usize,
-    first: &dyn Fn(usize) -> bool,
-) -> Option<(f64, f64)> {
     let h = Halves::of(fft, y, period)?;
-    Some((h.coherence(first), h.coherence(&|k| !first(k))))
+    Some((h.coherence(&|k| k % d != 0), h.coherence(&|k| k % d == 0)))
 }
 
 /// The order spectra of the averages of the two halves of a record resampled at `period` points per
