@@ -315,15 +315,27 @@ pub(super) fn shaft_from_comb(
     let lag = 1.0 / (k as f64 * mesh);
     let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
     let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| z_p * k as f64 * cycle);
-    // the revolution may be half a turn of the shaft (a mesh whose even harmonics stand over its odd ones
-    // was taken for a divisor of its second harmonic): then twice it is the revolution
-    let half = match &followed {
-        Some((_, y)) if !on_mains(fp) && fp / 2.0 >= slowest => half_a_turn(fft, y, zp * k, (zp, zw)),
+    // the mesh taken as m times the best comb's may be that comb's harmonic m (standing on a housing
+    // mode): when over m of the taken revolutions the shaft's own lines stand between the multiples of m,
+    // the best comb's revolution is the shaft's; else the revolution may still be half a turn (a mesh
+    // whose even harmonics stand over its odd ones was taken for a divisor of its second harmonic)
+    let promoted = (fp / top).round() as usize;
+    let longer = match &followed {
+        Some((_, y)) if !on_mains(fp) => {
+            let whole = part_of_a_turn(fft, y, zp * k, promoted, (zp, zw)).map(|c| (promoted, c));
+            whole.or_else(|| {
+                (promoted != 2 && fp / 2.0 >= slowest)
+                    .then(|| part_of_a_turn(fft, y, zp * k, 2, (zp, zw)).map(|c| (2, c)))
+                    .flatten()
+            })
+        }
         _ => None,
     };
     let peak = z_p / mesh;
-    let (fp, period, k, peak) =
-        if half.is_some() { (fp / 2.0, 2.0 * period, 2 * k, 2.0 * peak) } else { (fp, period, k, peak) };
+    let (fp, period, k, peak) = match longer {
+        Some((m, _)) => (fp / m as f64, m as f64 * period, m * k, m as f64 * peak),
+        None => (fp, period, k, peak),
+    };
     let comb_peak = (followed.is_some() && (period / peak - 1.0).abs() > MAX_TRACKING_SHIFT_ESTIMATED).then_some(peak);
     let hz =
         |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
@@ -339,10 +351,14 @@ pub(super) fn shaft_from_comb(
         },
         listed.join(", ")
     );
-    if let Some(c) = half {
+    if let Some((m, c)) = longer {
+        let (over, orders, part) = match m {
+            2 => ("twice".to_string(), "its odd orders".to_string(), "half a turn".to_string()),
+            _ => (format!("{m} times"), format!("the orders between its multiples of {m}"), format!("1/{m} of a turn")),
+        };
         note.push_str(&format!(
-            "; the mesh comb first read gave {}, but the record over twice that revolution repeats at its odd orders too (coherence of its halves {c:.2}): that was half a turn",
-            hz(period / 2.0)
+            "; the mesh comb first read gave {}, but the record over {over} that revolution repeats at {orders} too (coherence of its halves {c:.2}): that was {part}",
+            hz(period / m as f64)
         ));
     }
     if let (Some(&h), Some(f)) = (hum.first(), fs) {

@@ -18,32 +18,41 @@ pub(super) const SYNCHRONOUS: f64 = 0.8;
 pub(super) const SHAFT_LINES: f64 = 0.5;
 
 /// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
-/// per cycle) is half a turn of the pinion (`zp` teeth, meshing with `zw`): over twice its length the
-/// record's halves agree at the odd orders as well as at the even ones (at least [`SHAFT_LINES`] and
-/// [`SYNCHRONOUS`]), the shaft's own lines at its odd orders, which lie between the lines of a shaft
-/// turning twice as fast. Two kinds of odd orders are not the pinion's own:
-/// - the wheel's lines: over two pinion turns the wheel's order j is order 2 j zp / zw, odd where zw is
-///   even and zp odd (a spalled 15/52 wheel's order 26 is order 15 of two pinion turns, and read 0.96
-///   there); left out;
-/// - the multiples of one odd order q: when twice the revolution holds q turns of the shaft, its lines are
-///   there alone (the first generator's broken 21/37 pinion, its revolution read as 3.5 turns: 0.80 at the
-///   odd orders, 0.33 without the multiples of 7). The agreement must hold without the multiples of each
-///   odd q up to zp.
+/// per cycle) is 1/`m` of a turn of the pinion (`zp` teeth, meshing with `zw`): over `m` times its length
+/// the record's halves agree at the orders between the multiples of `m` as well as at the multiples (at
+/// least [`SHAFT_LINES`] and [`SYNCHRONOUS`]), the shaft's own lines between those of a shaft turning `m`
+/// times as fast. Two kinds of such orders are not the pinion's own:
+/// - the wheel's lines: over m pinion turns the wheel's order j is order m j zp / zw, between the
+///   multiples of m where zw shares a factor with m (a spalled 15/52 wheel's order 26 is order 15 of two
+///   pinion turns, and read 0.96 there); left out;
+/// - the multiples of one order q (not a multiple of m): when m times the revolution holds q turns of the
+///   shaft, its lines are there alone (the first generator's broken 21/37 pinion, its revolution read as
+///   3.5 turns: 0.80 at the odd orders of two revolutions, 0.33 without the multiples of 7). The agreement
+///   must hold without the multiples of each such q up to zp.
 ///
-/// Returns the least odd-order coherence. On the fresh 24/37 machine at twice its speed (the mesh's even
-/// harmonics standing over its odd ones) the odd orders read 0.65-0.91 with any q left out; on every
-/// right revolution of the fresh set with the teeth alone, -0.42 to 0.30.
-pub(super) fn half_a_turn(fft: &mut Fft, y: &[f64], cycles: usize, (zp, zw): (usize, usize)) -> Option<f64> {
-    let h = speed::Halves::of(fft, y, 2 * cycles * MESH_CYCLE_POINTS)?;
-    let wheel_line = |n: usize| (n * zw).is_multiple_of(2 * zp);
-    let odd = |n: usize| n % 2 == 1 && !wheel_line(n);
-    if h.coherence(&|n| !odd(n) && n > 0) < SYNCHRONOUS {
+/// Returns the least coherence between the multiples. m = 2, half a turn: on the fresh 24/37 machine at
+/// twice its speed (the mesh's even harmonics standing over its odd ones) the odd orders read 0.65-0.91
+/// with any q left out; on every right revolution of the fresh set with the teeth alone, -0.42 to 0.30.
+pub(super) fn part_of_a_turn(
+    fft: &mut Fft,
+    y: &[f64],
+    cycles: usize,
+    m: usize,
+    (zp, zw): (usize, usize),
+) -> Option<f64> {
+    if m < 2 {
         return None;
     }
-    let least = (3..=zp.max(3))
-        .step_by(2)
-        .map(|q| h.coherence(&|n| odd(n) && !n.is_multiple_of(q)))
-        .fold(h.coherence(&odd), f64::min);
+    let h = speed::Halves::of(fft, y, m * cycles * MESH_CYCLE_POINTS)?;
+    let wheel_line = |n: usize| (n * zw).is_multiple_of(m * zp);
+    let between = |n: usize| !n.is_multiple_of(m) && !wheel_line(n);
+    if h.coherence(&|n| n.is_multiple_of(m) && n > 0) < SYNCHRONOUS {
+        return None;
+    }
+    let least = (2..=zp.max(3))
+        .filter(|q| !q.is_multiple_of(m))
+        .map(|q| h.coherence(&|n| between(n) && !n.is_multiple_of(q)))
+        .fold(h.coherence(&between), f64::min);
     (least >= SHAFT_LINES).then_some(least)
 }
 
@@ -84,9 +93,14 @@ mod tests {
     /// A record on the followed line's angle, 20 cycles of it per supposed revolution (`MESH_CYCLE_POINTS`
     /// points per cycle), 64 revolutions, with lines at `orders` of that revolution and noise as strong.
     fn on_the_line(orders: &[f64]) -> Vec<f64> {
+        on_the_line_over(orders, 64)
+    }
+
+    /// [`on_the_line`] over `revolutions` supposed revolutions.
+    fn on_the_line_over(orders: &[f64], revolutions: usize) -> Vec<f64> {
         let period = 20 * MESH_CYCLE_POINTS;
         let mut state = 11_u64;
-        (0..period * 64)
+        (0..period * revolutions)
             .map(|i| {
                 state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
                 let noise = ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
@@ -125,16 +139,36 @@ mod tests {
     #[test]
     fn half_a_turn_is_told_by_the_odd_orders_of_twice_it() {
         let mut fft = Fft::new();
-        let half = half_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 20.0]), 20, (20, 56));
+        let half = part_of_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 20.0]), 20, 2, (20, 56));
         assert!(half.is_some_and(|c| c >= SHAFT_LINES), "{half:?}");
-        assert!(half_a_turn(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0]), 20, (20, 56)).is_none());
+        assert!(part_of_a_turn(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0]), 20, 2, (20, 56)).is_none());
         let wheel = on_the_line(&[1.0, 2.5, 3.0, 20.0]);
-        assert!(half_a_turn(&mut fft, &wheel, 20, (20, 56)).is_none(), "the wheel's line is left out");
+        assert!(part_of_a_turn(&mut fft, &wheel, 20, 2, (20, 56)).is_none(), "the wheel's line is left out");
         let own = on_the_line(&[0.5, 1.0, 1.5, 2.5, 20.0]);
-        assert!(half_a_turn(&mut fft, &own, 20, (20, 56)).is_some(), "the pinion's own lines beside the wheel's");
+        assert!(part_of_a_turn(&mut fft, &own, 20, 2, (20, 56)).is_some(), "the pinion's own lines beside the wheel's");
         // twice the revolution holds 7 turns: its odd lines (orders 7 and 21 of it) are multiples of 7 alone
         let seven = on_the_line(&[1.0, 3.5, 10.5, 20.0]);
-        assert!(half_a_turn(&mut fft, &seven, 20, (20, 57)).is_none(), "the lines of a revolution of 7 turns");
-        assert!(half_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 3.5, 20.0]), 20, (20, 57)).is_some());
+        assert!(part_of_a_turn(&mut fft, &seven, 20, 2, (20, 57)).is_none(), "the lines of a revolution of 7 turns");
+        assert!(part_of_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 3.5, 20.0]), 20, 2, (20, 57)).is_some());
+    }
+
+    /// The fresh 31/43 machine's case: its mesh's seventh harmonic stands on a housing mode, so the comb
+    /// of seven times the speed was taken (its lines the true mesh's 7th, 14th, ...) and the supposed
+    /// revolution is a seventh of a turn; over seven of them the pinion's own lines stand at orders that
+    /// are not multiples of 7 (orders 1 and 2 of the true turn: 1/7 and 2/7 of the supposed revolution).
+    /// A true revolution (a mesh of 20 with the shaft's orders 1 and 3) holds nothing between the
+    /// multiples of 7 of seven revolutions; neither does one whose lines between them are the wheel's (a
+    /// wheel of 70 teeth turns twice in seven pinion turns: its lines fall on even orders there).
+    #[test]
+    fn a_seventh_of_a_turn_is_told_by_the_orders_between_the_sevenths() {
+        let mut fft = Fft::new();
+        let seventh = on_the_line_over(&[1.0 / 7.0, 2.0 / 7.0, 1.0, 20.0], 7 * 32);
+        let told = part_of_a_turn(&mut fft, &seventh, 20, 7, (20, 43));
+        assert!(told.is_some_and(|c| c >= SHAFT_LINES), "{told:?}");
+        let whole = on_the_line_over(&[1.0, 3.0, 20.0, 21.0], 7 * 32);
+        assert!(part_of_a_turn(&mut fft, &whole, 20, 7, (20, 43)).is_none());
+        let wheel = on_the_line_over(&[2.0 / 7.0, 4.0 / 7.0, 1.0, 20.0], 7 * 32);
+        assert!(part_of_a_turn(&mut fft, &wheel, 20, 7, (20, 70)).is_none(), "the wheel's lines are left out");
+        assert!(part_of_a_turn(&mut fft, &seventh, 20, 1, (20, 43)).is_none(), "one turn is no part of one");
     }
 }
