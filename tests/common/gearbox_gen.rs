@@ -1034,6 +1034,16 @@ pub fn generate_oversampled(
     finish_train(&train, m.fs, r, m.seed, m.fan_blades, env, duration, &mut rng)
 }
 
+/// [`generate`] with the input speed changing steadily by `change` (a fraction: -0.12 for a coast-down that
+/// ends 12 % slower) over `duration`, on top of its fluctuation: the nominal angle's drift term is set so
+/// that the speed at the end is (1 + `change`) times the speed at the start (d omega / dt = drift omega0).
+pub fn generate_ramp(m: &Machine, fault: Option<Fault>, seed: u64, duration: f64, change: f64) -> Recording {
+    let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ m.seed);
+    let mut train = pair_train(m, fault, &mut rng, duration);
+    train.op.drift = change / duration;
+    finish_train(&train, m.fs, m.oversampling(), m.seed, m.fan_blades, None, duration, &mut rng)
+}
+
 /// Writes a recording as a two-channel 32-bit float WAV (1: accelerometer m/s^2, 2: tachometer), atomically.
 pub fn write_wav(path: &Path, rec: &Recording) {
     write_channels(path, rec.fs, &[&rec.accel, &rec.tacho]);

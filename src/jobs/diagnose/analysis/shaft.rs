@@ -126,11 +126,28 @@ pub(super) fn follow_shaft(
     // a given speed is a nominal one: what was measured (mesh comb and tracking, or the tachometer) is used,
     // and its deviation from the given speed reported
     let given = o.shaft_hz.zip(fs).map(|(hz, fs)| (hz, 100.0 * (speeds.mean * fs / hz - 1.0)));
+    let mut ramp_off = false;
+    let mut beyond = None;
     if let Some((hz, off)) = given {
         let measured = speeds.mean * fs.unwrap_or(0.0);
-        if off.abs() > 100.0 * o.speed_tolerance {
+        let ramp = fs.is_some_and(|f| tracking::passes_through(&speeds, f / hz, o.speed_tolerance));
+        if off.abs() > 100.0 * o.speed_tolerance && ramp {
+            ramp_off = true;
+            let f = fs.unwrap_or(0.0);
+            warnings.push(format!(
+                "the speed changed by {:+.1} % over the recording ({:.3} to {:.3} Hz, {tracking}) and passed through the given {hz:.4} Hz: a run-up or coast-down, whose mean lies {off:+.2} % from the given speed; the averages follow the measured angle",
+                100.0 * speeds.change,
+                f * speeds.min,
+                f * speeds.max
+            ));
+        } else if off.abs() > 100.0 * o.speed_tolerance {
             warnings.push(format!(
                 "the given speed {hz:.4} Hz is {off:+.2} % from the measured {measured:.4} Hz ({tracking}), beyond the +-{:.1} % tolerance: check the given speed",
+                100.0 * o.speed_tolerance
+            ));
+            beyond = Some(format!(
+                "the measured speed {measured:.4} Hz lies {:+.2} % from the given {hz:.4} Hz, beyond the +-{:.1} % tolerance: either the given speed is wrong or the line followed is not the mesh, so the averages cannot clear the machine; check the given speed (or widen --speed-tolerance) or give a tachometer channel",
+                off,
                 100.0 * o.speed_tolerance
             ));
         } else if off.abs() > 0.5 {
@@ -152,7 +169,8 @@ pub(super) fn follow_shaft(
     let doubt = nominal
         .doubt
         .or(rests_on_nothing)
-        .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o))
+        .or_else(|| unconfirmed_speed(nominal.unconfirmed_comb_db, &profile, o, ramp_off))
+        .or(beyond)
         .or_else(|| no_mesh_found(known_z, tracked_z, &profile, o))
         .or_else(|| unfollowed_estimate(nominal.source, &profile))
         .or_else(|| {
@@ -216,11 +234,21 @@ fn refine_by_average(x: &[f32], map: AngleMap, z: usize) -> (AngleMap, Option<f6
 /// (its height over the spectrum `comb_db`, dB, when it was sought and not found) and the tracking did not follow the mesh line, so the averages run on the
 /// nameplate speed as given, which a motor's slip puts up to the speed tolerance off, on a shaft that may
 /// wander: a fault is smeared over the revolution there (on generated machines of another physics, 20 of the
-/// 38 faults called healthy this way ran on a speed over 0.5 % off).
-fn unconfirmed_speed(comb_db: Option<f64>, profile: &SpeedProfile, o: &Options) -> Option<String> {
+/// 38 faults called healthy this way ran on a speed over 0.5 % off). Likewise a followed line that runs
+/// through the given speed with its mean beyond the tolerance (`ramp_off`: a run-up or coast-down,
+/// [`tracking::passes_through`]) without the comb's confirmation: a cracked pinion coasting from 30 to
+/// 26.4 Hz, given 2000 rpm, had its mesh's fifth harmonic followed for the fourth (the speed 5/4 of the
+/// true one) and was called healthy.
+fn unconfirmed_speed(comb_db: Option<f64>, profile: &SpeedProfile, o: &Options, ramp_off: bool) -> Option<String> {
     let db = comb_db?;
     match (profile.tracking, profile.line_snr_db) {
         (Tracking::Constant, _) => {}
+        (Tracking::MeshPhase, _) if ramp_off => {
+            return Some(format!(
+                "the given speed was not confirmed: its mesh comb stands only {db:.1} dB over the spectrum, and the line followed runs through the given speed with a mean beyond the +-{:.1} % tolerance, as a run-up or coast-down does, and as a mesh harmonic followed for another does; give a tachometer channel or the measured speed",
+                100.0 * o.speed_tolerance
+            ));
+        }
         (Tracking::MeshPhase, Some(line)) if line < FOLLOWED_LINE_DB => {
             return Some(format!(
                 "the given speed was not confirmed: its mesh comb stands only {db:.1} dB over the spectrum and the line followed stands only {line:.1} dB over its band (under {FOLLOWED_LINE_DB} dB), where the tracking can follow a neighbouring line; give a tachometer channel or the measured speed"

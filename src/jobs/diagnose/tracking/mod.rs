@@ -8,8 +8,11 @@ mod estimate;
 use estimate::*;
 mod turns;
 use turns::*;
+mod ramp;
 mod ridges;
 mod starts;
+pub(super) use ramp::passes_through;
+use ramp::ramp_through;
 pub(super) use ridges::strongest_low_harmonic;
 use ridges::*;
 use starts::*;
@@ -465,11 +468,14 @@ fn follow_mesh(
             break;
         }
     }
-    // a given speed may be off by a few percent; an estimated one by the speed's own wander
+    // a given speed may be off by a few percent; an estimated one by the speed's own wander; a given
+    // speed's line may run up or coast down through it
     let within = |t: &angle::Tracked| {
         let mean = t.map.mean_period_samples();
         let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { estimated_shift(&t.map) };
-        (mean / period - 1.0).abs() <= max_shift && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance)
+        let near = (mean / period - 1.0).abs() <= max_shift
+            && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance);
+        near || (o.shaft_hz.is_some() && ramp_through(t, period, given, o.speed_tolerance))
     };
     // a weak line, or one the phase-locked loop lost: the whole comb is followed too, and its angle kept
     // when the loop holds it and the single line was lost or stands lower
@@ -486,8 +492,19 @@ fn follow_mesh(
             }
         }
     }
+    // a clear line the loop holds near the nominal speed, only the given speed beyond the tolerance: the
+    // machine's mesh, followed (the caller checks it is no sideband and says the given speed is off)
+    let clear_beyond_given = |t: &angle::Tracked| {
+        o.shaft_hz.is_some()
+            && t.locked
+            && t.line_snr_db >= CLEAR_LINE_DB
+            && (t.map.mean_period_samples() / period - 1.0).abs() <= MAX_TRACKING_SHIFT
+    };
     let constant = (nominal, Tracking::Constant, None, Some(z));
     Ok(match best {
+        Some(Ok(t)) if !within(&t) && clear_beyond_given(&t) => {
+            ((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)), None)
+        }
         Some(Ok(t)) if !within(&t) => {
             let mean = t.map.mean_period_samples();
             let why = format!(
