@@ -145,7 +145,8 @@ pub(super) fn follow_shaft(
                 "the given speed {hz:.4} Hz is {off:+.2} % from the measured {measured:.4} Hz ({tracking}), beyond the +-{:.1} % tolerance: check the given speed",
                 100.0 * o.speed_tolerance
             ));
-            beyond = Some(format!(
+            // (a tachometer's speed stands on its pulses: the given one is then the one in doubt)
+            beyond = (tracking == Tracking::MeshPhase).then(|| format!(
                 "the measured speed {measured:.4} Hz lies {:+.2} % from the given {hz:.4} Hz, beyond the +-{:.1} % tolerance: either the given speed is wrong or the line followed is not the mesh, so the averages cannot clear the machine; check the given speed (or widen --speed-tolerance) or give a tachometer channel",
                 off,
                 100.0 * o.speed_tolerance

@@ -468,14 +468,11 @@ fn follow_mesh(
             break;
         }
     }
-    // a given speed may be off by a few percent; an estimated one by the speed's own wander; a given
-    // speed's line may run up or coast down through it
+    // a given speed may be off by a few percent; an estimated one by the speed's own wander
     let within = |t: &angle::Tracked| {
         let mean = t.map.mean_period_samples();
         let max_shift = if o.shaft_hz.is_some() { MAX_TRACKING_SHIFT } else { estimated_shift(&t.map) };
-        let near = (mean / period - 1.0).abs() <= max_shift
-            && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance);
-        near || (o.shaft_hz.is_some() && ramp_through(t, period, given, o.speed_tolerance))
+        (mean / period - 1.0).abs() <= max_shift && given.is_none_or(|g| (g / mean - 1.0).abs() <= o.speed_tolerance)
     };
     // a weak line, or one the phase-locked loop lost: the whole comb is followed too, and its angle kept
     // when the loop holds it and the single line was lost or stands lower
@@ -492,17 +489,21 @@ fn follow_mesh(
             }
         }
     }
-    // a clear line the loop holds near the nominal speed, only the given speed beyond the tolerance: the
-    // machine's mesh, followed (the caller checks it is no sideband and says the given speed is off)
-    let clear_beyond_given = |t: &angle::Tracked| {
-        o.shaft_hz.is_some()
-            && t.locked
+    // when neither the line nor the comb ends near the speeds, two lines are still the machine's mesh
+    // (the caller checks that the line is no sideband and says how the given speed is off): one the loop
+    // holds running up or coasting down through the given speed (a line near the speeds, the comb's above,
+    // is preferred: a sideband of a ramp runs through it too), and a clear one the loop holds near the
+    // nominal speed with only the given speed beyond the tolerance
+    let mesh_after_all = |t: &angle::Tracked| {
+        let ramp = ramp_through(t, period, given, o.speed_tolerance) && t.line_snr_db >= MIN_TRACKING_SNR_DB;
+        let clear_beyond_given = t.locked
             && t.line_snr_db >= CLEAR_LINE_DB
-            && (t.map.mean_period_samples() / period - 1.0).abs() <= MAX_TRACKING_SHIFT
+            && (t.map.mean_period_samples() / period - 1.0).abs() <= MAX_TRACKING_SHIFT;
+        o.shaft_hz.is_some() && (ramp || clear_beyond_given)
     };
     let constant = (nominal, Tracking::Constant, None, Some(z));
     Ok(match best {
-        Some(Ok(t)) if !within(&t) && clear_beyond_given(&t) => {
+        Some(Ok(t)) if !within(&t) && mesh_after_all(&t) => {
             ((t.map, Tracking::MeshPhase, Some(t.line_snr_db), Some(z)), None)
         }
         Some(Ok(t)) if !within(&t) => {
