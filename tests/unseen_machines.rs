@@ -1081,8 +1081,9 @@ fn a_wheels_higher_sidebands_do_not_contradict_its_teeth() {
 /// vibration channel only) slowing by 12 % over its 10 s, a 50 % crack on pinion tooth 5, `--rpm 1500`. Its
 /// mesh line was followed right, dropped for a mean 6 % from the given speed (over the 5 % tolerance),
 /// averaged on a constant speed and called HEALTHY. A followed line that the loop holds, changing by more
-/// than the tolerance and passing through the given speed, is kept now: the crack is flagged on the pinion,
-/// and the output says the speed ran down through the given one. The same machine steady, given 6 % slow
+/// than the tolerance and passing through the given speed, is kept now: the crack is flagged on the pinion
+/// (suspect: without a baseline a ramp's verdict is capped there), and the output says the speed ran down
+/// through the given one. The same machine steady, given 6 % slow
 /// (1410 rpm: beyond the tolerance), healthy: its clear mesh line is followed and the recording not judged,
 /// the given speed named as contradicted (it was averaged at the edge of the comb's window and called healthy).
 #[test]
@@ -1113,8 +1114,11 @@ fn a_coast_down_given_its_start_speed_is_followed() {
     let change = profile["change_percent"].as_f64().unwrap();
     assert!((-14.5..=-9.5).contains(&change), "change {change} %: {}", d["warnings"]);
     assert!(d["warnings"].to_string().contains("a run-up or coast-down"), "{}", d["warnings"]);
-    assert_eq!(d["verdict"]["state"], "faulty", "{}", d["verdict"]);
+    // flagged on the pinion; without a baseline a ramp's verdict is at most suspect (the absolute limits
+    // hold for a steady speed)
+    assert_eq!(d["verdict"]["state"], "suspect", "{}", d["verdict"]);
     assert_eq!(d["verdict"]["gear"], "pinion", "{}", d["verdict"]);
+    assert!(d["verdict"]["reasons"].to_string().contains("a run-up or coast-down"), "{}", d["verdict"]);
     let s = run(&steady, "1410");
     assert_eq!(s["speed_profile"]["tracking"], "mesh phase", "{}", s["warnings"]);
     let mean = s["speed_profile"]["mean_hz"].as_f64().unwrap();
