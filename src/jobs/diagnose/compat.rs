@@ -57,7 +57,7 @@ pub fn speed_of(d: &Diagnosis) -> f64 {
 }
 
 /// The relative difference of `speed` from the span `[lo, hi]`: 0 inside it, else from its nearer end.
-fn beyond_span(speed: f64, [lo, hi]: [f64; 2]) -> f64 {
+pub(super) fn beyond_span(speed: f64, [lo, hi]: [f64; 2]) -> f64 {
     if speed < lo {
         speed / lo - 1.0
     } else if speed > hi {

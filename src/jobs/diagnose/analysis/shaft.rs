@@ -129,18 +129,19 @@ pub(super) fn follow_shaft(
     let mut ramp_off = false;
     let mut beyond = None;
     if let Some((hz, off)) = given {
-        let measured = speeds.mean * fs.unwrap_or(0.0);
-        let ramp = fs.is_some_and(|f| tracking::passes_through(&speeds, f / hz, o.speed_tolerance));
-        if off.abs() > 100.0 * o.speed_tolerance && ramp {
-            ramp_off = true;
-            let f = fs.unwrap_or(0.0);
+        // (`given` is there only with a sample rate)
+        let f = fs.unwrap_or(0.0);
+        let measured = speeds.mean * f;
+        let beyond_tolerance = off.abs() > 100.0 * o.speed_tolerance;
+        ramp_off = beyond_tolerance && tracking::passes_through(&speeds, f / hz, o.speed_tolerance);
+        if ramp_off {
             warnings.push(format!(
                 "the speed changed by {:+.1} % over the recording ({:.3} to {:.3} Hz, {tracking}) and passed through the given {hz:.4} Hz: a run-up or coast-down, whose mean lies {off:+.2} % from the given speed; the averages follow the measured angle",
                 100.0 * speeds.change,
                 f * speeds.min,
                 f * speeds.max
             ));
-        } else if off.abs() > 100.0 * o.speed_tolerance {
+        } else if beyond_tolerance {
             warnings.push(format!(
                 "the given speed {hz:.4} Hz is {off:+.2} % from the measured {measured:.4} Hz ({tracking}), beyond the +-{:.1} % tolerance: check the given speed",
                 100.0 * o.speed_tolerance

@@ -13,10 +13,8 @@ pub(in crate::jobs::diagnose) const RAMP_MARGIN: f64 = 0.01;
 /// or a coast-down, not a wandering steady speed) and passed through the speed of a revolution of
 /// `period` samples on the way (between its slowest and fastest revolutions, within [`RAMP_MARGIN`]).
 pub(in crate::jobs::diagnose) fn passes_through(profile: &angle::SpeedProfile, period: f64, tolerance: f64) -> bool {
-    let speed = 1.0 / period;
     profile.change.abs() > tolerance
-        && profile.min * (1.0 - RAMP_MARGIN) <= speed
-        && speed <= profile.max * (1.0 + RAMP_MARGIN)
+        && super::super::compat::beyond_span(1.0 / period, [profile.min, profile.max]).abs() <= RAMP_MARGIN
 }
 
 /// Whether a followed line `t` is a run-up or coast-down through the nominal speed (a revolution of
