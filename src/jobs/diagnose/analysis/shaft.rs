@@ -90,15 +90,18 @@ pub(super) fn follow_shaft(
     let (map, rests_on_nothing) = match (o.shaft_hz, known_z, tacho, tracking) {
         (Some(_), Some(z), None, Tracking::MeshPhase) => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);
+            let unconfirmed = nominal.unconfirmed_comb_db.is_some();
             let spectrum = sync_of(&map, z);
-            let (map, spectrum) =
-                match spectrum.as_ref().and_then(|s| mesh_not_sideband(x, &map, s, (z, zw), o, fs, warnings)) {
-                    Some(scaled) => {
-                        let spectrum = sync_of(&scaled, z);
-                        (scaled, spectrum)
-                    }
-                    None => (map, spectrum),
-                };
+            let (map, spectrum) = match spectrum
+                .as_ref()
+                .and_then(|s| mesh_not_sideband(x, &map, s, (z, zw), o, (fs, unconfirmed), warnings))
+            {
+                Some(scaled) => {
+                    let spectrum = sync_of(&scaled, z);
+                    (scaled, spectrum)
+                }
+                None => (map, spectrum),
+            };
             let q = zw.map(|w| z as f64 / w as f64);
             let misfit = spectrum.as_ref().zip(o.shaft_hz).and_then(|(s, hz)| speed_multiple(s, q, hz));
             (map, misfit)

@@ -145,13 +145,21 @@ impl SyncSpectrum {
 /// lines (both gears' orders) score [`SIDEBAND_ENERGY_RATIO`] times those of the followed angle and of
 /// every other candidate, and whose own orders score that much more than the followed angle's, is taken,
 /// said in a warning.
+///
+/// With `unconfirmed` (the given speed's mesh comb did not stand out), the angles beyond the tolerance up to
+/// twice it (of the same offsets and, on the k-th harmonic, k > 2, of +-k) are tried the same way when none
+/// within it is taken: a given speed 5-7 % off puts the true
+/// shaft just outside the tolerance, and the tracking then follows the mesh's sideband +-1, 1/z away from
+/// the mesh and within the tolerance (a 19/53 machine at 21.9 Hz with a cracked pinion, given 1410 rpm:
+/// followed at 23.19 Hz, the +1 sideband, and called HEALTHY on averages 5.3 % off). The angle taken
+/// there lies beyond the tolerance, which the caller reports as a contradicted given speed.
 pub(super) fn mesh_not_sideband(
     x: &[f32],
     map: &AngleMap,
     spectrum: &SyncSpectrum,
     (z, zw): (usize, Option<usize>),
     o: &Options,
-    fs: Option<f64>,
+    (fs, unconfirmed): (Option<f64>, bool),
     warnings: &mut Vec<String>,
 ) -> Option<AngleMap> {
     let (Some(hz), Some(fs)) = (o.shaft_hz, fs) else { return None };
@@ -160,17 +168,46 @@ pub(super) fn mesh_not_sideband(
     let (order, _) = strongest_low_harmonic(x, period, z)?;
     let nominal = fs / hz;
     let ratio = zw.map(|w| z as f64 / w as f64);
-    let offsets = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q]));
-    let candidates: Vec<f64> =
-        offsets.filter(|j| (nominal / (period * (order + j) / order) - 1.0).abs() <= o.speed_tolerance).collect();
-    if candidates.is_empty() {
-        return None;
-    }
+    let offsets: Vec<f64> = [-2.0, -1.0, 1.0, 2.0].into_iter().chain(ratio.into_iter().flat_map(|q| [-q, q])).collect();
+    let off = |j: f64| (nominal / (period * (order + j) / order) - 1.0).abs();
+    let within: Vec<f64> = offsets.iter().copied().filter(|&j| off(j) <= o.speed_tolerance).collect();
+    // beyond the tolerance also the k-th harmonic's +-k: a speed given 1/z off puts the line nearest the
+    // k-th mesh harmonic's place on k (z +- 1), where a fault's modulation comb has its k-th line
+    let k = (order / z as f64).round();
+    let beyond: Vec<f64> = offsets
+        .iter()
+        .copied()
+        .chain([-k, k].into_iter().filter(|_| k > 2.0))
+        .filter(|&j| unconfirmed && off(j) > o.speed_tolerance && off(j) <= 2.0 * o.speed_tolerance)
+        .collect();
+    let own = spectrum.energy(1.0, ratio);
+    let (j, energy) = clear_sideband(spectrum, own, order, ratio, within)
+        .or_else(|| clear_sideband(spectrum, own, order, ratio, beyond))?;
+    let both = energy.0 + energy.1;
+    let r = (order + j) / order;
+    warnings.push(format!(
+        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's score {:.1} times the followed angle's (summed log heights of their lines over the local floor): that speed is used",
+        1.0 / r,
+        both / (own.0 + own.1).max(f64::MIN_POSITIVE)
+    ));
+    let revs = (map.revolutions() as f64 / r).floor() as usize;
+    Some(AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1))
+}
+
+/// Of the sideband offsets `candidates` (orders j beside the followed harmonic `order`), the one whose
+/// angle's lines stand clear of the followed angle's (`own`: its pinion's and wheel's excess over noise)
+/// and of every other candidate's ([`mesh_not_sideband`]): (j, its energies).
+fn clear_sideband(
+    spectrum: &SyncSpectrum,
+    own: (f64, f64),
+    order: f64,
+    ratio: Option<f64>,
+    candidates: Vec<f64>,
+) -> Option<(f64, (f64, f64))> {
     // both gears' lines decide, and the shaft's own must stand clearer too: each alone was fooled by a
     // comb of the other gear on a candidate in a whole ratio to it (a cracked 14-tooth pinion's orders,
     // given a speed a third off, on every other order of the wheel of a candidate; a broken 47-tooth
     // wheel's orders on the pinion orders of a candidate 3/2 of the wheel's speed)
-    let own = spectrum.energy(1.0, ratio);
     let mut scored: Vec<(f64, (f64, f64))> =
         candidates.into_iter().map(|j| (j, spectrum.energy((order + j) / order, ratio))).collect();
     let both = |e: (f64, f64)| e.0 + e.1;
@@ -184,15 +221,7 @@ pub(super) fn mesh_not_sideband(
         both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up).max(SIDEBAND_MIN_EXCESS)
             && e.0 > OWN_LINES_RATIO * own.0.max(SIDEBAND_MIN_EXCESS)
     };
-    let &(j, energy) = scored.first().filter(|b| clear(b.1))?;
-    let r = (order + j) / order;
-    warnings.push(format!(
-        "the line followed as the mesh harmonic (order {order:.0}) is its sideband {j:+.2} of a shaft turning {:.4} times as fast, whose orders and its wheel's score {:.1} times the followed angle's (summed log heights of their lines over the local floor): that speed is used",
-        1.0 / r,
-        both(energy) / both(own).max(f64::MIN_POSITIVE)
-    ));
-    let revs = (map.revolutions() as f64 / r).floor() as usize;
-    Some(AngleMap::from_pulses(&(0..=revs).map(|k| map.sample_at(k as f64 * r)).collect::<Vec<_>>(), 1))
+    scored.first().copied().filter(|b| clear(b.1))
 }
 
 /// Largest mean log height ([`SyncSpectrum::lines`]) of the lines at a gear's orders (its mesh orders
@@ -304,17 +333,18 @@ mod tests {
     /// pinion order (a cracked tooth's impulse train) besides the mesh harmonics (1.0 each) and `runout`
     /// that of every wheel order, in noise.
     fn pinion_at_30_hz(comb: f64, runout: f64) -> (Vec<f32>, f64) {
+        pinion_orders_at_30_hz(|m| if m % 14 == 0 && m <= 56 { 1.0 } else { comb }, runout)
+    }
+
+    /// [`pinion_at_30_hz`] with the amplitude of each pinion order m (1..=140) given by `amplitude`.
+    fn pinion_orders_at_30_hz(amplitude: impl Fn(usize) -> f64, runout: f64) -> (Vec<f32>, f64) {
         let (fs, f, n) = (20_480.0, 30.0, 1 << 18);
         let mut noise = crate::signal::test_noise::uniform_noise(5);
         let x = (0..n)
             .map(|i| {
                 let t = i as f64 / fs;
-                let pinion: f64 = (1..=140)
-                    .map(|m| {
-                        let a = if m % 14 == 0 && m <= 56 { 1.0 } else { comb };
-                        a * (TAU * m as f64 * f * t + 0.9 * m as f64).cos()
-                    })
-                    .sum();
+                let pinion: f64 =
+                    (1..=140).map(|m| amplitude(m) * (TAU * m as f64 * f * t + 0.9 * m as f64).cos()).sum();
                 let wheel: f64 =
                     (1..=300).map(|m| runout * (TAU * m as f64 * f * 14.0 / 39.0 * t + 0.4 * m as f64).cos()).sum();
                 (pinion + wheel + 0.5 * noise()) as f32
@@ -408,10 +438,40 @@ mod tests {
         let followed = AngleMap::constant(fs / (f * 24.0 / 23.0), 0.0, x.len());
         let spectrum = SyncSpectrum::new(&x, &followed, 4.5 * 23.0).unwrap();
         let mut warnings = Vec::new();
-        let back = mesh_not_sideband(&x, &followed, &spectrum, (23, Some(67)), &o, Some(fs), &mut warnings)
+        let back = mesh_not_sideband(&x, &followed, &spectrum, (23, Some(67)), &o, (Some(fs), false), &mut warnings)
             .expect("the fan's angle is put back on the shaft's");
         let hz = fs / back.mean_period_samples();
         assert!((hz / f - 1.0).abs() < 1e-3, "{hz} Hz: {warnings:?}");
+    }
+
+    /// Given 32.7 Hz, 9 % over the cracked 14-tooth pinion's 30 Hz, the true shaft lies beyond the +-5 %
+    /// tolerance and the tracking follows the mesh's +1 sideband (order 15, lifted to twice the mesh line
+    /// as a resonance lifts it; 32.14 Hz, within the tolerance). When the given speed's mesh comb did not
+    /// stand out, the angle is put back on 30 Hz (the caller then reports the given speed as
+    /// contradicted); when it did, the angles beyond the tolerance are not tried.
+    #[test]
+    fn a_sideband_beyond_the_tolerance_is_tried_when_the_comb_was_unconfirmed() {
+        let (x, fs) = pinion_orders_at_30_hz(
+            |m| match m {
+                15 => 2.0,
+                m if m % 14 == 0 && m <= 56 => 1.0,
+                _ => 0.3,
+            },
+            0.0,
+        );
+        let o = Options { shaft_hz: Some(32.7), teeth: Some((14, 39)), ..Default::default() };
+        let followed = AngleMap::constant(fs / (30.0 * 15.0 / 14.0), 0.0, x.len());
+        let spectrum = SyncSpectrum::new(&x, &followed, 4.5 * 14.0).unwrap();
+        let check = |unconfirmed: bool, warnings: &mut Vec<String>| {
+            mesh_not_sideband(&x, &followed, &spectrum, (14, Some(39)), &o, (Some(fs), unconfirmed), warnings)
+        };
+        let mut warnings = Vec::new();
+        let back = check(true, &mut warnings).expect("the sideband's angle beyond the tolerance is taken");
+        let hz = fs / back.mean_period_samples();
+        // the scaled angle is the followed one times 14/15 exactly: 30 Hz up to the rounding of its pulses
+        assert!((hz / 30.0 - 1.0).abs() < 1e-3, "{hz} Hz");
+        assert!(warnings.iter().any(|w| w.contains("sideband +1")), "{warnings:?}");
+        assert!(check(false, &mut Vec::new()).is_none());
     }
 
     /// A 21-tooth pinion at 40 Hz (51.2 kHz, 8 s) whose spectrum holds every shaft order (a broken tooth's
@@ -445,7 +505,7 @@ mod tests {
         let mut warnings = Vec::new();
         let check = |map: &AngleMap, o: &Options, warnings: &mut Vec<String>| {
             let spectrum = SyncSpectrum::new(&x, map, 4.5 * 21.0).unwrap();
-            mesh_not_sideband(&x, map, &spectrum, (21, Some(37)), o, Some(fs), warnings)
+            mesh_not_sideband(&x, map, &spectrum, (21, Some(37)), o, (Some(fs), false), warnings)
         };
         let wrong = AngleMap::constant(fs / (f * 40.0 / 42.0), 0.0, n);
         let put_back = check(&wrong, &o, &mut warnings).expect("the sideband's angle is taken");
