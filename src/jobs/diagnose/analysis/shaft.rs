@@ -68,17 +68,27 @@ pub(super) fn follow_shaft(
             let same_line = o.shaft_hz.is_none()
                 && line(&first).is_finite()
                 && (first.0.mean_period_samples() / second.0.mean_period_samples() - 1.0).abs() <= SAME_LINE;
-            // (a second start that followed no line is never kept: -inf stands as high as -inf plus
-            // any margin, and a 25/50 machine's broken wheel, given its nameplate, was averaged on the
-            // comb's best 4.7 % from it, under a reason saying the given speed was used as it is)
-            if !same_line && line(&second).is_finite() && line(&second) >= line(&first) + CLEARER_START_DB {
+            // when neither start followed a line (-inf stands as high as -inf plus any margin) the second
+            // is kept only beside an estimate of the recording's own (`kept_without_lines`): beside a given
+            // speed the weak comb's best is not (a 25/50 machine's broken wheel, given its nameplate, was
+            // averaged on the comb's best 4.7 % from it, under a reason saying the given speed was used as
+            // it is)
+            let neither = !line(&first).is_finite() && !line(&second).is_finite();
+            let clearer = line(&second) >= line(&first) + CLEARER_START_DB;
+            if !same_line && clearer && (!neither || what.kept_without_lines()) {
                 warnings.extend(alt_warnings);
                 let (second_start, first_start) = what.names();
-                warnings.push(format!(
-                    "the tracking from {second_start} followed a line {:.1} dB over its band, the one from {first_start} {}: the start from {second_start} is kept",
-                    line(&second),
-                    if line(&first).is_finite() { format!("{:.1} dB", line(&first)) } else { "none".into() }
-                ));
+                warnings.push(if neither {
+                    format!(
+                        "the tracking followed no line from {second_start} nor from {first_start}: the start from {second_start} is kept"
+                    )
+                } else {
+                    format!(
+                        "the tracking from {second_start} followed a line {:.1} dB over its band, the one from {first_start} {}: the start from {second_start} is kept",
+                        line(&second),
+                        if line(&first).is_finite() { format!("{:.1} dB", line(&first)) } else { "none".into() }
+                    )
+                });
                 second
             } else {
                 warnings.extend(given_warnings);

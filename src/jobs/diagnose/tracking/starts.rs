@@ -17,6 +17,14 @@ pub(in crate::jobs::diagnose) enum SecondStart {
 }
 
 impl SecondStart {
+    /// Whether this start is kept over the first when neither followed a line: not the weak comb's best
+    /// beside a given speed (the averages then run on the given speed, as the reason says); the others,
+    /// beside an estimate of the recording's own, are (the baseline's speed, which its healthy recordings
+    /// ran at; the comb's own peak).
+    pub(in crate::jobs::diagnose) fn kept_without_lines(self) -> bool {
+        self != Self::WeakComb
+    }
+
     /// The second start and the first, as the warning names them.
     pub(in crate::jobs::diagnose) fn names(self) -> (&'static str, &'static str) {
         match self {
