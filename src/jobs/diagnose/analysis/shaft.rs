@@ -74,8 +74,7 @@ pub(super) fn follow_shaft(
             // averaged on the comb's best 4.7 % from it, under a reason saying the given speed was used as
             // it is)
             let neither = !line(&first).is_finite() && !line(&second).is_finite();
-            let clearer = line(&second) >= line(&first) + CLEARER_START_DB;
-            if !same_line && clearer && (!neither || what.kept_without_lines()) {
+            if !same_line && second_start_kept(line(&first), line(&second), what.kept_without_lines()) {
                 warnings.extend(alt_warnings);
                 let (second_start, first_start) = what.names();
                 warnings.push(if neither {
@@ -219,6 +218,16 @@ const SAME_LINE: f64 = 1e-3;
 /// pinion's FM4 from 22.8 to 3.7), while a line and its neighbour differ by several.
 const CLEARER_START_DB: f64 = 3.0;
 
+/// Whether the second tracking start is kept: its followed line (dB over its band, -inf for none) stands
+/// [`CLEARER_START_DB`] over the first's, or neither start followed a line and `without_lines` (the start's
+/// `SecondStart::kept_without_lines` rule) keeps it.
+fn second_start_kept(first: f64, second: f64, without_lines: bool) -> bool {
+    if !first.is_finite() && !second.is_finite() {
+        return without_lines;
+    }
+    second >= first + CLEARER_START_DB
+}
+
 /// Why averages on an estimated speed that could not be followed cannot clear the machine: the estimate is
 /// the mean speed of a shaft that may wander by 0.5-2 %, and a constant-speed average on it smears a fault
 /// over the revolution (hold-out machines, teeth only: a spall and worn pinion averaged on a constant speed
@@ -340,6 +349,21 @@ fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<St
 
 #[cfg(test)]
 mod tests {
+    /// The second start is kept on a line 3 dB clearer, or on a line where the first followed none; where
+    /// neither followed a line, only as its kind says (-inf once compared as high as -inf plus the margin,
+    /// so the weak comb's best replaced a given speed on nothing).
+    #[test]
+    fn a_second_start_on_no_line_is_kept_only_as_its_kind_says() {
+        use super::second_start_kept;
+        let none = f64::NEG_INFINITY;
+        assert!(second_start_kept(12.0, 15.5, false));
+        assert!(!second_start_kept(12.0, 14.0, false));
+        assert!(second_start_kept(none, 8.0, false));
+        assert!(!second_start_kept(8.0, none, true));
+        assert!(!second_start_kept(none, none, false));
+        assert!(second_start_kept(none, none, true));
+    }
+
     use super::*;
 
     fn steady(wander: f64) -> angle::SpeedProfile {
