@@ -73,11 +73,11 @@ pub(super) fn follow_shaft(
             // speed the weak comb's best is not (a 25/50 machine's broken wheel, given its nameplate, was
             // averaged on the comb's best 4.7 % from it, under a reason saying the given speed was used as
             // it is)
-            let neither = !line(&first).is_finite() && !line(&second).is_finite();
             if !same_line && second_start_kept(line(&first), line(&second), what.kept_without_lines()) {
                 warnings.extend(alt_warnings);
                 let (second_start, first_start) = what.names();
-                warnings.push(if neither {
+                // (a second start kept on no line is one where neither start followed a line)
+                warnings.push(if !line(&second).is_finite() {
                     format!(
                         "the tracking followed no line from {second_start} nor from {first_start}: the start from {second_start} is kept"
                     )
