@@ -374,10 +374,31 @@ pub(super) fn shaft_from_comb(
     // are one family of lines with the chosen speed
     let whole = |x: f64| x >= 0.98 && x <= z_p.max(z_w) && (x - x.round()).abs() < (0.015 * x).min(0.1);
     let family = |f: f64| whole(fp / f) || whole(f / fp * z_p) || whole(f / fp * z_w);
+    // nor is a comb at m times the speed when the chosen revolution holds the shaft's own lines between
+    // the multiples of m, which a shaft turning m times as fast cannot make
+    let faster: Vec<(f64, usize, f64)> = match &followed {
+        Some((_, y)) if !on_mains(fp) => candidates
+            .iter()
+            .take(4)
+            .filter(|c| c.0 / fp >= 1.5 && whole(c.0 / fp) && !family(c.0))
+            .filter_map(|c| {
+                let m = (c.0 / fp).round() as usize;
+                lines_between_multiples(fft, y, zp * k, m, (zp, zw)).map(|co| (c.0, m, co))
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    for &(f, m, co) in &faster {
+        note.push_str(&format!(
+            "; the comb of {m} times the speed ({}) is no rival: the record repeats at the orders of the revolution between its multiples of {m} (coherence of its halves {co:.2}), which a shaft turning {m} times as fast cannot make",
+            hz(1.0 / f)
+        ));
+    }
     // (a comb on the mains is no rival of a mesh elsewhere)
     let second = candidates
         .iter()
         .filter(|c| on_mains(fp) || !on_mains(mesh_of(c.0)))
+        .filter(|c| !faster.iter().any(|f| f.0 == c.0))
         .find(|c| !family(c.0))
         .map_or(0.0, |s| s.1);
     let close_second = (second > CLOSE_COMB * best).then_some(second / best);

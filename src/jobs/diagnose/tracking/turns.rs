@@ -56,6 +56,33 @@ pub(super) fn part_of_a_turn(
     (least >= SHAFT_LINES).then_some(least)
 }
 
+/// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
+/// per cycle) holds synchronous content at its orders between the multiples of `m` (at least
+/// [`SYNCHRONOUS`]): content a shaft turning `m` times as fast cannot make, since over its `m` turns the
+/// revolution holds lines at the multiples of `m` alone. The orders where that faster pinion's wheel (`zp`
+/// and `zw` teeth) would put its lines are left out (as in [`part_of_a_turn`]). Returns that coherence when
+/// it reaches [`SYNCHRONOUS`].
+///
+/// On the third generator's 29/31 machine (its second mesh harmonic 23 dB over the floor, the first 1 dB)
+/// the comb of twice the speed held 60-65 % of the true comb's evidence, while the true revolution's odd
+/// orders read 0.96-0.98 on all its 11 recordings; on the fresh 20/33 machine, whose comb of half the speed
+/// was taken, the odd orders of that revolution (two true turns) read -0.33.
+pub(super) fn lines_between_multiples(
+    fft: &mut Fft,
+    y: &[f64],
+    cycles: usize,
+    m: usize,
+    (zp, zw): (usize, usize),
+) -> Option<f64> {
+    if m < 2 {
+        return None;
+    }
+    let h = speed::Halves::of(fft, y, cycles * MESH_CYCLE_POINTS)?;
+    let faster_wheel_line = |n: usize| (n * zw).is_multiple_of(m * zp);
+    let c = h.coherence(&|n| !n.is_multiple_of(m) && !faster_wheel_line(n));
+    (c >= SYNCHRONOUS).then_some(c)
+}
+
 /// How many turns of the shaft a revolution may hold, and the coherences that said so.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Turns {
@@ -150,6 +177,25 @@ mod tests {
         let seven = on_the_line(&[1.0, 3.5, 10.5, 20.0]);
         assert!(part_of_a_turn(&mut fft, &seven, 20, 2, (20, 57)).is_none(), "the lines of a revolution of 7 turns");
         assert!(part_of_a_turn(&mut fft, &on_the_line(&[0.5, 1.0, 1.5, 3.5, 20.0]), 20, 2, (20, 57)).is_some());
+    }
+
+    /// The third generator's 29/31 machine's case: a comb of twice the speed (the mesh's second harmonic
+    /// standing over its first) is a rival unless the chosen revolution holds lines at its odd orders,
+    /// which a shaft turning twice as fast cannot make. A revolution of two turns (lines at even orders
+    /// alone) holds none; neither does one whose only odd line is where that faster pinion's 56-tooth wheel
+    /// puts its own (order 5 of two turns of a 20-tooth pinion: 5 x 56 is a multiple of 2 x 20), while a
+    /// 57-tooth wheel puts nothing there, so the same line is the shaft's own.
+    #[test]
+    fn odd_orders_rule_out_a_shaft_twice_as_fast() {
+        let mut fft = Fft::new();
+        let own = lines_between_multiples(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 40.0]), 20, 2, (20, 56));
+        assert!(own.is_some_and(|c| c >= SYNCHRONOUS), "{own:?}");
+        let two = on_the_line(&[2.0, 6.0, 20.0, 40.0]);
+        assert!(lines_between_multiples(&mut fft, &two, 20, 2, (20, 56)).is_none(), "a revolution of two turns");
+        let wheel = on_the_line(&[2.0, 5.0, 20.0, 40.0]);
+        assert!(lines_between_multiples(&mut fft, &wheel, 20, 2, (20, 56)).is_none(), "the faster wheel's line");
+        assert!(lines_between_multiples(&mut fft, &wheel, 20, 2, (20, 57)).is_some(), "no wheel's line there");
+        assert!(lines_between_multiples(&mut fft, &on_the_line(&[1.0, 20.0]), 20, 1, (20, 56)).is_none());
     }
 
     /// The fresh 31/43 machine's case: its mesh's seventh harmonic stands on a housing mode, so the comb
