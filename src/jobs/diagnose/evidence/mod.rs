@@ -159,7 +159,15 @@ pub const ENVELOPE_OUTRISE_DB: f64 = 10.0;
 /// harmonic's change of amplitude and phase taken out). When the deciding gear's own average holds no
 /// impulse (FM4, M6A under their suspect limits: a local fault would put one there) and the other gear's
 /// pattern changed by more, beyond what the baseline's own files show among themselves, the verdict moves to
-/// the other gear, its state kept (the shared indicators say how large the change is, not where).
+/// the other gear, its state kept (the shared indicators say how large the change is, not where). Not
+/// when the other gear's larger excess lies within its own noise ([`within_its_noise`]): a pattern read on
+/// few revolutions of a many-toothed wheel is noisy. On the third generator's 13/43 machine a spalled
+/// pinion's pattern moved 16 times its healthy figure (0.41 against 0.026), the wheel's twice its (0.83
+/// against 0.41), and the wheel's excess over the pinion's (0.42 against 0.39) had put the spall on the
+/// wheel. The margin is the other gear's healthy figure itself: the first generator's worn 17/29 pinion,
+/// rightly moved there, stood 4.6 times its figure against the wheel's 23 (a wheel figure of 0.035) but
+/// exceeded the wheel's excess by 0.57, over its own figure of 0.38; every other right move on the four
+/// generators' scorecards had the other gear further beyond its figure than the deciding gear.
 ///
 /// A pattern whose healthy files differ by its whole energy or more ([`PATTERN_UNREADABLE`]) is not known.
 ///
@@ -190,6 +198,7 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     if d.verdict.state < VerdictState::Suspect
         || theirs.0 <= own.0.max(0.0)
         || theirs.1 < PATTERN_BEYOND_HEALTHY * theirs.2
+        || within_its_noise(theirs, own)
     {
         return true;
     }
@@ -221,6 +230,15 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     }
     place_tooth(d);
     true
+}
+
+/// Whether the other gear's pattern change (`theirs`: excess over its healthy figure, value, healthy
+/// figure) exceeds the deciding gear's (`own`) by less than its own healthy figure while standing no
+/// further beyond that figure than the deciding gear's stands beyond its own: then the larger excess lies
+/// within the other gear's noise and names nothing ([`pattern_evidence`]).
+fn within_its_noise(theirs: (f64, f64, f64, usize), own: (f64, f64, f64, usize)) -> bool {
+    let times_healthy = |p: (f64, f64, f64, usize)| if p.2 > 0.0 { p.1 / p.2 } else { f64::INFINITY };
+    times_healthy(theirs) <= times_healthy(own) && theirs.0 - own.0.max(0.0) < theirs.2
 }
 
 /// The healthy figure of a gear's pattern change (the baseline's files against each other, in the

@@ -185,3 +185,25 @@ fn an_unrepeated_pattern_decides_nothing() {
     assert!(!pattern_evidence(&mut kept), "the pinion's pattern is not known");
     assert_eq!(kept.verdict.gear, VerdictGear::Pinion, "{:?}", kept.verdict.reasons);
 }
+
+/// The patterns of both gears with their healthy figures: (pinion's, its figure, wheel's, its figure),
+/// the verdict on the pinion from an energy measure both averages share.
+fn with_patterns(pinion: (f64, f64), wheel: (f64, f64)) -> VerdictGear {
+    let mut d = suspect_pinion(0.5, 0.0);
+    (d.local_change[0].pattern, d.local_change[0].pattern_healthy) = pinion;
+    (d.local_change[1].pattern, d.local_change[1].pattern_healthy) = wheel;
+    assert!(pattern_evidence(&mut d), "both patterns are known");
+    d.verdict.gear
+}
+
+/// A larger excess within the other gear's own noise names nothing: the third generator's spalled 13/43
+/// pinion (its pattern 16 times its healthy figure, the wheel's twice its, the wheel's excess over it by
+/// 0.03 where its figure is 0.41) stays on the pinion. The first generator's worn 17/29 pinion, read from
+/// the wheel's side (the wheel 23 times its small figure, the pinion 4.6 times its own but its excess
+/// larger by 0.57, over its figure of 0.38), moves; so does a change that stands further beyond its figure.
+#[test]
+fn an_excess_within_the_other_gears_noise_names_nothing() {
+    assert_eq!(with_patterns((0.413, 0.026), (0.827, 0.41)), VerdictGear::Pinion);
+    assert_eq!(with_patterns((0.80, 0.035), (1.715, 0.376)), VerdictGear::Wheel);
+    assert_eq!(with_patterns((0.093, 0.21), (0.346, 0.127)), VerdictGear::Wheel);
+}
