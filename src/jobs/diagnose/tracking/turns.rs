@@ -44,8 +44,7 @@ pub(super) fn part_of_a_turn(
         return None;
     }
     let h = speed::Halves::of(fft, y, m * cycles * MESH_CYCLE_POINTS)?;
-    let wheel_line = |n: usize| (n * zw).is_multiple_of(m * zp);
-    let between = |n: usize| !n.is_multiple_of(m) && !wheel_line(n);
+    let between = |n: usize| between_multiples(n, m, (zp, zw));
     if h.coherence(&|n| n.is_multiple_of(m) && n > 0) < SYNCHRONOUS {
         return None;
     }
@@ -78,9 +77,15 @@ pub(super) fn lines_between_multiples(
         return None;
     }
     let h = speed::Halves::of(fft, y, cycles * MESH_CYCLE_POINTS)?;
-    let faster_wheel_line = |n: usize| (n * zw).is_multiple_of(m * zp);
-    let c = h.coherence(&|n| !n.is_multiple_of(m) && !faster_wheel_line(n));
+    let c = h.coherence(&|n| between_multiples(n, m, (zp, zw)));
     (c >= SYNCHRONOUS).then_some(c)
+}
+
+/// Whether order `n` of a revolution lies between its multiples of `m` and off the lines of the wheel
+/// (`zw` teeth) of a pinion (`zp` teeth) turning `m` times in it: over m pinion turns the wheel's order j
+/// is order m j zp / zw, whole where zw shares a factor with m.
+fn between_multiples(n: usize, m: usize, (zp, zw): (usize, usize)) -> bool {
+    !n.is_multiple_of(m) && !(n * zw).is_multiple_of(m * zp)
 }
 
 /// How many turns of the shaft a revolution may hold, and the coherences that said so.
