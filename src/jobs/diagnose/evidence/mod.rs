@@ -166,8 +166,9 @@ pub const ENVELOPE_OUTRISE_DB: f64 = 10.0;
 /// against 0.41), and the wheel's excess over the pinion's (0.42 against 0.39) had put the spall on the
 /// wheel. The margin is the other gear's healthy figure itself: the first generator's worn 17/29 pinion,
 /// rightly moved there, stood 4.6 times its figure against the wheel's 23 (a wheel figure of 0.035) but
-/// exceeded the wheel's excess by 0.57, over its own figure of 0.38; every other right move on the four
-/// generators' scorecards had the other gear further beyond its figure than the deciding gear.
+/// exceeded the wheel's excess by 0.57, over its own figure of 0.38; the 14 right moves of the hold-out,
+/// fresh, common-factor and third sets' scorecards all had the other gear further beyond its figure than
+/// the deciding gear.
 ///
 /// A pattern whose healthy files differ by its whole energy or more ([`PATTERN_UNREADABLE`]) is not known.
 ///
