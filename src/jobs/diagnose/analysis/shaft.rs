@@ -349,12 +349,13 @@ fn on_mains(zp: usize, shaft_hz: f64, speeds: &angle::SpeedProfile) -> Option<St
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// The second start is kept on a line 3 dB clearer, or on a line where the first followed none; where
     /// neither followed a line, only as its kind says (-inf once compared as high as -inf plus the margin,
     /// so the weak comb's best replaced a given speed on nothing).
     #[test]
     fn a_second_start_on_no_line_is_kept_only_as_its_kind_says() {
-        use super::second_start_kept;
         let none = f64::NEG_INFINITY;
         assert!(second_start_kept(12.0, 15.5, false));
         assert!(!second_start_kept(12.0, 14.0, false));
@@ -363,8 +364,6 @@ mod tests {
         assert!(!second_start_kept(none, none, false));
         assert!(second_start_kept(none, none, true));
     }
-
-    use super::*;
 
     fn steady(wander: f64) -> angle::SpeedProfile {
         angle::SpeedProfile { mean: 1e-3, min: 1e-3, max: 1e-3, change: 0.0, wander }
