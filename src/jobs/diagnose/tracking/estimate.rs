@@ -413,18 +413,19 @@ pub(super) fn shaft_from_comb(
     // the comb of half the speed): said, and no verdict of health rests on it (a comb on the mains was
     // followed on the mains' angle, not a shaft's)
     let turns = match &followed {
-        Some((_, y)) if !on_mains(fp) => turns_per_revolution(fft, y, zp * k, (fastest / fp).floor() as usize),
+        Some((_, y)) if !on_mains(fp) => turns_per_revolution(fft, y, (zp * k, zp), (fastest / fp).floor() as usize),
         _ => None,
     };
     let turns = turns.map(|t| {
         let said = format!(
-            "the estimated revolution may hold {} turns of the shaft: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), so the shaft may turn {} times as fast ({})",
+            "the estimated revolution may hold {} turns of a shaft: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), so a shaft may turn {} times as fast ({}: the pinion, or the wheel with the pinion at {})",
             t.count,
             t.count,
             t.kept,
             t.lacking,
             t.count,
-            hz(period / t.count as f64)
+            hz(period / t.count as f64),
+            hz(period / t.count as f64 * z_p / z_w)
         );
         note.push_str(&format!("; {said}"));
         format!(

@@ -12,6 +12,13 @@ pub(super) const NO_SYNCHRONOUS: f64 = 0.4;
 /// Coherence the orders a revolution of several turns keeps must reach: the angle follows a line of the
 /// machine, its averages hold the machine (0.83-1.0 at the even orders of the hold-out and fresh recordings).
 pub(super) const SYNCHRONOUS: f64 = 0.8;
+/// Coherence the orders a revolution of several turns keeps must reach for the doubt
+/// ([`turns_per_revolution`]): the averages hold something there. Lower than [`SYNCHRONOUS`]: the third
+/// generator's broken 25/50 wheel, its revolution five wheel turns, kept 0.55 at the multiples of 5 (its
+/// impacts ring the housing's kHz modes, where a 0.9 % speed fluctuation left on the followed angle blurs
+/// the halves) while lacking -0.71 at the others; on the 40 right revolutions of that set with the teeth
+/// alone, no order set that is not multiples of a d read under 0.52, so the doubt still needs both.
+pub(super) const TURNS_KEPT: f64 = 0.5;
 /// Coherence a shorter revolution must keep at its orders that are not multiples of its cycles of the
 /// followed line (the shaft's own lines: runout, the teeth's errors, sidebands): on a signal that repeats
 /// with every cycle of the line (a mesh alone on its own angle) a shorter revolution holds nothing there.
@@ -97,24 +104,34 @@ pub(super) struct Turns {
 }
 
 /// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
-/// per cycle) may hold d = 2 or 3 turns of the shaft: its orders that are not multiples of d hold no
-/// synchronous content ([`NO_SYNCHRONOUS`]) while those that are do ([`SYNCHRONOUS`]), and the revolution
-/// of cycles / d cycles (a whole number) holds lines of its own beside the followed line's
-/// ([`SHAFT_LINES`]); at most `most` turns (the mesh must stay below the highest frequency sought).
+/// per cycle), a pinion revolution of `zp` mesh cycles, may hold d = 2..=`most` turns of a shaft (d dividing
+/// `cycles`): its orders that are not multiples of d hold no synchronous content ([`NO_SYNCHRONOUS`]) while
+/// those that are do ([`TURNS_KEPT`]), and the revolution of 1/d of it holds lines of its own besides the
+/// supposed mesh's harmonics (its orders n with n d not a multiple of zp: [`SHAFT_LINES`]). The least such
+/// d is returned; at most `most` turns (the mesh must stay below the highest frequency sought).
 ///
 /// A doubt, not a correction: a true revolution whose pinion carries little content of its own at those
 /// orders reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
-/// not divisible by 3, where the fresh 20/33 machine's true double revolutions read -0.33 to 0.12).
-pub(super) fn turns_per_revolution(fft: &mut Fft, y: &[f64], cycles: usize, most: usize) -> Option<Turns> {
+/// not divisible by 3, where the fresh 20/33 machine's true double revolutions read -0.33 to 0.12). The
+/// third generator's broken 25/50 wheel took a comb of five wheel turns for the pinion's (its impacts a
+/// line at every wheel order, the mesh one line): the orders of that revolution that are multiples of 5
+/// read 0.55 ([`TURNS_KEPT`]), the others -0.71, and it was called healthy on averages 10 times too slow.
+pub(super) fn turns_per_revolution(
+    fft: &mut Fft,
+    y: &[f64],
+    (cycles, zp): (usize, usize),
+    most: usize,
+) -> Option<Turns> {
     let period = cycles * MESH_CYCLE_POINTS;
-    [2, 3].into_iter().filter(|&d| d <= most && cycles.is_multiple_of(d)).find_map(|d| {
-        let (lacking, kept) = speed::halves_coherence(fft, y, period, d)?;
-        let own = speed::halves_coherence(fft, y, period / d, cycles / d)?.0;
-        (lacking < NO_SYNCHRONOUS && kept >= SYNCHRONOUS && own >= SHAFT_LINES).then_some(Turns {
-            count: d,
-            kept,
-            lacking,
-        })
+    let whole = speed::Halves::of(fft, y, period)?;
+    (2..=most.min(cycles / 2)).filter(|&d| cycles.is_multiple_of(d)).find_map(|d| {
+        let lacking = whole.coherence(&|n| !n.is_multiple_of(d));
+        let kept = whole.coherence(&|n| n.is_multiple_of(d) && n > 0);
+        if lacking >= NO_SYNCHRONOUS || kept < TURNS_KEPT {
+            return None;
+        }
+        let own = speed::Halves::of(fft, y, period / d)?.coherence(&|n| !(n * d).is_multiple_of(zp));
+        (own >= SHAFT_LINES).then_some(Turns { count: d, kept, lacking })
     })
 }
 
@@ -150,15 +167,31 @@ mod tests {
     #[test]
     fn a_revolution_of_two_turns_is_doubted() {
         let mut fft = Fft::new();
-        let two = turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 8);
+        let two = turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), (20, 20), 8);
         assert!(two.is_some_and(|t| t.count == 2 && t.lacking < NO_SYNCHRONOUS), "{two:?}");
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0, 40.0]), 20, 8).is_none());
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[20.0, 40.0, 60.0]), 20, 8).is_none());
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[1.0, 3.0, 20.0, 21.0, 40.0]), (20, 20), 8).is_none());
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[20.0, 40.0, 60.0]), (20, 20), 8).is_none());
         // a revolution of two turns would put the mesh beyond the highest frequency sought
-        assert!(turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), 20, 1).is_none());
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[2.0, 6.0, 20.0, 40.0, 42.0]), (20, 20), 1).is_none());
         let why = "the estimated revolution may hold 2 turns of the shaft".to_string();
         let doubted = MeshShaft { turns: Some(why), ..super::super::estimate::tests::shaft(0.9, true, None) };
         assert!(doubted.nominal(40_000, &mut Vec::new()).doubt.is_some_and(|d| d.contains("2 turns")));
+    }
+
+    /// The third generator's broken 25/50 wheel's case: the comb taken was that of five turns of a shaft in
+    /// the supposed revolution (an impact every fifth of it: lines at every multiple of 5), which is said
+    /// as five turns, not two; the same lines with the shaft's own order 1 beside them are one turn, and a
+    /// mesh of 20 cycles followed on its second harmonic (40 cycles) with nothing else is no shaft at all.
+    #[test]
+    fn a_revolution_of_five_turns_is_doubted() {
+        let mut fft = Fft::new();
+        let impacts: Vec<f64> = (1..8).map(|j| 5.0 * j as f64).collect();
+        let five = turns_per_revolution(&mut fft, &on_the_line(&impacts), (20, 20), 8);
+        assert!(five.is_some_and(|t| t.count == 5), "{five:?}");
+        let own: Vec<f64> = impacts.iter().copied().chain([1.0]).collect();
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&own), (20, 20), 8).is_none());
+        // 20 mesh cycles on a line of 20 cycles per revolution read as 40 (its second harmonic followed)
+        assert!(turns_per_revolution(&mut fft, &on_the_line(&[10.0, 20.0, 30.0]), (20, 10), 8).is_none());
     }
 
     /// The fresh 24/37 machine's case the other way round: the comb of twice the speed was taken, so the
