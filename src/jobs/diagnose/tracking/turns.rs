@@ -105,7 +105,8 @@ pub(super) struct Turns {
 
 /// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
 /// per cycle), a pinion revolution of `zp` mesh cycles, may hold d = 2..=`most` turns of a shaft (d dividing
-/// `cycles`): its orders that are not multiples of d hold no synchronous content ([`NO_SYNCHRONOUS`]) while
+/// `zp`: the comb taken for the mesh, spaced zp orders of the revolution, is then a comb of that shaft's
+/// lines; a d that does not divide it leaves most of the comb's lines off the shaft's): its orders that are not multiples of d hold no synchronous content ([`NO_SYNCHRONOUS`]) while
 /// those that are do ([`TURNS_KEPT`]), and the revolution of 1/d of it holds lines of its own besides the
 /// supposed mesh's harmonics (its orders n with n d not a multiple of zp: [`SHAFT_LINES`]). The least such
 /// d is returned; at most `most` turns (the mesh must stay below the highest frequency sought).
@@ -116,6 +117,8 @@ pub(super) struct Turns {
 /// third generator's broken 25/50 wheel took a comb of five wheel turns for the pinion's (its impacts a
 /// line at every wheel order, the mesh one line): the orders of that revolution that are multiples of 5
 /// read 0.55 ([`TURNS_KEPT`]), the others -0.71, and it was called healthy on averages 10 times too slow.
+/// (The common-factor set's 20/40 machine beside a 6-blade fan read 0.89 and -0.29 at the multiples of 6
+/// of its true revolution, the mesh followed on its third harmonic: 6 does not divide 20.)
 pub(super) fn turns_per_revolution(
     fft: &mut Fft,
     y: &[f64],
@@ -124,7 +127,7 @@ pub(super) fn turns_per_revolution(
 ) -> Option<Turns> {
     let period = cycles * MESH_CYCLE_POINTS;
     let whole = speed::Halves::of(fft, y, period)?;
-    (2..=most.min(cycles / 2)).filter(|&d| cycles.is_multiple_of(d)).find_map(|d| {
+    (2..=most.min(zp / 2)).filter(|&d| zp.is_multiple_of(d)).find_map(|d| {
         let lacking = whole.coherence(&|n| !n.is_multiple_of(d));
         let kept = whole.coherence(&|n| n.is_multiple_of(d) && n > 0);
         if lacking >= NO_SYNCHRONOUS || kept < TURNS_KEPT {
@@ -180,8 +183,9 @@ mod tests {
 
     /// The third generator's broken 25/50 wheel's case: the comb taken was that of five turns of a shaft in
     /// the supposed revolution (an impact every fifth of it: lines at every multiple of 5), which is said
-    /// as five turns, not two; the same lines with the shaft's own order 1 beside them are one turn, and a
-    /// mesh of 20 cycles followed on its second harmonic (40 cycles) with nothing else is no shaft at all.
+    /// as five turns, not two; the same lines with the shaft's own order 1 beside them are one turn, a mesh
+    /// of 10 followed on its second harmonic with nothing else is no shaft at all, and neither are a fan's
+    /// tones at multiples of a number that does not divide the mesh's order.
     #[test]
     fn a_revolution_of_five_turns_is_doubted() {
         let mut fft = Fft::new();
@@ -192,6 +196,10 @@ mod tests {
         assert!(turns_per_revolution(&mut fft, &on_the_line(&own), (20, 20), 8).is_none());
         // 20 mesh cycles on a line of 20 cycles per revolution read as 40 (its second harmonic followed)
         assert!(turns_per_revolution(&mut fft, &on_the_line(&[10.0, 20.0, 30.0]), (20, 10), 8).is_none());
+        // a 3-blade fan's tones beside a mesh of 10 followed on its second harmonic: lines at multiples of
+        // 3 alone, but 3 does not divide the mesh comb's spacing of 10, so it is no comb of such a shaft
+        let fan = on_the_line(&[3.0, 6.0, 9.0, 12.0, 20.0, 40.0]);
+        assert!(turns_per_revolution(&mut fft, &fan, (20, 10), 8).is_none());
     }
 
     /// The fresh 24/37 machine's case the other way round: the comb of twice the speed was taken, so the

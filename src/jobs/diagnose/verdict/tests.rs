@@ -165,3 +165,35 @@ fn si_alone_is_said_to_rest_on_two_lines() {
     let wheel = LocalChange { gear: Shaft::Wheel, ..sidebands_grew(5.0) };
     assert!(lone_si(Shaft::Pinion, 1, &[si, sbr], &[wheel]).is_some());
 }
+
+/// Without a baseline, a gear of a pair whose average holds five times the other's ER over at least as
+/// many revolutions is suspect (the third set's broken 13/43 pinion: ER 3.04 against the wheel's 0.081,
+/// 415 revolutions against 125, FM4 4.8, HEALTHY before); not when the gear with the larger ER averaged
+/// fewer revolutions (its average keeps more noise beside the shared mesh lines), nor at four times, nor
+/// on a machine file's named shafts, whose meshes differ.
+#[test]
+fn a_gear_holding_far_more_energy_off_the_mesh_than_its_mate_is_suspect() {
+    let with = |gear: Shaft, revolutions: usize, er: f64| GearIndicators {
+        gear,
+        channel: 1,
+        mesh_order: 13,
+        revolutions,
+        indicators: [(Indicator::Er, er)].into_iter().collect(),
+        residual: Vec::new(),
+        difference: Vec::new(),
+        tsa_amplitudes: Vec::new(),
+        tsa: Vec::new(),
+        blocks: Vec::new(),
+    };
+    let pair = [with(Shaft::Pinion, 415, 3.04), with(Shaft::Wheel, 125, 0.081)];
+    let t = own_energy(&pair[0], &pair).expect("the pinion holds far more");
+    assert_eq!(t.state, VerdictState::Suspect);
+    assert!(t.text.contains("37.5 times"), "{}", t.text);
+    assert!(own_energy(&pair[1], &pair).is_none());
+    let fewer = [with(Shaft::Pinion, 100, 3.04), with(Shaft::Wheel, 125, 0.081)];
+    assert!(own_energy(&fewer[0], &fewer).is_none(), "fewer revolutions: noise may explain it");
+    let four = [with(Shaft::Pinion, 415, 0.324), with(Shaft::Wheel, 125, 0.081)];
+    assert!(own_energy(&four[0], &four).is_none());
+    let named = [with(Shaft::named("input"), 415, 3.04), with(Shaft::named("output"), 125, 0.081)];
+    assert!(own_energy(&named[0], &named).is_none());
+}
