@@ -16,8 +16,8 @@ pub(super) const SYNCHRONOUS: f64 = 0.8;
 /// ([`turns_per_revolution`]): the averages hold something there. Lower than [`SYNCHRONOUS`]: the third
 /// generator's broken 25/50 wheel, its revolution five wheel turns, kept 0.55 at the multiples of 5 (its
 /// impacts ring the housing's kHz modes, where a 0.9 % speed fluctuation left on the followed angle blurs
-/// the halves) while lacking -0.71 at the others; on the 40 right revolutions of that set with the teeth
-/// alone, no order set that is not multiples of a d read under 0.52, so the doubt still needs both.
+/// the halves) while lacking -0.71 at the others; the 40 right revolutions of that set, teeth only, read
+/// 0.52 or more at the orders that are not multiples of each d tried, so the doubt still needs both.
 pub(super) const TURNS_KEPT: f64 = 0.5;
 /// Coherence a shorter revolution must keep at its orders that are not multiples of its cycles of the
 /// followed line (the shaft's own lines: runout, the teeth's errors, sidebands): on a signal that repeats
@@ -104,12 +104,13 @@ pub(super) struct Turns {
 }
 
 /// Whether a revolution of `cycles` cycles of the line `y` was resampled on ([`MESH_CYCLE_POINTS`] points
-/// per cycle), a pinion revolution of `zp` mesh cycles, may hold d = 2..=`most` turns of a shaft (d dividing
-/// `zp`: the comb taken for the mesh, spaced zp orders of the revolution, is then a comb of that shaft's
-/// lines; a d that does not divide it leaves most of the comb's lines off the shaft's): its orders that are not multiples of d hold no synchronous content ([`NO_SYNCHRONOUS`]) while
-/// those that are do ([`TURNS_KEPT`]), and the revolution of 1/d of it holds lines of its own besides the
-/// supposed mesh's harmonics (its orders n with n d not a multiple of zp: [`SHAFT_LINES`]). The least such
-/// d is returned; at most `most` turns (the mesh must stay below the highest frequency sought).
+/// per cycle), a pinion revolution of `zp` mesh cycles, may hold d = 2..=`most` turns of a shaft: its
+/// orders that are not multiples of d hold no synchronous content ([`NO_SYNCHRONOUS`]) while those that
+/// are do ([`TURNS_KEPT`]), and the revolution of 1/d of it holds lines of its own besides the supposed
+/// mesh's harmonics (its orders n with n d not a multiple of zp: [`SHAFT_LINES`]). d divides `zp`: the comb
+/// taken for the mesh, spaced zp orders of the revolution, is then a comb of that shaft's lines, where a d
+/// that does not divide it would leave most of the comb's lines off the shaft's. The least such d is
+/// returned; at most `most` turns (the mesh must stay below the highest frequency sought).
 ///
 /// A doubt, not a correction: a true revolution whose pinion carries little content of its own at those
 /// orders reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
