@@ -393,7 +393,8 @@ fn gear_triggers(
         }
         per_gear.push(GearTriggers { gear: g.gear, channel: g.channel, triggers });
     }
-    if reference.is_none() {
+    // (on a doubtful speed the averages may hold no gear, and their ratio says nothing)
+    if reference.is_none() && d.speed_doubt.is_none() {
         for (g, trigger) in gears.iter().filter_map(|g| own_energy(g, &gears).map(|x| (g, x))) {
             if let Some(p) = per_gear.iter_mut().find(|p| p.gear == g.gear && p.channel == g.channel) {
                 p.triggers.push(trigger);
@@ -419,8 +420,15 @@ fn gear_triggers(
 /// never faulty, on this alone.
 pub const OWN_ENERGY_OVER_OTHER: f64 = 5.0;
 
+/// The least ER of the gear for [`OWN_ENERGY_OVER_OTHER`] to apply: as much energy off the mesh as in it.
+/// A gear whose mate is nearly ideal reads a large ratio on a small ER (gearvib's own bundled healthy
+/// 14/39 recording, whose wheel carries no tooth errors: pinion ER 0.18, 29 times the wheel's); the faults
+/// the ratio found on the hold-out, fresh and third sets stood at ER 1.19 and more.
+pub const OWN_ENERGY_FLOOR: f64 = 1.0;
+
 /// The trigger of a gear of a pair (pinion or wheel) whose average holds [`OWN_ENERGY_OVER_OTHER`] times
-/// the other gear's ER on the same channel while averaging at least as many revolutions.
+/// the other gear's ER on the same channel, and at least [`OWN_ENERGY_FLOOR`], while averaging at least as
+/// many revolutions.
 fn own_energy(g: &GearIndicators, gears: &[GearIndicators]) -> Option<Trigger> {
     if !matches!(g.gear, Shaft::Pinion | Shaft::Wheel) {
         return None;
@@ -430,7 +438,8 @@ fn own_energy(g: &GearIndicators, gears: &[GearIndicators]) -> Option<Trigger> {
         .find(|h| matches!(h.gear, Shaft::Pinion | Shaft::Wheel) && h.gear != g.gear && h.channel == g.channel)?;
     let (own, theirs) = (get(&g.indicators, Indicator::Er), get(&other.indicators, Indicator::Er));
     let ratio = own / theirs;
-    (g.revolutions >= other.revolutions && ratio.is_finite() && ratio >= OWN_ENERGY_OVER_OTHER).then(|| Trigger {
+    let stands = own >= OWN_ENERGY_FLOOR && ratio.is_finite() && ratio >= OWN_ENERGY_OVER_OTHER;
+    (g.revolutions >= other.revolutions && stands).then(|| Trigger {
         state: VerdictState::Suspect,
         local: false,
         sideband: false,
