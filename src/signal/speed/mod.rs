@@ -307,24 +307,11 @@ pub fn teeth_candidates<T: Sample>(
     Ok(out)
 }
 
-/// Coherence of the synchronous content between the two halves of `y`, a record resampled on a shaft's
-/// angle at `period` points per (supposed) revolution: the halves' averages over their whole revolutions
-/// are compared order by order, as sum Re(A_k conj(B_k)) / sqrt(sum |A_k|^2 sum |B_k|^2) over the orders
-/// below a quarter of `period`, once over the orders not divisible by `d` and once over those that are
-/// (order 0 left out). Content synchronous with the revolution reads near 1 (the same line in both halves),
-/// noise near 0. When the revolution holds `d` turns of the shaft, the orders not divisible by `d` hold no
-/// synchronous content while the others do. `None` with fewer than 8 revolutions.
-pub fn halves_coherence(fft: &mut Fft, y: &[f64], period: usize, d: usize) -> Option<(f64, f64)> {
-    if d < 2 {
-        return None;
-    }
-    let h = Halves::of(fft, y, period)?;
-    Some((h.coherence(&|k| k % d != 0), h.coherence(&|k| k % d == 0)))
-}
-
 /// The order spectra of the averages of the two halves of a record resampled at `period` points per
-/// (supposed) revolution, over their whole revolutions: [`halves_coherence`]'s parts, for several sets
-/// of orders at the cost of one pair of transforms.
+/// (supposed) revolution, over their whole revolutions, compared order by order ([`Halves::coherence`])
+/// over several sets of orders at the cost of one pair of transforms. Content synchronous with the
+/// revolution reads near 1 (the same line in both halves), noise near 0: when the revolution holds d turns
+/// of the shaft, the orders not divisible by d hold no synchronous content while the others do.
 pub struct Halves {
     a: Vec<(f64, f64)>,
     b: Vec<(f64, f64)>,

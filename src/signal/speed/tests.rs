@@ -184,6 +184,10 @@ fn halves_coherence_tells_a_revolution_holding_two_turns() {
             .collect()
     };
     let mut fft = Fft::new();
+    // the coherence at the orders not divisible by d and at those that are
+    let halves_coherence = |fft: &mut Fft, y: &[f64], period: usize, d: usize| {
+        Halves::of(fft, y, period).map(|h| (h.coherence(&|k| k % d != 0), h.coherence(&|k| k % d == 0)))
+    };
     // every line at an even order: the shaft turns twice per supposed revolution
     let twice = record(&[2.0, 4.0, 10.0, 20.0, 22.0, 40.0]);
     let (odd, even) = halves_coherence(&mut fft, &twice, period, 2).unwrap();

@@ -3,7 +3,7 @@
 
 use super::*;
 
-/// Coherence between the record's halves (`speed::halves_coherence`) at the orders a revolution of several
+/// Coherence between the record's halves (`speed::Halves`) at the orders a revolution of several
 /// turns lacks, under which they hold no synchronous content: on the tachometer's angle the right
 /// revolutions of 273 generated recordings (the hold-out, fresh and first generators, 21 machines) kept
 /// 0.76-1.0 at their odd orders, and a revolution of two true ones read -0.5 to 0.3 on 138 of the 154
