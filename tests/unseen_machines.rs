@@ -993,7 +993,9 @@ fn on_a_doubtful_speed_the_envelope_names_the_gear() {
 /// machine's pinion (15 Hz) leaves the pinion's FM4 and M6A within their baselines while the wheel's FM0,
 /// ER and SBR move (FAULTY on the wheel before), and the pinion's envelope order 1 rises 17 dB against its
 /// healthy sibling while the wheel's falls. With the speed and with the tachometer, against one sibling and
-/// against two, the verdict must be on the pinion, saying why, and name the wheel's move as cross-talk.
+/// against two, the verdict must be on the pinion, saying why, and name the wheel's move as cross-talk
+/// (by the envelope, or, read at the baseline's noise, by the pinion's own pattern: against one sibling on
+/// the nominal speed it stands 1.28 times its healthy figure, the wheel's 1.10).
 #[test]
 fn the_envelope_names_the_gear_whose_average_holds_no_impulse() {
     let m = more_machines().into_iter().find(|m| m.name.starts_with("z18z31")).unwrap();
@@ -1008,7 +1010,14 @@ fn the_envelope_names_the_gear_whose_average_holds_no_impulse() {
             assert!(o.state == "suspect" || o.state == "faulty", "{why}");
             let reasons = o.json["verdict"]["reasons"].to_string();
             assert!(reasons.contains("pinion order 1 stands"), "{why}");
-            assert!(o.json["verdict"]["cross_talk"].to_string().contains("envelope order 1 rose"), "{why}");
+            // the wheel's move named as cross-talk: by the envelope, or by the pinion's own pattern
+            // changing further beyond its healthy figure than the wheel's (read at the baseline's noise)
+            let cross = o.json["verdict"]["cross_talk"].to_string();
+            assert!(
+                cross.contains("envelope order 1 rose")
+                    || cross.contains("read as the pinion's change seen in the wheel's"),
+                "{why}"
+            );
         }
     }
 }

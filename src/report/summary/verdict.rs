@@ -184,8 +184,11 @@ pub struct LocalChange {
     pub sidebands_limit: f64,
     /// Pattern change: the difference's energy at every order that is not a mesh harmonic, after each mesh
     /// harmonic's band is scaled by its own complex factor (a change of the mesh's carrier taken out), over
-    /// the baseline's own there: how much the gear's own teeth changed (wear, runout, a local fault). NaN
-    /// when it could not be computed.
+    /// the baseline's own there: how much the gear's own teeth changed (wear, runout, a local fault). Read at
+    /// the baseline's noise: the recording's own noise there (its blocks' scatter, each band's scale taken
+    /// out) replaced by the baseline files' mean (`baseline::local::at_baseline_noise`), so that a noisier
+    /// average (the mate's lines, which do not repeat on this gear's revolution) does not read as a change
+    /// of this gear's teeth. NaN when it could not be computed.
     pub pattern: f64,
     /// The largest of the same between the baseline's own files (NaN from one file, or a profile written
     /// before it).

@@ -273,6 +273,11 @@ struct GearReference {
     /// The pattern change ([`tsa_change::pattern_change`]) of each baseline file against the other files'.
     #[serde(default)]
     pattern_healthy: Vec<f64>,
+    /// The noise each of those comparisons carried, as a share of the baseline's energy at the pattern's
+    /// orders (a half's over 2); empty in profiles written before it, which then score the pattern change
+    /// without a noise allowance (see `local::at_baseline_noise`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pattern_noise: Vec<f64>,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -434,6 +439,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
             sidebands_beyond_noise,
             sidebands_noise,
             pattern_healthy,
+            pattern_noise,
         } = local_reference(&mut fft, &per_file[&key], teeth[&key]);
         let mut stats = BTreeMap::new();
         for k in Indicator::DECIDING {
@@ -461,6 +467,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 sidebands_beyond_noise,
                 sidebands_noise,
                 pattern_healthy,
+                pattern_noise,
             },
         );
     }

@@ -213,7 +213,7 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
         v
     };
     let reason = format!(
-        "{other} (channel {}): its own teeth changed against the baseline: the pattern around its mesh harmonics (each harmonic's change of amplitude and phase taken out) differs by {} of its energy (healthy recordings by at most {}: the baseline's files against each other, a single file's halves counted twice), the {gear}'s by {} ({}): the {gear}'s {} measure the mesh both averages share, so the change is put on the {other} (one value per recording, so it names the gear, not the state)",
+        "{other} (channel {}): its own teeth changed against the baseline: the pattern around its mesh harmonics (each harmonic's change of amplitude and phase taken out, read at the baseline's noise) differs by {} of its energy (healthy recordings by at most {}: the baseline's files against each other, a single file's halves counted twice), the {gear}'s by {} ({}): the {gear}'s {} measure the mesh both averages share, so the change is put on the {other} (one value per recording, so it names the gear, not the state)",
         theirs.3,
         num(theirs.1),
         num(theirs.2),
