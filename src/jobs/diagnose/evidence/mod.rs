@@ -172,8 +172,11 @@ pub const ENVELOPE_OUTRISE_DB: f64 = 10.0;
 ///
 /// A pattern whose healthy files differ by its whole energy or more ([`PATTERN_UNREADABLE`]) is not known.
 ///
-/// Returns whether both gears' pattern changes were known (then they, not the local change's sideband
-/// evidence, decide between the gears: see [`local_change_evidence`]). Never on a pair whose teeth share
+/// Returns whether both gears' pattern changes were known and at least one stood [`PATTERN_BEYOND_HEALTHY`]
+/// times its healthy figure (then they, not the local change's sideband evidence, decide between the gears:
+/// see [`local_change_evidence`]); patterns both within their healthy figures name no gear (the first
+/// generator's 10 % cracked 17/29 wheel against a sibling: the wheel's pattern at 1.16 times its figure, the
+/// pinion's at 0.42, while the wheel's average changed at its tooth 2.4 times its limit). Never on a pair whose teeth share
 /// a factor, where each band holds the other gear's lines too.
 pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
     // on teeth that share a factor the band around a gear's mesh harmonics holds the other gear's lines
@@ -191,6 +194,11 @@ pub fn pattern_evidence(d: &mut Diagnosis) -> bool {
             .max_by(|a, b| a.0.total_cmp(&b.0))
     };
     let (Some(pinion), Some(wheel)) = (excess(Shaft::Pinion), excess(Shaft::Wheel)) else { return false };
+    // neither pattern beyond its healthy figure: neither gear's teeth changed in a way that repeats on its
+    // revolution, and the patterns name no gear
+    if [pinion, wheel].iter().all(|p| p.1 < PATTERN_BEYOND_HEALTHY * p.2) {
+        return false;
+    }
     let (gear, other, own, theirs) = match d.verdict.gear {
         VerdictGear::Pinion => (Shaft::Pinion, Shaft::Wheel, pinion, wheel),
         VerdictGear::Wheel => (Shaft::Wheel, Shaft::Pinion, wheel, pinion),

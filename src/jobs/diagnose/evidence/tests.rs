@@ -90,25 +90,45 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
     }
 }
 
-fn judged(wheel_change: f64, pinion_fm4_spreads: f64) -> VerdictGear {
+/// The verdict gear of [`suspect_pinion`] after the pattern and local-change evidence, the pinion's own
+/// pattern at `pinion_pattern` times its healthy figure (the wheel's at half its).
+fn judged_with(wheel_change: f64, pinion_fm4_spreads: f64, pinion_pattern: f64) -> (VerdictGear, bool) {
     let mut d = suspect_pinion(wheel_change, pinion_fm4_spreads);
+    d.local_change[0].pattern = pinion_pattern * d.local_change[0].pattern_healthy;
     let decided = pattern_evidence(&mut d);
-    assert!(decided, "both patterns are known");
     local_change_evidence(&mut d, decided);
     assert_eq!(d.verdict.state, VerdictState::Suspect, "the state is kept");
-    d.verdict.gear
+    (d.verdict.gear, decided)
 }
 
-/// Neither gear's pattern changed, so the patterns decide nothing: a change at one wheel tooth 5.9 times its
-/// limit (the hold-out's 25 % wheel crack whose pinion's SI took the verdict) names the wheel; a change
-/// 2.2 times its limit (the pinion of a worn wheel) does not, and neither does one beside a pinion whose
-/// own average holds an impulse (FM4 over its suspect limit).
+fn judged(wheel_change: f64, pinion_fm4_spreads: f64) -> VerdictGear {
+    let (gear, decided) = judged_with(wheel_change, pinion_fm4_spreads, 1.5);
+    assert!(decided, "the pinion's pattern changed: the patterns decided");
+    gear
+}
+
+/// The pinion's own pattern changed (1.5 times its healthy figure) and the wheel's did not, so the patterns
+/// keep the verdict on the pinion: a change at one wheel tooth 5.9 times its limit (the hold-out's 25 %
+/// wheel crack whose pinion's SI took the verdict) still names the wheel; a change 2.2 times its limit (the
+/// pinion of a worn wheel) does not, and neither does one beside a pinion whose own average holds an
+/// impulse (FM4 over its suspect limit).
 #[test]
 fn a_change_at_one_tooth_far_over_its_limit_names_its_gear() {
     assert_eq!(judged(5.9, 0.5), VerdictGear::Wheel);
     assert_eq!(judged(LOCAL_CHANGE_NAMES, 0.5), VerdictGear::Wheel);
     assert_eq!(judged(2.2, 0.5), VerdictGear::Pinion);
     assert_eq!(judged(5.9, 3.5), VerdictGear::Pinion);
+}
+
+/// Neither gear's pattern stands 1.25 times its healthy figure, so the patterns name no gear and a change
+/// at one tooth over its limit names its gear as it did before the pattern rule: the first generator's
+/// 10 % cracked 17/29 wheel against a sibling (its average changed at its tooth 2.4 times its limit, its
+/// pattern 1.16 times its figure, the pinion's 0.42) goes from the pinion to the wheel, and so it does with
+/// the pinion's pattern just under the margin.
+#[test]
+fn unchanged_patterns_leave_the_gear_to_the_change_at_one_tooth() {
+    assert_eq!(judged_with(2.4, 0.5, 0.42), (VerdictGear::Wheel, false));
+    assert_eq!(judged_with(2.4, 0.5, 1.2), (VerdictGear::Wheel, false));
 }
 
 /// One revolution of a difference signal of `z` teeth at 64 points per tooth: a ripple over every tooth
