@@ -106,7 +106,7 @@ impl MeshShaft {
     /// Why no verdict of health can rest on this speed: a comb confidence under [`UNSURE_SPEED`], or a
     /// runner-up close enough that the pick between two speeds is undecided (averages on the wrong one hold
     /// no gear and look healthy).
-    fn doubt(&self) -> Option<String> {
+    pub(super) fn doubt(&self) -> Option<String> {
         if self.confidence < UNSURE_SPEED && self.from_comb {
             return Some(format!(
                 "the shaft speed was estimated from the teeth with confidence {:.2} (under {UNSURE_SPEED}): averages on a wrong speed hold no gear, so the indicators cannot clear it; give the shaft speed or a tachometer channel",

@@ -9,10 +9,12 @@ use estimate::*;
 mod turns;
 use turns::*;
 mod ramp;
+mod repetition;
 mod ridges;
 mod starts;
 pub(super) use ramp::passes_through;
 use ramp::ramp_through;
+use repetition::*;
 pub(super) use ridges::strongest_low_harmonic;
 use ridges::*;
 use starts::*;
@@ -77,7 +79,7 @@ pub(super) fn nominal_speed(
     }
     let views: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 20)]).collect();
     let full: Vec<&[f32]> = channels.iter().map(|&c| &rec.channels[c - 1][..n.min(1 << 21)]).collect();
-    let est = match estimated_on_lines(path, (&views, &full, n), o, fs, geometry, fft)? {
+    let est = match estimated_on_lines(path, (&views, &full, n), o, fs, geometry, fft, warnings)? {
         Ok(found) => return Ok(with_baseline_start(found.nominal(n, warnings), o, geometry, n)),
         Err(est) => est,
     };
@@ -162,6 +164,7 @@ fn estimated_on_lines(
     fs: Option<f64>,
     geometry: Option<&Geometry>,
     fft: &mut Fft,
+    warnings: &mut Vec<String>,
 ) -> Result<Result<MeshShaft, speed::PeriodEstimate>, Error> {
     let comb = |fft: &mut Fft| o.teeth.and_then(|t| shaft_from_comb(fft, views, full, t, o.min_revolutions, fs));
     let est = match geometry.and_then(|g| g.period_samples) {
@@ -187,7 +190,7 @@ fn estimated_on_lines(
         }
         None => {
             if let Some(found) = comb(fft) {
-                return Ok(Ok(found));
+                return Ok(Ok(over_unsure_comb(found, fft, (views, full, n), o, fs, warnings)));
             }
             speed::estimate_period(fft, views, 16, n / o.min_revolutions.max(2))
         }

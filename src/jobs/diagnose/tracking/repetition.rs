@@ -1,0 +1,222 @@
+//! The shaft of a recording whose teeth are given and whose mesh comb could not clear its own speed, from
+//! the signal's repetition period: how many turns of which gear the period holds.
+
+use super::*;
+
+/// Autocorrelation at the signal's repetition period from which it decides the speed over a mesh comb
+/// that could not clear its own (a confidence under [`UNSURE_SPEED`] or a close second): a broken or
+/// spalled tooth fills the spectrum with shaft harmonics whose combs outscore the mesh's (generated
+/// machines of another physics, the teeth alone: 20 of 69 broken and spalled recordings taken 2-14 times
+/// too slow), while its impulse repeats every turn of its gear at 0.4-0.6; a healthy mesh repeats at its
+/// revolution far less (a real rig's 0.16-0.47).
+pub(super) const REPETITION_OVER_UNSURE_COMB: f64 = 0.3;
+
+/// The teeth's mesh comb's shaft `found`, or, when it carries a doubt ([`MeshShaft::doubt`]) and the
+/// signal's repetition over `views` decides ([`repetition_decides`], [`shaft_of_repetition`]), the
+/// repetition's, with a warning saying so. `n` is the record's length (samples); `fs` (Hz) is for the note.
+pub(super) fn over_unsure_comb(
+    found: MeshShaft,
+    fft: &mut Fft,
+    (views, full, n): (&[&[f32]], &[&[f32]], usize),
+    o: &Options,
+    fs: Option<f64>,
+    warnings: &mut Vec<String>,
+) -> MeshShaft {
+    let (Some(teeth), Some(_)) = (o.teeth, found.doubt()) else { return found };
+    let Ok(rep) = speed::estimate_period(fft, views, 16, n / o.min_revolutions.max(2)) else { return found };
+    if !repetition_decides(&rep, o) {
+        return found;
+    }
+    let Some(shaft) = shaft_of_repetition(&rep, (views, full), teeth, fs) else { return found };
+    let hz =
+        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    warnings.push(format!(
+        "the teeth's mesh comb gave the pinion {} but could not clear it (confidence {:.2}{}), while the signal repeats strongly (autocorrelation {:.2} at {:.1} samples): the repetition decides the speed",
+        hz(found.period_samples),
+        found.confidence,
+        found.close_second.map_or(String::new(), |c| format!(", a second candidate at {:.0} % of its evidence", 100.0 * c)),
+        rep.confidence,
+        rep.period_samples
+    ));
+    shaft
+}
+
+/// Whether the repetition `rep` can be a number of revolutions of the pinion of the given teeth: it
+/// repeats at [`REPETITION_OVER_UNSURE_COMB`] or more, over at least [`MIN_SAMPLES_PER_REV`] samples and
+/// 4 max(zp, zw) + 16 (the shortest revolution the mesh comb takes: a TSA resolving both mesh orders with
+/// their sidebands), and its pinion mesh lies below [`MESH_HIGHEST`]: a ringing resonance or a mesh lag
+/// repeats at a few dozen to a few hundred samples.
+pub(super) fn repetition_decides(rep: &speed::PeriodEstimate, o: &Options) -> bool {
+    let Some((zp, zw)) = o.teeth else { return false };
+    rep.confidence >= REPETITION_OVER_UNSURE_COMB
+        && rep.period_samples >= shortest_revolution(zp, zw)
+        && zp as f64 / rep.period_samples < MESH_HIGHEST
+}
+
+/// Share of the mean line at the orders that are multiples of r below which the other orders of a
+/// repetition count as empty, so that it holds r turns ([`shaft_of_repetition`]): a shaft's harmonics
+/// fill every order of its own revolution, and a period of r turns leaves the orders between its multiples
+/// of r to the noise (well under a fifth of a line that stands 10 dB over it).
+pub(super) const EMPTY_ORDERS: f64 = 0.2;
+/// The shortest pinion revolution (samples) a repetition may give: [`MIN_SAMPLES_PER_REV`], and
+/// 4 max(zp, zw) + 16 (the shortest the mesh comb takes: a TSA resolving both mesh orders with their
+/// sidebands).
+fn shortest_revolution(zp: usize, zw: usize) -> f64 {
+    MIN_SAMPLES_PER_REV.max(4.0 * zp.max(zw) as f64 + 16.0)
+}
+
+/// Orders of each kind compared by [`shaft_of_repetition`].
+const ORDERS_COMPARED: usize = 6;
+
+/// The shaft of a repetition `rep` that decided over an unsure mesh comb ([`repetition_decides`]): the
+/// period holds r = 4, 3 or 2 turns when the orders between the multiples of r are empty
+/// ([`EMPTY_ORDERS`]), else one; the turn is the wheel's when its mesh (zw orders, best of the first four
+/// harmonics) stands over twice the pinion's (zp orders), else the pinion's. The teeth `(zp, zw)` give the
+/// pinion's revolution either way, read on `views` (the record's first 2^20 samples) and refined on
+/// the mesh line followed over `full`; `fs` (Hz) is for the note. `None` when no harmonic 1-4 of that
+/// mesh can be followed at the period's rate ([`COMB_AGREEMENT`]): the period is then no turn of a gear of
+/// those teeth (a resonance ringing, a fan).
+pub(super) fn shaft_of_repetition(
+    rep: &speed::PeriodEstimate,
+    (views, full): (&[&[f32]], &[&[f32]]),
+    (zp, zw): (usize, usize),
+    fs: Option<f64>,
+) -> Option<MeshShaft> {
+    let p = rep.period_samples;
+    let line = |order: f64| -> f64 {
+        let f = order / p;
+        if f >= 0.45 { 0.0 } else { views.iter().map(|c| ind_line(c, f, 0.2 / p)).sum() }
+    };
+    let mean = |orders: &mut dyn Iterator<Item = usize>| {
+        let v: Vec<f64> = orders.map(|j| line(j as f64)).collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    let turns = [4, 3, 2]
+        .into_iter()
+        .find(|&r| {
+            let on = mean(&mut (1..=ORDERS_COMPARED).map(|j| j * r));
+            let off = mean(&mut (1..=ORDERS_COMPARED * r).filter(|j| j % r != 0));
+            on > 0.0 && off < EMPTY_ORDERS * on
+        })
+        .unwrap_or(1);
+    let turn = p / turns as f64;
+    // the turn is the wheel's when its mesh orders hold the stronger line
+    let mesh = |z: usize| (1..=4).map(|k| line((k * z * turns) as f64)).fold(0.0, f64::max);
+    let wheel = zw != zp && mesh(zw) > 2.0 * mesh(zp);
+    let z = if wheel { zw } else { zp };
+    // that gear's mesh must be a line that can be followed at one of its first four harmonics, its mean
+    // cycle agreeing with the period (a ringing resonance or a fan repeats without one); the followed
+    // cycle refines the turn
+    let (k, cycle) = (1..=4).find_map(|k| {
+        let lag = turn / (k * z) as f64;
+        follow_line(full, lag).ok().filter(|(c, _)| (c / lag - 1.0).abs() <= COMB_AGREEMENT).map(|(c, _)| (k, c))
+    })?;
+    let turn = (k * z) as f64 * cycle;
+    let period = if wheel { turn * zp as f64 / zw as f64 } else { turn };
+    if period < shortest_revolution(zp, zw) {
+        return None;
+    }
+    let hz =
+        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    Some(MeshShaft {
+        period_samples: period,
+        mesh_order: None,
+        confidence: rep.confidence,
+        note: format!(
+            "pinion speed from the signal's repetition: {} ({} turn{} of the {} in {p:.1} samples{}); give the speed or a tachometer channel when known",
+            hz(period),
+            turns,
+            if turns == 1 { "" } else { "s" },
+            if wheel { "wheel, whose mesh line stands over the pinion's" } else { "pinion" },
+            if turns > 1 { ", the orders between its multiples empty" } else { "" }
+        ),
+        from_comb: false,
+        close_second: None,
+        turns: None,
+        comb_peak: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::test_noise::uniform_noise;
+    use std::f64::consts::PI;
+
+    /// A pinion of 13 teeth at 64 samples per mesh cycle with a broken tooth: its mesh, and a decaying
+    /// ring of 7 mesh cycles' period once per turn (832 samples), in noise.
+    fn broken_pinion(n: usize) -> Vec<f32> {
+        let turn = 832.0;
+        let mut noise = uniform_noise(7);
+        (0..n)
+            .map(|i| {
+                let t = i as f64;
+                let since = t % turn;
+                let ring = 3.0 * (-since / 40.0).exp() * (2.0 * PI * since / 9.0).sin();
+                ((2.0 * PI * 13.0 * t / turn).sin() + ring + 0.3 * noise()) as f32
+            })
+            .collect()
+    }
+
+    /// A repetition of two turns is read as two (every odd order of it empty: a shaft's harmonics are
+    /// the even ones), one turn as one: the pinion's revolution is 832 samples either way. The order
+    /// lines are exact for a constant speed, and the followed mesh line's mean cycle is good to 1e-4 of it
+    /// over 60 turns.
+    #[test]
+    fn a_repetition_of_two_turns_of_a_broken_pinion_is_halved() {
+        let x = broken_pinion(832 * 60);
+        let views = [&x[..]];
+        for (period, turns) in [(1664.0, 2), (832.0, 1)] {
+            let rep = speed::PeriodEstimate { period_samples: period, confidence: 0.6, mesh_lag: None };
+            let found =
+                shaft_of_repetition(&rep, (&views, &views), (13, 43), None).expect("a mesh over its half-orders");
+            assert!((found.period_samples / 832.0 - 1.0).abs() < 1e-4, "{period}: {}", found.period_samples);
+            assert!(found.note.contains(&format!("{turns} turn")), "{}", found.note);
+            assert!(!found.from_comb);
+        }
+    }
+
+    /// A period holding a turn of the wheel, whose mesh line stands at its 43 orders (and nothing at the
+    /// 13 orders a pinion's turn would put it at), gives the pinion 13/43 of it.
+    #[test]
+    fn a_repetition_whose_mesh_is_at_the_wheel_orders_is_the_wheel_turn() {
+        let turn = 2752.0;
+        let mut noise = uniform_noise(3);
+        let x: Vec<f32> = (0..turn as usize * 20)
+            .map(|i| {
+                let t = i as f64;
+                ((2.0 * PI * 43.0 * t / turn).sin() + 0.2 * (2.0 * PI * t / turn).sin() + 0.3 * noise()) as f32
+            })
+            .collect();
+        let rep = speed::PeriodEstimate { period_samples: turn, confidence: 0.5, mesh_lag: None };
+        let found =
+            shaft_of_repetition(&rep, (&[&x[..]], &[&x[..]]), (13, 43), Some(1000.0)).expect("the wheel's mesh");
+        assert!((found.period_samples / (turn * 13.0 / 43.0) - 1.0).abs() < 1e-4, "{}", found.period_samples);
+        assert!(found.note.contains("wheel"), "{}", found.note);
+    }
+
+    /// A repetition that holds no mesh of the given teeth (noise with a ringing tone of its own period)
+    /// gives no shaft: no line at its mesh orders can be followed.
+    #[test]
+    fn a_repetition_without_the_teeth_mesh_gives_no_shaft() {
+        let mut noise = uniform_noise(5);
+        let x: Vec<f32> =
+            (0..446 * 200).map(|i| ((2.0 * PI * i as f64 / 446.0).sin() + 0.5 * noise()) as f32).collect();
+        let rep = speed::PeriodEstimate { period_samples: 446.0, confidence: 0.4, mesh_lag: None };
+        assert!(shaft_of_repetition(&rep, (&[&x[..]], &[&x[..]]), (22, 49), None).is_none());
+    }
+
+    /// The repetition decides only when it repeats strongly, over a shaft's worth of samples, and the
+    /// teeth are given; a ringing resonance of a few dozen samples (the third set's 96 kHz 25/50 machine with a
+    /// broken tooth: 0.94 at 72 samples, a mesh of 25 teeth over it above a quarter of the rate) does not.
+    #[test]
+    fn a_weak_or_ringing_repetition_does_not_decide() {
+        let o = |teeth| Options { teeth, ..Options::default() };
+        let rep = |period_samples, confidence| speed::PeriodEstimate { period_samples, confidence, mesh_lag: None };
+        assert!(repetition_decides(&rep(832.0, 0.4), &o(Some((13, 43)))));
+        assert!(!repetition_decides(&rep(146.0, 0.38), &o(Some((22, 49)))));
+        assert!(!repetition_decides(&rep(832.0, 0.25), &o(Some((13, 43)))));
+        assert!(!repetition_decides(&rep(72.0, 0.94), &o(Some((25, 50)))));
+        assert!(!repetition_decides(&rep(832.0, 0.9), &o(None)));
+    }
+}
