@@ -50,6 +50,12 @@ pub(super) fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, 
     })
 }
 
+/// A revolution of `period` samples as a speed for a note: in Hz with the sample rate `fs`, else in
+/// samples per revolution.
+pub(super) fn revolution_text(period: f64, fs: Option<f64>) -> String {
+    fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period))
+}
+
 /// Points per mesh cycle when a record is resampled on the mesh line's angle to find its shaft.
 pub(super) const MESH_CYCLE_POINTS: usize = 32;
 
@@ -337,8 +343,7 @@ pub(super) fn shaft_from_comb(
         None => (fp, period, k, peak),
     };
     let comb_peak = (followed.is_some() && (period / peak - 1.0).abs() > MAX_TRACKING_SHIFT_ESTIMATED).then_some(peak);
-    let hz =
-        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let hz = |period: f64| revolution_text(period, fs);
     let listed: Vec<String> =
         candidates.iter().take(3).map(|&(f, e)| format!("{} (evidence {e:.1})", hz(1.0 / f))).collect();
     let mut note = format!(

@@ -28,8 +28,7 @@ pub(super) fn over_unsure_comb(
         return found;
     }
     let Some(shaft) = shaft_of_repetition(&rep, (views, full), teeth, fs) else { return found };
-    let hz =
-        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let hz = |period: f64| revolution_text(period, fs);
     warnings.push(format!(
         "the teeth's mesh comb gave the pinion {} but could not clear it (confidence {:.2}{}), while the signal repeats strongly (autocorrelation {:.2} at {:.1} samples): the repetition decides the speed",
         hz(found.period_samples),
@@ -58,15 +57,15 @@ pub(super) fn repetition_decides(rep: &speed::PeriodEstimate, o: &Options) -> bo
 /// fill every order of its own revolution, and a period of r turns leaves the orders between its multiples
 /// of r to the noise (well under a fifth of a line that stands 10 dB over it).
 pub(super) const EMPTY_ORDERS: f64 = 0.2;
+/// Orders of each kind compared by [`shaft_of_repetition`].
+const ORDERS_COMPARED: usize = 6;
+
 /// The shortest pinion revolution (samples) a repetition may give: [`MIN_SAMPLES_PER_REV`], and
 /// 4 max(zp, zw) + 16 (the shortest the mesh comb takes: a TSA resolving both mesh orders with their
 /// sidebands).
 fn shortest_revolution(zp: usize, zw: usize) -> f64 {
     MIN_SAMPLES_PER_REV.max(4.0 * zp.max(zw) as f64 + 16.0)
 }
-
-/// Orders of each kind compared by [`shaft_of_repetition`].
-const ORDERS_COMPARED: usize = 6;
 
 /// The shaft of a repetition `rep` that decided over an unsure mesh comb ([`repetition_decides`]): the
 /// period holds r = 4, 3 or 2 turns when the orders between the multiples of r are empty
@@ -116,8 +115,7 @@ pub(super) fn shaft_of_repetition(
     if period < shortest_revolution(zp, zw) {
         return None;
     }
-    let hz =
-        |period: f64| fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let hz = |period: f64| revolution_text(period, fs);
     Some(MeshShaft {
         period_samples: period,
         mesh_order: None,
@@ -168,8 +166,7 @@ mod tests {
         let views = [&x[..]];
         for (period, turns) in [(1664.0, 2), (832.0, 1)] {
             let rep = speed::PeriodEstimate { period_samples: period, confidence: 0.6, mesh_lag: None };
-            let found =
-                shaft_of_repetition(&rep, (&views, &views), (13, 43), None).expect("a mesh over its half-orders");
+            let found = shaft_of_repetition(&rep, (&views, &views), (13, 43), None).expect("a followed mesh line");
             assert!((found.period_samples / 832.0 - 1.0).abs() < 1e-4, "{period}: {}", found.period_samples);
             assert!(found.note.contains(&format!("{turns} turn")), "{}", found.note);
             assert!(!found.from_comb);

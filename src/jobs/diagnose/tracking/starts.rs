@@ -63,7 +63,7 @@ pub(super) fn with_baseline_start(mut nominal: Nominal, o: &Options, geometry: O
 /// good as the line followed, and the tracking line says how well that was. No mesh order of its own: the
 /// tracking takes the given teeth's or the baseline's.
 pub(super) fn from_the_baseline(period: f64, fs: Option<f64>) -> MeshShaft {
-    let hz = fs.map_or(format!("{period:.2} samples per revolution"), |f| format!("{:.3} Hz", f / period));
+    let hz = revolution_text(period, fs);
     MeshShaft {
         period_samples: period,
         mesh_order: None,
