@@ -54,3 +54,73 @@ fn keep_freed_memory() {
 
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
 fn keep_freed_memory() {}
+
+/// The system allocator, asking the kernel for 2 MiB pages (transparent huge pages, `madvise` mode) in the
+/// 2 MiB-aligned interior of every block of 4 MiB or more before it is first touched: a record-long buffer
+/// (a 60 s channel at 51.2 kHz is 12 MB in f32, its resampled average 30 MB in f64) then faults in 512
+/// times fewer pages. 60 s x 4 channels: 0.31 -> 0.27 s, system time 0.07 -> 0.03 s (medians of 5 on the
+/// 2-core VM). Where the kernel has no such pages the advice is refused and nothing changes.
+#[cfg(all(target_os = "linux", target_env = "gnu", any(target_arch = "x86_64", target_arch = "aarch64")))]
+struct HugePageHint;
+
+#[cfg(all(target_os = "linux", target_env = "gnu", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[global_allocator]
+static ALLOCATOR: HugePageHint = HugePageHint;
+
+#[cfg(all(target_os = "linux", target_env = "gnu", any(target_arch = "x86_64", target_arch = "aarch64")))]
+mod huge_pages {
+    use std::alloc::{GlobalAlloc, Layout, System};
+
+    /// Smallest block advised (two huge pages: at least one aligned one lies inside).
+    const ADVISED_FROM: usize = 4 << 20;
+    /// The huge page size, bytes.
+    const HUGE_PAGE: usize = 2 << 20;
+    /// `MADV_HUGEPAGE` of Linux's `asm-generic/mman-common.h` (x86-64 and aarch64).
+    const MADV_HUGEPAGE: i32 = 14;
+
+    unsafe extern "C" {
+        fn madvise(addr: *mut std::ffi::c_void, len: usize, advice: i32) -> i32;
+    }
+
+    /// Advises huge pages for the aligned interior of the `size` bytes at `p` (a failure is ignored: the
+    /// pages are then ordinary ones).
+    fn advise(p: *mut u8, size: usize) {
+        if p.is_null() || size < ADVISED_FROM {
+            return;
+        }
+        let start = (p as usize).next_multiple_of(HUGE_PAGE);
+        let end = (p as usize + size) / HUGE_PAGE * HUGE_PAGE;
+        if end > start {
+            // SAFETY: the range lies inside a block the allocator just handed out; the advice changes how
+            // its pages are backed, never their contents.
+            unsafe { madvise(start as *mut std::ffi::c_void, end - start, MADV_HUGEPAGE) };
+        }
+    }
+
+    // SAFETY: every call goes to the system allocator with the same arguments; `advise` only adds a hint on
+    // the block it returned.
+    unsafe impl GlobalAlloc for super::HugePageHint {
+        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+            // SAFETY: as the caller's contract for `GlobalAlloc::alloc`
+            let p = unsafe { System.alloc(layout) };
+            advise(p, layout.size());
+            p
+        }
+        unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+            // SAFETY: as the caller's contract for `GlobalAlloc::alloc_zeroed`
+            let p = unsafe { System.alloc_zeroed(layout) };
+            advise(p, layout.size());
+            p
+        }
+        unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+            // SAFETY: as the caller's contract for `GlobalAlloc::dealloc`
+            unsafe { System.dealloc(ptr, layout) }
+        }
+        unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+            // SAFETY: as the caller's contract for `GlobalAlloc::realloc`
+            let p = unsafe { System.realloc(ptr, layout, new_size) };
+            advise(p, new_size);
+            p
+        }
+    }
+}

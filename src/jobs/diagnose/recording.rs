@@ -184,15 +184,30 @@ pub(super) fn check_channel(
     // clipping: runs of 3+ samples stuck at the extreme value
     let level = lo.abs().max(hi.abs()) * 0.9999;
     let peak = lo.abs().max(hi.abs());
+    if let Some(stuck) = clipped_samples(x, level) {
+        warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
+    }
+    Ok(m)
+}
+
+/// Share of a channel's samples stuck at its extreme from which it is called clipped.
+const CLIPPED_SHARE: f64 = 1e-4;
+
+/// The samples of `x` that are the third or later of a run at or beyond `level` in magnitude (a clipped
+/// channel's runs stuck at its extreme), when they are over [`CLIPPED_SHARE`] of the channel. Counted run
+/// by run only when the samples reaching the level at all (a vectorised count, and a bound on the stuck
+/// ones) are over that share.
+fn clipped_samples(x: &[f32], level: f32) -> Option<usize> {
+    let over_share = |count: usize| count as f64 > CLIPPED_SHARE * x.len() as f64;
+    if !over_share(x.iter().map(|v| usize::from(v.abs() >= level)).sum::<usize>()) {
+        return None;
+    }
     let (mut run, mut stuck) = (0usize, 0usize);
     for v in x {
         run = if v.abs() >= level { run + 1 } else { 0 };
         stuck += usize::from(run >= 3);
     }
-    if stuck as f64 > 1e-4 * x.len() as f64 {
-        warnings.push(format!("channel {idx} looks clipped: {stuck} runs of samples stuck at +-{peak}; amplitudes and indicators are unreliable"));
-    }
-    Ok(m)
+    over_share(stuck).then_some(stuck)
 }
 
 /// Fewest samples per shaft revolution a TSA can use (the resampling keeps at least 64 points).
@@ -435,6 +450,34 @@ mod tests {
         .to_string();
         assert!(e.contains("hour-long.wav") && e.contains("worker 9"), "{e}");
         assert_eq!(caught(file, || Ok(5)).unwrap(), 5);
+    }
+
+    /// The clipping count against a plain run-by-run count: a sine clipped at 0.8 of its peak (runs of
+    /// about 40 samples stuck at the level: counted), a channel with a few short runs at its peak (under
+    /// the share: none), and one with many isolated peak samples (the count of samples reaching the level
+    /// passes the share, the runs of three do not: none).
+    #[test]
+    fn clipping_is_counted_as_run_by_run() {
+        let plain = |x: &[f32], level: f32| {
+            let (mut run, mut stuck) = (0usize, 0usize);
+            for v in x {
+                run = if v.abs() >= level { run + 1 } else { 0 };
+                stuck += usize::from(run >= 3);
+            }
+            stuck
+        };
+        let n = 100_000;
+        let clipped: Vec<f32> = (0..n).map(|i| (i as f32 * 0.01).sin().clamp(-0.8, 0.8)).collect();
+        let stuck = plain(&clipped, 0.8 * 0.9999);
+        assert!(stuck as f64 > CLIPPED_SHARE * n as f64);
+        assert_eq!(clipped_samples(&clipped, 0.8 * 0.9999), Some(stuck));
+        let mut few: Vec<f32> = (0..n).map(|i| 0.5 * (i as f32 * 0.01).sin()).collect();
+        few[10..14].fill(1.0);
+        assert_eq!(clipped_samples(&few, 0.9999), None);
+        let isolated: Vec<f32> =
+            (0..n).map(|i| if i % 50 == 0 { 1.0 } else { 0.5 * (i as f32 * 0.01).sin() }).collect();
+        assert_eq!(plain(&isolated, 0.9999), 0);
+        assert_eq!(clipped_samples(&isolated, 0.9999), None);
     }
 
     /// A tachometer recorded through an ADC (pulses of 8 % duty, edges through a one-pole low-pass of 4
