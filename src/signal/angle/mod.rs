@@ -371,13 +371,12 @@ fn ridge<T: Sample>(x: &[T], period: f64, order: f64) -> Result<(Vec<(f64, f64)>
     let mags: Vec<Vec<f64>> = starts
         .par_iter()
         .map_init(
-            || (Fft::new(), vec![0.0; nw], Vec::new()),
-            |(fft, buf, spec), &s| {
+            || (Fft::new(), vec![0.0; nw]),
+            |(fft, buf), &s| {
                 for (b, (v, w)) in buf.iter_mut().zip(x[s..s + nw].iter().zip(&win)) {
                     *b = v.f() * w;
                 }
-                fft.forward(buf, spec);
-                spec[keep.0..=keep.1].iter().map(|c| (c.0 * c.0 + c.1 * c.1).sqrt()).collect()
+                fft.forward_band_magnitudes(buf, keep.0..=keep.1)
             },
         )
         .collect();

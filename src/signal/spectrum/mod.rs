@@ -105,6 +105,13 @@ impl Fft {
         });
     }
 
+    /// |X_k| for k in `bins` (within 0..=N/2) of the unnormalised forward transform of `input`
+    /// (overwritten), as sqrt(re^2 + im^2): a band of [`forward`](Self::forward)'s spectrum, without copying
+    /// the rest of it (a short-time spectrum that reads a few hundred bins of 8193).
+    pub fn forward_band_magnitudes(&mut self, input: &mut [f64], bins: std::ops::RangeInclusive<usize>) -> Vec<f64> {
+        self.forward_with(input, |spec| spec[bins].iter().map(|c| (c.re * c.re + c.im * c.im).sqrt()).collect())
+    }
+
     /// |X_k| for k = 0..=N/2 of the unnormalised forward transform of `input` (overwritten): what
     /// [`forward`](Self::forward) gives, without a second record-long copy of the spectrum.
     pub fn forward_magnitudes(&mut self, input: &mut [f64]) -> Vec<f64> {
