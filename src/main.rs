@@ -57,8 +57,8 @@ fn keep_freed_memory() {}
 
 /// The system allocator, asking the kernel for 2 MiB pages (transparent huge pages, `madvise` mode) in the
 /// 2 MiB-aligned interior of every block of 4 MiB or more before it is first touched: a record-long buffer
-/// (a 60 s channel at 51.2 kHz is 12 MB in f32, its resampled average 30 MB in f64) then faults in 512
-/// times fewer pages. 60 s x 4 channels: 0.31 -> 0.27 s, system time 0.07 -> 0.03 s (medians of 5 on the
+/// (a 60 s channel at 51.2 kHz is 12 MB in f32, twice that in f64) then faults in 512
+/// times fewer pages. 60 s x 4 channels: 0.31 -> 0.28 s, system time 0.07 -> 0.05 s (medians of 7 on the
 /// 2-core VM). Where the kernel has no such pages the advice is refused and nothing changes.
 #[cfg(all(target_os = "linux", target_env = "gnu", any(target_arch = "x86_64", target_arch = "aarch64")))]
 struct HugePageHint;

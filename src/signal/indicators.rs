@@ -122,6 +122,8 @@ pub struct ChannelMoments {
 ///
 /// With d = x - c and S_k = sum d^k: mu = S_1 / n, C_2 = S_2 - n mu^2,
 /// C_4 = S_4 - 4 mu S_3 + 6 mu^2 S_2 - 3 n mu^4; kurtosis = n C_4 / C_2^2, RMS = sqrt(sum x^2 / n).
+/// A channel whose mean lies k standard deviations from its first 4096 samples' loses about 4 log10(k)
+/// of the kurtosis's 16 digits to the cancellation in C_4 (a drift of 100 sigma: 8 left).
 ///
 /// # Errors
 /// The index of the first NaN or infinite sample.
