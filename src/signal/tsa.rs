@@ -392,19 +392,20 @@ pub fn decompose_many(
             }
         }
     }
-    let is_foreign = |k: usize| foreign[k];
-    let is_regular = |k: usize| k > 0 && (k <= shaft_orders || is_mesh(k) || is_foreign(k));
+    // each bin's class found once (the modulo tests are the costly part of a block's split)
+    let regular: Vec<bool> = (0..nb).map(|k| k > 0 && (k <= shaft_orders || is_mesh(k) || foreign[k])).collect();
+    let side: Vec<bool> = (0..nb).map(|k| !regular[k] && is_side(k)).collect();
     let keep = |pred: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
         (0..nb).map(|k| if pred(k) { spec[k] } else { (0.0, 0.0) }).collect()
     };
     let weight = |k: usize| if k == 0 || (l.is_multiple_of(2) && k == l / 2) { 1.0 } else { 2.0 };
     let regular_energy = (0..nb)
-        .filter(|&k| is_regular(k))
+        .filter(|&k| regular[k])
         .map(|k| weight(k) * (spec[k].0 * spec[k].0 + spec[k].1 * spec[k].1))
         .sum::<f64>()
         / l as f64;
-    let residual = fft.inverse(&keep(&|k| k > 0 && !is_regular(k)), l);
-    let difference = fft.inverse(&keep(&|k| k > 0 && !is_regular(k) && !is_side(k)), l);
+    let residual = fft.inverse(&keep(&|k| k > 0 && !regular[k]), l);
+    let difference = fft.inverse(&keep(&|k| k > 0 && !regular[k] && !side[k]), l);
     Decomposition { amplitudes, regular_energy, residual, difference }
 }
 
