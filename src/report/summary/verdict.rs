@@ -133,6 +133,10 @@ pub struct Score {
     pub suspect_at: f64,
     /// Faulty limit in spreads (false-alarm probability 1e-6).
     pub faulty_at: f64,
+    /// The suspect limit for a recording at the baseline's own operating point; against a single
+    /// baseline file `suspect_at` and `faulty_at` are raised over it by what a neighbouring load moves a
+    /// healthy recording (`baseline::one_file`), else the two are equal.
+    pub suspect_at_one_load: f64,
     /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
     pub decides: bool,
 }
@@ -180,8 +184,12 @@ pub struct LocalChange {
     pub sidebands_noise: f64,
     /// From here the growth counts as evidence: the lower of `baseline::sidebands_limit` of
     /// `sidebands_healthy` and of `sidebands_beyond_noise` + `sidebands_noise` (each the lower of 3 times
-    /// its argument but at least 8, and 4.5 times it but at least 0.25).
+    /// its argument but at least 8, and 4.5 times it but at least 0.25); from a single baseline file at
+    /// least `baseline::ONE_FILE_SIDEBAND_LEAST` (what a neighbouring load grows).
     pub sidebands_limit: f64,
+    /// The limit before that single-file least: the growth a recording at the baseline file's own
+    /// operating point is held to (`sidebands_limit` from two files or more).
+    pub sidebands_limit_one_load: f64,
     /// Pattern change: the difference's energy at every order that is not a mesh harmonic, after each mesh
     /// harmonic's band is scaled by its own complex factor (a change of the mesh's carrier taken out), over
     /// the baseline's own there: how much the gear's own teeth changed (wear, runout, a local fault). Read at

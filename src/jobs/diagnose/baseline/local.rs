@@ -196,6 +196,9 @@ pub(super) fn local_change_of(
     } else {
         files_limit
     };
+    // a single file cannot show what a change of operating point does to the sidebands
+    let sidebands_limit_one_load = sidebands_limit;
+    let sidebands_limit = if one_file { sidebands_limit.max(super::one_file::SIDEBAND_LEAST) } else { sidebands_limit };
     let pattern = tsa_change::pattern_parts(&mean, &reference, z)
         .map_or(f64::NAN, |p| at_baseline_noise(p, pattern_scatter, &r.pattern_noise));
     let pattern_healthy = largest(&r.pattern_healthy);
@@ -215,6 +218,7 @@ pub(super) fn local_change_of(
         sidebands_beyond_noise,
         sidebands_noise: noise,
         sidebands_limit,
+        sidebands_limit_one_load,
         pattern,
         pattern_healthy,
         own_share: tsa_change::own_share(&mean, &reference, shared_step),

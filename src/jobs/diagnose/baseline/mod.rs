@@ -144,6 +144,11 @@ struct Stat {
     /// healthy recording's median reached (absent from one file and in profiles written before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     highest_file: Option<f64>,
+    /// From a single file: how far a neighbouring load may move a healthy recording's median
+    /// ([`one_file::allowance`], on the scale), which the file's blocks cannot show (absent from two files
+    /// or more, and in profiles written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    load_allowance: Option<f64>,
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -181,6 +186,7 @@ impl Stat {
             count: v.len(),
             scale,
             highest_file: None,
+            load_allowance: None,
         }
     }
 
@@ -448,7 +454,9 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 Indicator::SpectralChange => leave_one_out.clone(),
                 _ => blocks.iter().map(|b| value(b, k)).collect(),
             };
-            let stat = Stat::of(&values, k.scale()).with_files(&by_file(&values, &per_file[&key]));
+            let stat = Stat::of(&values, k.scale())
+                .with_files(&by_file(&values, &per_file[&key]))
+                .with_one_file(per_file[&key].len(), one_file::allowance(k));
             let least = if k == Indicator::SpectralChange { SPECTRAL_CHANGE_LEAST_SPREAD_DB } else { 0.0 };
             stats.insert(k, stat.with_least_spread(least));
         }
@@ -546,9 +554,11 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
             let near_zero = k == Indicator::Si && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
             let (suspect_at, faulty_at) = limits(stat.count);
             let (spread, spread_from_files) = stat.scoring_spread(values.len(), suspect_at);
+            let (raised_suspect, raised_faulty) = stat.load_limits(spread, values.len(), suspect_at, faulty_at);
             Some(Score {
-                suspect_at,
-                faulty_at,
+                suspect_at: raised_suspect,
+                faulty_at: raised_faulty,
+                suspect_at_one_load: suspect_at,
                 gear: g.gear,
                 channel: g.channel,
                 indicator: k,
@@ -568,10 +578,12 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
 }
 
 mod local;
+mod one_file;
 pub use local::SameData;
 #[cfg(test)]
 use local::SidebandNoise;
 use local::{LocalReference, local_change_of, local_reference};
+pub use one_file::SIDEBAND_LEAST as ONE_FILE_SIDEBAND_LEAST;
 
 #[cfg(test)]
 mod tests;

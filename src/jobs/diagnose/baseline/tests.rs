@@ -97,6 +97,33 @@ fn files_that_differ_widen_the_spread_to_the_highest_file() {
     assert_eq!(one.scoring_spread(30, suspect_at), (one.spread, false));
 }
 
+/// A single file keeps an allowance for a change of load: its suspect limit, in spreads of its blocks,
+/// lies the allowance plus the median's own scatter above its median, so a recording whose FM0 is 1.35
+/// times the file's (the rig's 30 % file against its 40 % file: 5.3 block spreads) is kept and one 1.6
+/// times it is flagged; the spread itself is the blocks' (a gear is still told from its mate by how far
+/// it stands); two files, or no allowance, leave the limits as they were.
+#[test]
+fn one_file_keeps_an_allowance_for_a_change_of_load() {
+    let blocks: Vec<f64> = (0..30).map(|i| (3.844f64.ln() + 0.057 * acklam((i as f64 + 0.5) / 30.0)).exp()).collect();
+    let a = one_file::allowance(Indicator::Fm0);
+    let stat = Stat::of(&blocks, Scale::Log).with_files(std::slice::from_ref(&blocks)).with_one_file(1, a);
+    let (suspect_at, faulty_at) = limits(stat.count);
+    let (spread, widened) = stat.scoring_spread(30, suspect_at);
+    assert_eq!((spread, widened), (stat.spread, false));
+    let (suspect, faulty) = stat.load_limits(spread, 30, suspect_at, faulty_at);
+    let of_median = MEDIAN_SCATTER * stat.spread / 30f64.sqrt();
+    assert!((suspect * spread - (a + suspect_at * of_median)).abs() < 1e-12, "{suspect}");
+    assert!((faulty * spread - (a + faulty_at * of_median)).abs() < 1e-12, "{faulty}");
+    let spreads = |ratio: f64| ratio.ln() / spread;
+    assert!(spreads(1.35) > suspect_at, "over the blocks' own limit: {}", spreads(1.35));
+    assert!(spreads(1.35) < suspect, "a neighbouring load's FM0 is kept: {} under {suspect}", spreads(1.35));
+    assert!(spreads(1.6) > suspect, "beyond a load's move is flagged: {} over {suspect}", spreads(1.6));
+    let two = Stat::of(&blocks, Scale::Log).with_one_file(2, a);
+    assert_eq!(two.load_limits(two.spread, 30, suspect_at, faulty_at), (suspect_at, faulty_at));
+    let none = Stat::of(&blocks, Scale::Log).with_one_file(1, 0.0);
+    assert_eq!(none.load_limits(none.spread, 30, suspect_at, faulty_at), (suspect_at, faulty_at));
+}
+
 /// The sideband growth's limit: three times what the baseline's files show among themselves but at least 8
 /// (noise-level sidebands grow by several times their energy between healthy recordings), or 4.5 times it
 /// but at least 0.25 where that is lower (real sideband lines that the files reproduce closely); one file

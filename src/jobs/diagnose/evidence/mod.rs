@@ -373,7 +373,7 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                 c.sidebands / c.sidebands_limit,
                 c.gear,
                 format!(
-                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (healthy recordings at most {}: the baseline's files against each other, a single file's halves counted twice{}; limit {}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
+                    "{} (channel {}): sideband growth against the baseline's average: the change at the mesh harmonics' first-order sidebands holds {} times their energy in the baseline (healthy recordings at most {}: the baseline's files against each other, a single file's halves counted twice{}; limit {}{}): the gear's mesh is modulated once per its revolution, as an eccentric or unevenly worn gear modulates it (one value per recording, so supporting evidence: at most suspect on its own)",
                     c.gear,
                     c.channel,
                     num(c.sidebands),
@@ -387,7 +387,12 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                     } else {
                         String::new()
                     },
-                    num(c.sidebands_limit)
+                    num(c.sidebands_limit),
+                    if c.sidebands_limit == baseline::ONE_FILE_SIDEBAND_LEAST {
+                        ", the least against a single file: healthy recordings at neighbouring loads grow that much"
+                    } else {
+                        ""
+                    }
                 ),
                 false,
             ));

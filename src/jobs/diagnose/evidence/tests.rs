@@ -23,6 +23,7 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
         baseline_blocks: 30,
         spreads,
         suspect_at: 3.4,
+        suspect_at_one_load: 3.4,
         faulty_at: 5.5,
         decides: true,
     };
@@ -39,6 +40,7 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
         sidebands_beyond_noise: 0.1,
         sidebands_noise: 0.05,
         sidebands_limit: 8.0,
+        sidebands_limit_one_load: 8.0,
         pattern: 0.05,
         pattern_healthy: 0.1,
         own_share: None,

@@ -100,9 +100,15 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             (false, _) => (VerdictState::Suspect, ""),
         };
         let files = if sc.spread_from_files {
-            " (the spread widened to how far the baseline's files differ among themselves)"
+            " (the spread widened to how far the baseline's files differ among themselves)".to_string()
+        } else if sc.suspect_at > sc.suspect_at_one_load {
+            format!(
+                " (suspect from {} spreads, not {}: what a neighbouring load moves a healthy recording, which a single baseline file cannot show)",
+                num(sc.suspect_at),
+                num(sc.suspect_at_one_load)
+            )
         } else {
-            ""
+            String::new()
         };
         out.push(Trigger {
             state,
@@ -428,10 +434,19 @@ fn cross_talk_notes(per_gear: &[GearTriggers], w: &GearTriggers, unit: &str) -> 
 fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) -> String {
     match reference {
         Some(r) => {
-            let lo = d.scores.iter().map(|s| s.suspect_at).fold(f64::INFINITY, f64::min);
-            let hi = d.scores.iter().map(|s| s.suspect_at).fold(0.0, f64::max);
+            let lo = d.scores.iter().map(|s| s.suspect_at_one_load).fold(f64::INFINITY, f64::min);
+            let hi = d.scores.iter().map(|s| s.suspect_at_one_load).fold(0.0, f64::max);
             let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
             let widened = d.scores.iter().filter(|s| s.spread_from_files).count();
+            let raised = d.scores.iter().filter(|s| s.suspect_at > s.suspect_at_one_load).count();
+            let raised = if raised > 0 {
+                format!(
+                    "; {raised} of the {} with the limit raised to what a neighbouring load moves a healthy recording (a single baseline file cannot show it)",
+                    d.scores.len()
+                )
+            } else {
+                String::new()
+            };
             let files = if widened > 0 {
                 format!(
                     "; {widened} of the {} on a spread widened to how far the baseline's files differ among themselves",
@@ -441,7 +456,7 @@ fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) 
                 String::new()
             };
             format!(
-                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){files})",
+                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){files}{raised})",
                 r.files
             )
         }

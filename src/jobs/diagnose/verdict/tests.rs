@@ -122,6 +122,7 @@ fn score(indicator: Indicator, spreads: f64) -> Score {
         baseline_blocks: 32,
         spreads,
         suspect_at: 3.43,
+        suspect_at_one_load: 3.43,
         faulty_at: 5.6,
         decides: true,
     }
@@ -141,6 +142,7 @@ fn sidebands_grew(by: f64) -> LocalChange {
         sidebands_beyond_noise: 0.1,
         sidebands_noise: 0.05,
         sidebands_limit: 1.0,
+        sidebands_limit_one_load: 1.0,
         pattern: 0.1,
         pattern_healthy: 0.2,
         own_share: None,
