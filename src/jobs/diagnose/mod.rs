@@ -427,7 +427,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     let pattern_decided = evidence::pattern_evidence(&mut d);
     evidence::local_change_evidence(&mut d, pattern_decided);
     if p.reference.as_ref().is_some_and(|r| r.files == 1) {
-        d.warnings.extend(load_doubt::warning(&d));
+        d.warnings.extend(load_doubt::warning(&d.scores, &d.local_change));
     }
     match &p.facts {
         Some(b) => {
