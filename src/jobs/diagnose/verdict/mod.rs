@@ -437,24 +437,18 @@ fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) 
             let lo = d.scores.iter().map(|s| s.suspect_at_one_load).fold(f64::INFINITY, f64::min);
             let hi = d.scores.iter().map(|s| s.suspect_at_one_load).fold(0.0, f64::max);
             let range = if hi - lo < 0.05 { format!("{lo:.1}") } else { format!("{lo:.1} to {hi:.1}") };
-            let widened = d.scores.iter().filter(|s| s.spread_from_files).count();
-            let raised = d.scores.iter().filter(|s| s.suspect_at > s.suspect_at_one_load).count();
-            let raised = if raised > 0 {
-                format!(
-                    "; {raised} of the {} with the limit raised to what a neighbouring load moves a healthy recording (a single baseline file cannot show it)",
-                    d.scores.len()
-                )
-            } else {
-                String::new()
+            // "; n of the m <how>" when n scores were scored so
+            let share = |n: usize, how: &str| {
+                if n > 0 { format!("; {n} of the {} {how}", d.scores.len()) } else { String::new() }
             };
-            let files = if widened > 0 {
-                format!(
-                    "; {widened} of the {} on a spread widened to how far the baseline's files differ among themselves",
-                    d.scores.len()
-                )
-            } else {
-                String::new()
-            };
+            let files = share(
+                d.scores.iter().filter(|s| s.spread_from_files).count(),
+                "on a spread widened to how far the baseline's files differ among themselves",
+            );
+            let raised = share(
+                d.scores.iter().filter(|s| s.suspect_at > s.suspect_at_one_load).count(),
+                "with the limit raised to what a neighbouring load moves a healthy recording (a single baseline file cannot show it)",
+            );
             format!(
                 "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){files}{raised})",
                 r.files
