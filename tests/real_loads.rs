@@ -57,3 +57,30 @@ fn a_broken_tooth_against_the_next_load_is_flagged() {
         assert!(state == "suspect" || state == "faulty", "{x} against {y}: {}", d["verdict"]);
     }
 }
+
+/// The same single file through `learn` and `--profile` judges as through `--baseline`: the same verdict,
+/// the same word on the load, the raised limits the same to the profile's rounding (its JSON keeps 17
+/// digits: 1e-12 relative covers them).
+#[test]
+fn a_single_file_profile_keeps_the_allowance() {
+    let dir = temp_dir("real-loads-profile");
+    let profile = dir.join("p20.json").to_string_lossy().into_owned();
+    let run = gearvib(&["learn", &real("h30hz20"), "--fs-unknown", "-o", &profile]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let run = gearvib(&["diagnose", &real("h30hz10"), "--profile", &profile, "--json"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let p: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    let b = judged("h30hz10", "h30hz20");
+    assert_eq!(p["verdict"], b["verdict"]);
+    assert_eq!(load_warning(&p).is_some(), load_warning(&b).is_some());
+    let limits = |d: &serde_json::Value| -> Vec<(f64, f64)> {
+        let s = d["scores"].as_array().unwrap();
+        s.iter().map(|s| (s["suspect_at"].as_f64().unwrap(), s["suspect_at_one_load"].as_f64().unwrap())).collect()
+    };
+    let (lp, lb) = (limits(&p), limits(&b));
+    assert_eq!(lp.len(), lb.len());
+    assert!(lb.iter().any(|(raised, own)| raised > own), "no limit raised against one file");
+    for ((a, c), (x, y)) in lp.iter().zip(&lb) {
+        assert!((a - x).abs() <= 1e-12 * x.abs() && (c - y).abs() <= 1e-12 * y.abs(), "{a} {c} against {x} {y}");
+    }
+}
