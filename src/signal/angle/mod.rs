@@ -311,9 +311,9 @@ pub fn baseband_lines_over<T: Sample>(
     let mut edges = vec![0.0; nb + 1];
     map.fill_positions(revs.start as f64, 1.0 / per_rev as f64, &mut edges);
     let m = (8 * nb).next_power_of_two();
-    let mut y = vec![(0.0, 0.0); m];
+    let mut y = vec![(0.0, 0.0); nb];
     // the blocks are independent: summed in parallel; each gives its entry and its window weight
-    let w: Vec<f64> = y[..nb]
+    let w: Vec<f64> = y
         .par_iter_mut()
         .with_min_len(256)
         .zip(edges.par_windows(2))
@@ -335,8 +335,8 @@ pub fn baseband_lines_over<T: Sample>(
         })
         .collect();
     let wsum: f64 = w.iter().sum();
-    fft.inverse_complex(&mut y);
-    y.iter().map(|c| 2.0 * (c.0 * c.0 + c.1 * c.1).sqrt() / wsum).collect()
+    // zero-padded to m in the transform's own buffer
+    fft.inverse_complex_magnitudes(&y, m).into_iter().map(|a| 2.0 * a / wsum).collect()
 }
 
 /// Knots (sample index, angle in revolutions) of the ridge stage and the median line-to-band ratio.

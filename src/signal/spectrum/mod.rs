@@ -131,6 +131,23 @@ impl Fft {
         self.keep(buf);
     }
 
+    /// |x_n| for n = 0..len of the unnormalised complex inverse transform of `data` padded with zeros to
+    /// `len` entries (`data.len()` <= `len`): x_n = sum_k X_k exp(+2 pi i k n / len). The padding is
+    /// written once, into the transform's own buffer, never read before it is written (a record-long
+    /// zero-padded buffer that is read first costs the kernel a copy-on-write of every page).
+    pub fn inverse_complex_magnitudes(&mut self, data: &[(f64, f64)], len: usize) -> Vec<f64> {
+        let plan = complex_inverse(len);
+        let mut buf = std::mem::take(&mut self.spec);
+        buf.clear();
+        buf.reserve(len);
+        buf.extend(data.iter().take(len).map(|&(r, i)| Complex::new(r, i)));
+        buf.resize(len, Complex::new(0.0, 0.0));
+        plan.process_with_scratch(&mut buf, self.scratch(plan.get_inplace_scratch_len()));
+        let out = buf.iter().map(|c| (c.re * c.re + c.im * c.im).sqrt()).collect();
+        self.keep(buf);
+        out
+    }
+
     /// Inverse of [`forward`](Self::forward) including the 1/N factor: `spec` (len N/2 + 1) -> N samples.
     pub fn inverse(&mut self, spec: &[(f64, f64)], n: usize) -> Vec<f64> {
         let plan = real_inverse(n);
