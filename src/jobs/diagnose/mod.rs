@@ -426,9 +426,8 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
     let pattern_decided = evidence::pattern_evidence(&mut d);
     evidence::local_change_evidence(&mut d, pattern_decided);
-    if p.reference.as_ref().is_some_and(|r| r.files == 1) {
-        d.warnings.extend(load_doubt::warning(&d.scores, &d.local_change));
-    }
+    // (empty unless a limit was raised for a single baseline file)
+    d.warnings.extend(load_doubt::warning(&d.scores, &d.local_change));
     match &p.facts {
         Some(b) => {
             if let Some(e) = &b.envelope {
