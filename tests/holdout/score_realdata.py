@@ -8,6 +8,7 @@ broken tooth, sample rate and teeth unknown, so every run is `diagnose REC --fs-
   healthy-self       h30hzL against itself                      must be healthy
   healthy-alone      h30hzL without a baseline                  must be healthy
   healthy-vs-one     h30hzL against h30hz(L-10) and h30hz(L+10) must be healthy
+  broken-vs-one      b30hzL against each of those               must be flagged
   healthy-vs-two     h30hzL against both neighbouring loads     must be healthy
   broken-vs-two      b30hzL against both neighbouring loads     must be flagged
   healthy-vs-rest    h30hzL against a profile learned from the nine other loads' healthy files (`learn`)
@@ -44,6 +45,7 @@ def cases():
         out.append(("healthy-alone", f"h30hz{load}", [], "keep"))
         for m in near:
             out.append(("healthy-vs-one", f"h30hz{load}", [f"h30hz{m}"], "keep"))
+            out.append(("broken-vs-one", f"b30hz{load}", [f"h30hz{m}"], "flag"))
         if len(near) == 2:
             out.append(("healthy-vs-two", f"h30hz{load}", [f"h30hz{m}" for m in near], "keep"))
             out.append(("broken-vs-two", f"b30hz{load}", [f"h30hz{m}" for m in near], "flag"))
