@@ -146,7 +146,9 @@ pub struct DiagnoseArgs {
     pub pulses_per_rev: usize,
     /// Healthy recordings of the same machine to judge against (files or directories of .wav/.csv; the
     /// flag may be repeated or take several paths). Their blocks of whole revolutions make the statistical
-    /// baseline.
+    /// baseline. A single file cannot show how recordings at another load differ: its limits keep an
+    /// allowance for a neighbouring load, and what stands between its own limits and those is said; two
+    /// files or more, at the loads the machine runs at, judge more finely.
     #[arg(long, num_args = 1..)]
     pub baseline: Vec<String>,
     /// Envelope band in Hz, LO,HI (default: the band of largest spectral kurtosis from the kurtogram).
