@@ -202,3 +202,16 @@ fn a_gear_holding_far_more_energy_off_the_mesh_than_its_mate_is_suspect() {
     let named = [with(Shaft::named("input"), 415, 3.04), with(Shaft::named("output"), 125, 0.081)];
     assert!(own_energy(&named[0], &named).is_none());
 }
+
+/// The mesh fundamental's sidebands alone (SI, SER) with SBR under its limit: at most suspect, however far
+/// over (a line of another source beside the mesh reads there); with SBR over its limit too, or another
+/// indicator beside them, the usual states.
+#[test]
+fn the_fundamentals_sidebands_alone_are_at_most_suspect() {
+    let sbr_at = |spreads: f64| score(Indicator::Sbr, spreads);
+    assert!(si_without_sbr(&[score(Indicator::Si, 6.0), sbr_at(3.1)]));
+    assert!(si_without_sbr(&[score(Indicator::Si, 6.0), score(Indicator::Ser, 3.5), sbr_at(3.1)]));
+    assert!(!si_without_sbr(&[score(Indicator::Si, 6.0), sbr_at(3.5)]), "SBR moved with them");
+    assert!(!si_without_sbr(&[score(Indicator::Si, 6.0), score(Indicator::Fm4, 4.0), sbr_at(1.0)]));
+    assert!(!si_without_sbr(&[score(Indicator::Si, 1.0), sbr_at(1.0)]), "nothing over its limit");
+}
