@@ -185,7 +185,7 @@ pub struct LocalChange {
     /// From here the growth counts as evidence: the lower of `baseline::sidebands_limit` of
     /// `sidebands_healthy` and of `sidebands_beyond_noise` + `sidebands_noise` (each the lower of 3 times
     /// its argument but at least 8, and 4.5 times it but at least 0.25); from a single baseline file at
-    /// least `baseline::ONE_FILE_SIDEBAND_LEAST` (what a neighbouring load grows).
+    /// least what a neighbouring load grows (`baseline::one_file`).
     pub sidebands_limit: f64,
     /// The limit before that single-file least: the growth a recording at the baseline file's own
     /// operating point is held to (`sidebands_limit` from two files or more).

@@ -583,7 +583,6 @@ pub use local::SameData;
 #[cfg(test)]
 use local::SidebandNoise;
 use local::{LocalReference, local_change_of, local_reference};
-pub use one_file::SIDEBAND_LEAST as ONE_FILE_SIDEBAND_LEAST;
 
 #[cfg(test)]
 mod tests;

@@ -388,7 +388,7 @@ pub fn local_change_evidence(d: &mut Diagnosis, pattern_decided: bool) {
                         String::new()
                     },
                     num(c.sidebands_limit),
-                    if c.sidebands_limit == baseline::ONE_FILE_SIDEBAND_LEAST {
+                    if c.sidebands_limit > c.sidebands_limit_one_load {
                         ", the least against a single file: healthy recordings at neighbouring loads grow that much"
                     } else {
                         ""

@@ -155,9 +155,8 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
 fn lone_si(gear: Shaft, channel: usize, scores: &[Score], changes: &[LocalChange]) -> Option<String> {
     let mut moved = scores.iter().filter(|s| s.over_suspect());
     let si = moved.next().filter(|s| s.indicator == Indicator::Si && moved.next().is_none())?;
-    let sbr_moved = scores.iter().any(|s| s.indicator == Indicator::Sbr && s.spreads >= s.suspect_at);
     let grew = changes.iter().any(|c| c.gear == gear && c.channel == channel && c.sidebands >= c.sidebands_limit);
-    (!sbr_moved && !grew).then(|| {
+    (!sbr_moved(scores) && !grew).then(|| {
         format!(
             "{} (channel {}): SI {} rose {:.1} spreads over the baseline alone, while the first sidebands of its mesh harmonics did not grow (SBR and the sideband growth under their limits): SI is the two lines beside the mesh fundamental, where a line of another source (a fan's or another shaft's harmonic) reads as SI, so which gear changed is uncertain on SI alone",
             gear,
@@ -181,7 +180,13 @@ fn si_without_sbr(scores: &[Score]) -> bool {
     let fundamental = |s: &Score| matches!(s.indicator, Indicator::Si | Indicator::Ser);
     let mut moved = scores.iter().filter(|s| s.over_suspect()).peekable();
     let only = moved.peek().is_some() && moved.all(fundamental);
-    only && !scores.iter().any(|s| s.indicator == Indicator::Sbr && s.spreads >= s.suspect_at)
+    only && !sbr_moved(scores)
+}
+
+/// Whether SBR (the first sidebands of every mesh harmonic against the harmonics) stands at or over its
+/// suspect limit among `scores`.
+fn sbr_moved(scores: &[Score]) -> bool {
+    scores.iter().any(|s| s.indicator == Indicator::Sbr && s.spreads >= s.suspect_at)
 }
 
 /// A number with four significant digits, in plain or scientific notation by size.
