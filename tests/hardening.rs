@@ -226,6 +226,49 @@ fn csv_with_a_byte_order_mark_keeps_its_first_row_and_huge_values_are_out_of_ran
 }
 
 #[test]
+fn csv_lines_and_fields_are_bounded_and_quoted_names_keep_their_commas() {
+    let dir = temp_dir("csv-bounds");
+    // 8 MB on one line (no line break): refused at the 1 MiB line bound, under the 2 GB limit, the
+    // field not echoed
+    let long = std::path::Path::new(&dir).join("one-line.csv");
+    std::fs::write(&long, "1,".repeat(4 << 20)).unwrap();
+    let run = limited(&["diagnose", long.to_str().unwrap(), "--fs", "10000"]);
+    assert_one_line_error(&run, &["one-line.csv", "line 1", "without a line break"]);
+    assert!(run.stderr.len() < 300, "{}", run.stderr);
+    let digits = std::path::Path::new(&dir).join("digits.csv");
+    std::fs::write(&digits, format!("{}\n", "7".repeat(600_000))).unwrap();
+    let run = limited(&["diagnose", digits.to_str().unwrap(), "--fs", "10000"]);
+    assert_one_line_error(&run, &["digits.csv", "line 1", "600000 characters"]);
+    assert!(run.stderr.len() < 300, "a 600000-digit field is cut in the message: {}", run.stderr);
+    let wide = write(&dir, "wide.csv", &format!("{}\n", vec!["0.5"; 5000].join(",")));
+    let run = limited(&["diagnose", &wide, "--fs", "10000"]);
+    assert_one_line_error(&run, &["wide.csv", "5000 fields", "1024 columns"]);
+    // a quoted header with the delimiter inside is one column
+    let rows: String = (0..50).map(|i| format!("{i},{}\n", (i as f64 * 0.3).sin())).collect();
+    let quoted = write(&dir, "quoted.csv", &format!("\"index, n\",\"sensor, 2 [m/s^2]\"\n{rows}"));
+    let rec = gearvib::io::read_recording(std::path::Path::new(&quoted)).unwrap();
+    assert_eq!(rec.names, ["index, n", "sensor, 2"]);
+    assert_eq!(rec.units[1], "m/s^2");
+    assert_eq!(rec.channels[1].len(), 50);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_recording_path_that_is_a_pipe_or_a_device_is_refused_without_reading() {
+    let dir = temp_dir("not-a-file");
+    let fifo = std::path::Path::new(&dir).join("pipe.wav");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+    assert!(made.success());
+    // nothing writes the pipe: reading it would block for ever
+    let run = limited(&["diagnose", fifo.to_str().unwrap(), "--teeth", "14,39"]);
+    assert_one_line_error(&run, &["pipe.wav", "not a regular file"]);
+    let zero = std::path::Path::new(&dir).join("zero.csv");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let run = limited(&["diagnose", zero.to_str().unwrap(), "--fs", "10000"]);
+    assert_one_line_error(&run, &["zero.csv", "not a regular file"]);
+}
+
+#[test]
 fn nonsense_signal_requests_are_refused_and_leave_no_file() {
     let dir = temp_dir("nonsense-signal");
     let mut v = read_json(&repo("data/scenes/paper-gear-fig8a.json"));

@@ -5,8 +5,43 @@
 //! actually present, never with a claimed size.
 
 use super::{AtomicFile, DataError, Recording};
-use std::io::{BufRead, BufWriter, Write};
+use std::io::{BufRead, BufWriter, Read, Write};
 use std::path::Path;
+
+/// Longest line read, bytes: far beyond a row of [`MAX_COLUMNS`] numbers of 30 characters, so that a file
+/// without line breaks (a binary file, a device, a column of digits) is refused before it fills the memory.
+const MAX_LINE_BYTES: u64 = 1 << 20;
+
+/// Most fields a row may hold: a recording's channels (and a time column).
+const MAX_COLUMNS: usize = 1024;
+
+/// Longest field quoted in a message, characters (a longer one is cut, with its length said).
+const QUOTED_CHARS: usize = 40;
+
+/// `f` trimmed and quoted for a message, cut at [`QUOTED_CHARS`] characters.
+fn quoted(f: &str) -> String {
+    let t = f.trim();
+    match t.char_indices().nth(QUOTED_CHARS) {
+        Some((i, _)) => format!("{:?}... ({} characters)", &t[..i], t.chars().count()),
+        None => format!("{t:?}"),
+    }
+}
+
+/// The fields of `line` split at `delim` outside double quotes (a quoted header "sensor, 2" is one field).
+fn split_fields(line: &str, delim: char) -> Vec<&str> {
+    let mut fields = Vec::new();
+    let (mut start, mut quoted) = (0, false);
+    for (i, c) in line.char_indices() {
+        if c == '"' {
+            quoted = !quoted;
+        } else if c == delim && !quoted {
+            fields.push(&line[start..i]);
+            start = i + c.len_utf8();
+        }
+    }
+    fields.push(&line[start..]);
+    fields
+}
 
 fn delimiter(line: &str) -> char {
     let count = |c| line.matches(c).count();
@@ -54,7 +89,8 @@ fn time_unit(name: &str) -> Result<f64, String> {
 /// (named with its line and column), or a non-uniform time column.
 pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     let file = std::fs::File::open(path).map_err(|e| DataError::io(path, format!("cannot read: {e}")))?;
-    let reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut raw: Vec<u8> = Vec::new();
     let mut delim = None;
     let mut header: Option<Vec<String>> = None;
     let mut columns: Vec<Vec<f64>> = Vec::new();
@@ -62,17 +98,45 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     let mut field = String::new();
     // first value per column beyond the f32 range of the stored channels: (line, text)
     let mut overflow: Vec<Option<(usize, String)>> = Vec::new();
-    for (idx, line) in reader.lines().enumerate() {
-        let lineno = idx + 1;
-        let line = line.map_err(|e| DataError::format(path, format!("line {lineno}: {e}")))?;
+    for lineno in 1.. {
+        raw.clear();
+        let read = (&mut reader)
+            .take(MAX_LINE_BYTES + 1)
+            .read_until(b'\n', &mut raw)
+            .map_err(|e| DataError::io(path, format!("line {lineno}: cannot read: {e}")))?;
+        if read == 0 {
+            break;
+        }
+        if raw.len() as u64 > MAX_LINE_BYTES && raw.last() != Some(&b'\n') {
+            let why = if raw.contains(&b'\r') {
+                "its lines end in a carriage return alone (old Mac text): convert the line ends to LF or CRLF"
+            } else {
+                "not a delimited text signal"
+            };
+            return Err(DataError::format(
+                path,
+                format!("line {lineno} runs over {MAX_LINE_BYTES} bytes without a line break: {why}"),
+            ));
+        }
+        let line = std::str::from_utf8(&raw)
+            .map_err(|_| DataError::format(path, format!("line {lineno}: not UTF-8 text (a binary file?)")))?;
         // a UTF-8 byte-order mark (spreadsheet exports) is no part of the first field
-        let line = if idx == 0 { line.trim_start_matches('\u{feff}') } else { line.as_str() };
-        let line = line.trim_end_matches('\r');
+        let line = if lineno == 1 { line.trim_start_matches('\u{feff}') } else { line };
+        let line = line.trim_end_matches('\n').trim_end_matches('\r');
         if line.trim().is_empty() {
             continue;
         }
         let d = *delim.get_or_insert_with(|| delimiter(line));
-        let fields: Vec<&str> = line.split(d).collect();
+        let fields = split_fields(line, d);
+        if fields.len() > MAX_COLUMNS {
+            return Err(DataError::format(
+                path,
+                format!(
+                    "line {lineno}: {} fields, more than the {MAX_COLUMNS} columns a recording may hold",
+                    fields.len()
+                ),
+            ));
+        }
         if fields.iter().all(|f| f.trim().is_empty()) {
             continue; // an empty row such as ",,,"
         }
@@ -91,16 +155,16 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
         }
         for (c, f) in fields.iter().enumerate() {
             let v = parse(f, d, &mut field).ok_or_else(|| {
-                DataError::format(path, format!("line {lineno}, column {}: {:?} is not a number", c + 1, f.trim()))
+                DataError::format(path, format!("line {lineno}, column {}: {} is not a number", c + 1, quoted(f)))
             })?;
             if !v.is_finite() {
                 return Err(DataError::format(
                     path,
-                    format!("line {lineno}, column {}: non-finite value {:?}", c + 1, f.trim()),
+                    format!("line {lineno}, column {}: non-finite value {}", c + 1, quoted(f)),
                 ));
             }
             if v.abs() > f64::from(f32::MAX) && overflow[c].is_none() {
-                overflow[c] = Some((lineno, f.trim().to_string()));
+                overflow[c] = Some((lineno, quoted(f)));
             }
             columns[c].push(v);
         }

@@ -282,6 +282,10 @@ pub fn read_recording(path: &Path) -> Result<Recording<'static>, DataError> {
 pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'static>, DataError> {
     register_input(path);
     register_input(&sidecar::path_of(path));
+    // a pipe would block the read and a device never end (the readers' bounds are for files)
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return Err(DataError::io(path, "not a regular file (a device, pipe or directory)"));
+    }
     match extension(path).as_deref() {
         Some("wav") => {
             // the sidecar first: a device or a damaged one is refused before the signal is read
