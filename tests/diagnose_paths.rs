@@ -138,3 +138,41 @@ fn cracked_against_the_healthy_is_faulty_on_the_pinion_through_every_path() {
         Some("data/recordings/gear-z14z39-fs10kHz-healthy.wav"),
     );
 }
+
+/// A baseline directory that holds the recording under test: the recording is left out of the baseline
+/// and said to be, and the cracked pinion is faulty against the healthy file alone (it was HEALTHY
+/// against "2 healthy recordings", itself among them). A file given twice counts once (said), and `learn`
+/// refuses it. The cracked recording against itself alone cannot show a change: it is judged on the
+/// absolute limits, as without a baseline (the same verdict as with none), never healthy for want of a
+/// change.
+#[test]
+fn a_recording_is_never_its_own_baseline_among_others() {
+    let dir = temp_dir("baseline-holds-recording");
+    for name in ["cracked-pinion-tooth3", "healthy"] {
+        let src = format!("data/recordings/gear-z14z39-fs10kHz-{name}.wav");
+        std::fs::copy(&src, dir.join(format!("{name}.wav"))).unwrap();
+        std::fs::copy(format!("{src}.json"), dir.join(format!("{name}.wav.json"))).unwrap();
+    }
+    let cracked = dir.join("cracked-pinion-tooth3.wav").to_string_lossy().into_owned();
+    let healthy = dir.join("healthy.wav").to_string_lossy().into_owned();
+    let dir_s = dir.to_string_lossy().into_owned();
+    let run = gearvib(&["diagnose", &cracked, "--baseline", &dir_s, "--baseline", &healthy, "--json"]);
+    let d: Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "faulty", "{}", d["verdict"]);
+    assert_eq!(d["verdict"]["gear"], "pinion", "{}", d["verdict"]);
+    let warnings = d["warnings"].to_string();
+    assert!(warnings.contains("left out of the baseline: it is also under test"), "{warnings}");
+    assert!(warnings.contains("given twice as a baseline: it counts once"), "{warnings}");
+    let learn = gearvib(&["learn", &healthy, &dir_s, "-o", &dir.join("p.json").to_string_lossy()]);
+    assert_one_line_error(&learn, &["healthy.wav", "given twice"]);
+    assert!(!dir.join("p.json").exists());
+    // against itself alone: the absolute limits, as without a baseline
+    let alone = gearvib(&["diagnose", &cracked, "--json"]);
+    let alone: Value = serde_json::from_str(alone.stdout.lines().next().unwrap()).unwrap();
+    let selfish = gearvib(&["diagnose", &cracked, "--baseline", &cracked, "--json"]);
+    let selfish: Value = serde_json::from_str(selfish.stdout.lines().next().unwrap()).unwrap();
+    assert_ne!(alone["verdict"]["state"], "healthy", "{}", alone["verdict"]);
+    assert_eq!(selfish["verdict"]["state"], alone["verdict"]["state"], "{}", selfish["verdict"]);
+    assert_eq!(selfish["verdict"]["gear"], alone["verdict"]["gear"], "{}", selfish["verdict"]);
+    assert!(selfish["warnings"].to_string().contains("judged on the absolute limits"), "{}", selfish["warnings"]);
+}

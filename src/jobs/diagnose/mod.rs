@@ -229,6 +229,9 @@ pub struct Prepared {
     scene: Option<compare::ModelScene>,
     /// With a machine: the healthy recordings' planet-fault energies of each planetary stage.
     planets: Option<Vec<crate::report::summary::PlanetBaseline>>,
+    /// What was done to the baseline files given (one given twice, one also under test), said with
+    /// every verdict.
+    notes: Vec<String>,
 }
 
 /// The first healthy recording's amplitude spectra per channel and its averages per channel and gear.
@@ -253,18 +256,70 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
             reference: Some(p.reference),
             scene,
             planets: p.planets,
+            notes: Vec::new(),
         });
     }
-    let mut learned = learn_baseline(&job.baselines, &job.options)?;
+    let files = baseline_files(job)?;
+    let mut learned = learn_baseline(&files.files, &job.options)?;
     learned.scene = scene;
+    learned.notes = files.notes();
     Ok(learned)
 }
 
-/// The baseline side learned from healthy recordings (files or directories): the first fixes what was
-/// estimated (speed, mesh order), the block length and the averaging length; the others follow it.
-fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Error> {
+/// The baseline files of a job as they are used ([`baseline_files`]).
+pub(crate) struct BaselineFiles {
+    /// Each once, in the order given.
+    pub(crate) files: Vec<PathBuf>,
+    /// Files given more than once (after the first).
+    pub(crate) twice: Vec<PathBuf>,
+    /// Files left out because they are also under test.
+    pub(crate) under_test: Vec<PathBuf>,
+}
+
+impl BaselineFiles {
+    /// What was done, one note per file, said with every verdict.
+    fn notes(&self) -> Vec<String> {
+        let twice = self.twice.iter().map(|f| format!("{} is given twice as a baseline: it counts once", f.display()));
+        let tested = self.under_test.iter().map(|f| {
+            format!(
+                "{} is left out of the baseline: it is also under test, and a recording against itself shows no change ({} healthy recording(s) remain)",
+                f.display(),
+                self.files.len()
+            )
+        });
+        twice.chain(tested).collect()
+    }
+}
+
+/// The baseline files of `job` (directories expanded), each once, less those that are also under test
+/// while another remains: a baseline directory that holds the recording would count the recording among
+/// its own healthy files, and a fault against itself shows no change.
+///
+/// # Errors
+/// A baseline directory that cannot be read or holds no recording.
+pub(crate) fn baseline_files(job: &DiagnoseJob) -> Result<BaselineFiles, Error> {
+    let key = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut seen = std::collections::HashSet::new();
+    let (mut files, mut twice) = (Vec::new(), Vec::new());
+    for f in expand_dirs(&job.baselines)? {
+        if seen.insert(key(&f)) { files.push(f) } else { twice.push(f) }
+    }
+    // a recording directory that cannot be listed fails where the recordings are read
+    let tested: std::collections::HashSet<PathBuf> =
+        expand_dirs(&job.recordings).unwrap_or_default().iter().map(|r| key(r)).collect();
+    let (under_test, others): (Vec<PathBuf>, Vec<PathBuf>) =
+        files.iter().cloned().partition(|f| tested.contains(&key(f)));
+    if others.is_empty() {
+        return Ok(BaselineFiles { files, twice, under_test: Vec::new() });
+    }
+    Ok(BaselineFiles { files: others, twice, under_test })
+}
+
+/// The baseline side learned from healthy recordings (`baseline_files`, directories expanded): the first
+/// fixes what was estimated (speed, mesh order), the block length and the averaging length; the others
+/// follow it.
+fn learn_baseline(baseline_files: &[PathBuf], options: &Options) -> Result<Prepared, Error> {
     let mut opts = options.clone();
-    let baseline_files = expand_dirs(paths)?;
     opts.residual_spectra = !baseline_files.is_empty();
     let mut first = baseline_files.first().map(|b| diagnose(b, &opts, None)).transpose()?;
     if let (Some(b), None) = (&first, opts.block_revs) {
@@ -308,7 +363,7 @@ fn learn_baseline(paths: &[PathBuf], options: &Options) -> Result<Prepared, Erro
         .is_some()
         .then(|| crate::report::summary::PlanetBaseline::of(baselines.iter().filter_map(|b| b.machine.as_ref())))
         .filter(|p| !p.is_empty());
-    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, planets })
+    Ok(Prepared { opts, facts, plots, geometry, reference, scene: None, planets, notes: Vec::new() })
 }
 
 /// Recordings diagnosed at once by [`run_streaming`]: enough to keep every core busy, few enough that a
@@ -374,6 +429,11 @@ fn caught<T>(file: &Path, f: impl FnOnce() -> Result<T, Error>) -> Result<T, Err
     })
 }
 
+/// Said when every gear's average is the baseline's own data ([`baseline::SameData`]): the verdict then
+/// rests on the absolute limits, as without a baseline, so that a fault judged against itself is not
+/// called healthy for want of a change.
+const OWN_DATA_WARNING: &str = "every gear's average equals the baseline's to within a quarter of its own noise: the recording is one of the baseline's recordings (or overlaps one), so a change against the baseline cannot show; it is judged on the absolute limits, as without a baseline; give another healthy recording of the machine to compare with";
+
 /// Said when a gear's average is the baseline's own data ([`baseline::SameData`]).
 const SAME_DATA_WARNING: &str = "a gear's average equals the baseline's to within a quarter of its own noise: the recording is one of the baseline's recordings (or overlaps one), so its change against the baseline is nil and is not measured";
 
@@ -397,6 +457,7 @@ fn ramp_without_baseline(d: &Diagnosis, tolerance: f64) -> Option<String> {
 fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, report: bool) -> Result<Diagnosis, Error> {
     let mut cap = None;
     let mut levels = true;
+    d.warnings.extend(p.notes.iter().cloned());
     if let Some(b) = &p.facts {
         let c = compatibility(&d, b)?;
         d.warnings.extend(c.warnings);
@@ -414,21 +475,31 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         d.baseline_tsas = tsas.clone();
     }
     history.apply(&mut d);
-    if let Some(r) = &p.reference {
+    let mut reference = p.reference.as_ref();
+    if let Some(r) = reference {
         let gears = &d.gears;
-        let compared: Vec<_> =
-            gears.iter().filter_map(|g| r.local_change(g, shared_period::shared_step(gears, g))).collect();
-        if compared.iter().any(Result::is_err) {
+        let compared: Vec<_> = gears.iter().map(|g| r.local_change(g, shared_period::shared_step(gears, g))).collect();
+        if !compared.is_empty() && compared.iter().all(|c| matches!(c, Some(Err(_)))) {
+            // nothing to compare: the recording is judged as it would be without a baseline, its scores
+            // against the baseline (each at the baseline's centre) kept for the trend
+            d.warnings.push(OWN_DATA_WARNING.into());
+            verdict::judge_levels(&mut d, reference, &Thresholds::default(), levels);
+            reference = None;
+        } else if compared.iter().any(|c| matches!(c, Some(Err(_)))) {
             d.warnings.push(SAME_DATA_WARNING.into());
         }
-        d.local_change = compared.into_iter().filter_map(Result::ok).collect();
+        d.local_change = compared.into_iter().flatten().filter_map(Result::ok).collect();
     }
-    verdict::judge_levels(&mut d, p.reference.as_ref(), &Thresholds::default(), levels);
+    let scores = std::mem::take(&mut d.scores);
+    verdict::judge_levels(&mut d, reference, &Thresholds::default(), levels);
+    if reference.is_none() && p.reference.is_some() {
+        d.scores = scores;
+    }
     let pattern_decided = evidence::pattern_evidence(&mut d);
     evidence::local_change_evidence(&mut d, pattern_decided);
     // (empty unless a limit was raised for a single baseline file)
     d.warnings.extend(load_doubt::warning(&d.scores, &d.local_change));
-    match &p.facts {
+    match p.facts.as_ref().filter(|_| reference.is_some() || p.reference.is_none()) {
         Some(b) => {
             if let Some(e) = &b.envelope {
                 evidence::envelope_evidence(&mut d, e);

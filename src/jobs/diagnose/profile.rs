@@ -74,6 +74,10 @@ pub fn learn(job: &LearnJob) -> Result<Profile, Error> {
     }
     let diagnose_job =
         DiagnoseJob { baselines: job.healthy.clone(), options: job.options.clone(), ..Default::default() };
+    // a file given twice would count twice among the healthy recordings the limits rest on
+    if let Some(f) = super::baseline_files(&diagnose_job)?.twice.first() {
+        return Err(bad(f, "given twice to learn from: give each healthy recording once"));
+    }
     let p = super::prepare(&diagnose_job)?;
     let (Some(facts), Some(geometry), Some(reference)) = (p.facts, p.geometry, p.reference) else {
         return Err(JobError::Value { what: Given::Baseline, message: "no healthy recordings given".into() }.into());
