@@ -354,6 +354,33 @@ fn interrupted_writes_leave_no_temporary_and_stale_ones_are_swept() {
     assert!(!stale.exists(), "the stale temporary of a dead process was swept");
 }
 
+/// A wrong pulse count that puts the mesh on a whole multiple of its order: a 1-pulse tachometer read
+/// as 2 pulses per revolution halves the speed (15 Hz for 30), the mesh of 14 teeth then standing at
+/// order 28, a multiple of 14. The cracked pinion, whose impacts put a line on every true order, passed
+/// the mesh-order check and was called HEALTHY on averages of two revolutions; now every line standing on
+/// every second order alone tells it, and it is not judged (exit 3) with the cause named.
+#[test]
+fn a_tachometer_read_at_twice_its_pulses_is_not_judged() {
+    let run = gearvib(&[
+        "diagnose",
+        "data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav",
+        "--pulses-per-rev",
+        "2",
+        "--teeth",
+        "14,39",
+        "--json",
+    ]);
+    assert_eq!(run.code, 3, "{}", run.stderr);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!(d["verdict"]["state"], "not_judged", "{}", d["verdict"]);
+    let why = d["verdict"]["reasons"].to_string();
+    assert!(why.contains("every second order") && why.contains("pulses per revolution"), "{why}");
+    // the right count judges it
+    let right =
+        gearvib(&["diagnose", "data/recordings/gear-z14z39-fs10kHz-cracked-pinion-tooth3.wav", "--teeth", "14,39"]);
+    assert!(right.stdout.contains("SUSPECT") || right.stdout.contains("FAULTY"), "{}", right.stdout);
+}
+
 /// Issue 29: a damaged tachometer (contact chatter: 10-sample pulses every 40 samples, or every third
 /// pulse missing; fixtures cut from the bundled healthy recording), teeth beyond any TSA's resolution and
 /// a wrong pulse count once panicked in the block indicators (index out of bounds) or gave a confident

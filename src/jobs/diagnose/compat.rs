@@ -236,6 +236,50 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
     Ok(Compatibility { warnings, operating_point, levels_comparable })
 }
 
+/// Whether a further healthy recording `d` of a baseline is of the same machine and recorder as its first
+/// (`first`), as the limits learned from them all need: the same unit (or none on both), channels and
+/// sample rate, and levels within [`SCALE_MISMATCH`] of each other. Where [`compatibility`] only warns of
+/// these for a recording under test, a baseline that mixes them learns limits of no machine: a 10 kHz
+/// 14/39 file with a 20 kHz file of a 19/53 machine in no unit gave a profile whose NA4* reached 1.3e6.
+///
+/// # Errors
+/// What differs, naming both files.
+pub fn same_recorder(d: &Diagnosis, first: &BaselineFacts) -> Result<(), Error> {
+    let refuse = |what: String| -> Error {
+        JobError::Value {
+            what: Given::Baseline,
+            message: format!("{} and {} cannot be one baseline: {what}", first.file, d.file),
+        }
+        .into()
+    };
+    if d.unit != first.unit {
+        let name = |u: &str| if u.is_empty() { "no unit".to_string() } else { u.to_string() };
+        return Err(refuse(format!("their units differ ({} and {})", name(&first.unit), name(&d.unit))));
+    }
+    if d.channels != first.channels {
+        return Err(refuse(format!("their analysed channels differ ({:?} and {:?})", first.channels, d.channels)));
+    }
+    match (first.sample_rate_hz, d.sample_rate_hz) {
+        (Some(a), Some(b)) if (a / b - 1.0).abs() > 1e-3 => {
+            return Err(refuse(format!("they were sampled at {a} Hz and {b} Hz")));
+        }
+        (Some(_), None) | (None, Some(_)) => {
+            return Err(refuse("one has a sample rate and the other none".into()));
+        }
+        _ => {}
+    }
+    for (i, c) in d.channels.iter().enumerate() {
+        let now = d.raw.get(i).and_then(|m| m.get(&Indicator::Rms)).copied().unwrap_or(f64::NAN);
+        let r = now / first.raw_rms.get(i).copied().unwrap_or(f64::NAN);
+        if r.is_finite() && !(1.0 / SCALE_MISMATCH..=SCALE_MISMATCH).contains(&r) {
+            return Err(refuse(format!(
+                "channel {c}'s overall level differs {r:.3e} times, beyond any change of load (another scale or sensor)"
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::{BaselineFacts, beyond_span};

@@ -351,6 +351,7 @@ fn learn_baseline(baseline_files: &[PathBuf], options: &Options) -> Result<Prepa
     if let Some(f) = baselines.first().map(BaselineFacts::of) {
         for b in baselines.iter().skip(1) {
             compatibility(b, &f)?;
+            compat::same_recorder(b, &f)?;
         }
     }
     let facts = BaselineFacts::of_all(&baselines);

@@ -2,7 +2,7 @@
 //! speed it implies, and the doubts that keep a verdict of health from resting on it.
 
 use super::super::*;
-use super::sync::{SyncSpectrum, mesh_not_sideband, no_mesh_lines, no_shaft_lines, speed_multiple};
+use super::sync::{CheckedSpeed, SyncSpectrum, mesh_not_sideband, no_mesh_lines, no_shaft_lines, speed_multiple};
 
 /// Track stage: the shaft's angle from one source, where it came from, and the speed it implies.
 pub(in crate::jobs::diagnose) struct ShaftAngle {
@@ -115,12 +115,22 @@ pub(super) fn follow_shaft(
                 None => (map, spectrum),
             };
             let q = zw.map(|w| z as f64 / w as f64);
-            let misfit = spectrum.as_ref().zip(o.shaft_hz).and_then(|(s, hz)| speed_multiple(s, q, hz));
+            let misfit =
+                spectrum.as_ref().zip(o.shaft_hz).and_then(|(s, hz)| speed_multiple(s, q, hz, CheckedSpeed::Given));
             (map, misfit)
         }
         (_, _, Some(_), Tracking::Tachometer) => {
-            let no_mesh = tracked_z.or(known_z).and_then(|z| sync_of(&map, z).and_then(|s| no_mesh_lines(&s, z)));
-            (map, no_mesh)
+            // the mesh must stand on the tachometer's angle, and a single pair's lines not on every d-th
+            // order alone: too many pulses per revolution given put the averages on d turns of the shaft
+            // (a machine's other shafts put lines of their own between the tachometer shaft's orders)
+            let z = tracked_z.or(known_z);
+            let spectrum = z.and_then(|z| sync_of(&map, z));
+            let no_mesh = spectrum.as_ref().zip(z).and_then(|(s, z)| no_mesh_lines(s, z));
+            let q = z.and_then(|z| o.teeth.filter(|t| t.0 == z)).map(|t| t.0 as f64 / t.1 as f64);
+            let hz = fs.filter(|_| o.machine.is_none()).map(|fs| fs / map.mean_period_samples());
+            let misfit =
+                || spectrum.as_ref().zip(hz).and_then(|(s, hz)| speed_multiple(s, q, hz, CheckedSpeed::Tachometer));
+            (map, no_mesh.or_else(misfit))
         }
         (None, Some(z), None, Tracking::MeshPhase) if nominal.source == SpeedSource::Estimated => {
             let zw = o.teeth.filter(|t| t.0 == z).map(|t| t.1);

@@ -298,6 +298,31 @@ const MULTIPLE_LINES: f64 = 1.5;
 /// order reach [`MULTIPLE_LINES`] (a healthy 21-tooth pinion's every third order).
 const MULTIPLE_CONTRAST: f64 = 4.0;
 
+/// Where a speed checked by [`speed_multiple`] came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum CheckedSpeed {
+    /// Given, and confirmed by the mesh line.
+    Given,
+    /// From a tachometer's pulses (and the pulses per revolution given or read).
+    Tachometer,
+}
+
+impl CheckedSpeed {
+    fn what(self) -> &'static str {
+        match self {
+            Self::Given => "the given",
+            Self::Tachometer => "the tachometer's",
+        }
+    }
+
+    fn remedy(self) -> &'static str {
+        match self {
+            Self::Given => "give the shaft's speed",
+            Self::Tachometer => "check the tachometer's pulses per revolution (and that it is on the pinion's shaft)",
+        }
+    }
+}
+
 /// Why a given speed (`hz`, Hz) that the mesh line confirmed is a whole fraction or multiple of the shaft's:
 /// a mesh harmonic was followed for another (a halved speed puts the true mesh on the given one's second
 /// harmonic, which a resonance can make the strongest), so the averages hold d revolutions, or 1/d of one,
@@ -305,7 +330,8 @@ const MULTIPLE_CONTRAST: f64 = 4.0;
 /// on every d-th order ([`SyncSpectrum::split_mean`] on the pinion's orders, step 1, and the wheel's, step
 /// `q` = zp / zw), and the orders between hold noise; on d times too fast a shaft the lines stand between
 /// whole orders, at the multiples of 1/d, as strong as on them.
-pub(super) fn speed_multiple(spectrum: &SyncSpectrum, q: Option<f64>, hz: f64) -> Option<String> {
+pub(super) fn speed_multiple(spectrum: &SyncSpectrum, q: Option<f64>, hz: f64, from: CheckedSpeed) -> Option<String> {
+    let (what, remedy) = (from.what(), from.remedy());
     let splits = |d: usize| {
         [("pinion", 1.0)]
             .into_iter()
@@ -317,15 +343,17 @@ pub(super) fn speed_multiple(spectrum: &SyncSpectrum, q: Option<f64>, hz: f64) -
             splits(d).find(|&(_, (on, off))| on >= MULTIPLE_LINES && on >= MULTIPLE_CONTRAST * off)
         {
             return Some(format!(
-                "the lines of the followed angle stand on every {nth} order of the {gear} only (mean log height {on:.2} over the local floor, {off:.2} between them): the shaft turns {d} times as fast as the given {hz:.4} Hz, near {:.4} Hz, and the averages on the given speed hold {d} revolutions, so they cannot clear the machine; give the shaft's speed",
+                "the lines of the followed angle stand on every {nth} order of the {gear} only (mean log height {on:.2} over the local floor, {off:.2} between them): the shaft turns {d} times as fast as {what} {hz:.4} Hz, near {:.4} Hz, and the averages on that speed hold {d} revolutions, so they cannot clear the machine; {remedy}",
                 d as f64 * hz
             ));
         }
-        // between whole orders: the orders m / d of the pinion, m not a multiple of d
+        // between whole orders: the orders m / d of the pinion, m not a multiple of d (not read on a
+        // tachometer's angle: its pulses are whole per revolution, and too few would give a speed the
+        // tachometer's own check refuses, while a wheel of twice the teeth puts its lines there)
         let (whole, between) = spectrum.split_mean(1.0 / d as f64, d);
-        if between >= MULTIPLE_LINES && between * MULTIPLE_CONTRAST >= whole {
+        if from == CheckedSpeed::Given && between >= MULTIPLE_LINES && between * MULTIPLE_CONTRAST >= whole {
             return Some(format!(
-                "the lines of the followed angle stand between whole orders of the pinion, at every 1/{d} order (mean log height {between:.2} over the local floor, {whole:.2} on whole orders): the shaft turns 1/{d} as fast as the given {hz:.4} Hz, near {:.4} Hz, and each average holds 1/{d} revolution, so it cannot clear the machine; give the shaft's speed",
+                "the lines of the followed angle stand between whole orders of the pinion, at every 1/{d} order (mean log height {between:.2} over the local floor, {whole:.2} on whole orders): the shaft turns 1/{d} as fast as {what} {hz:.4} Hz, near {:.4} Hz, and each average holds 1/{d} revolution, so it cannot clear the machine; {remedy}",
                 hz / d as f64
             ));
         }
@@ -370,7 +398,7 @@ mod tests {
     fn a_given_speed_a_whole_fraction_or_multiple_of_the_shafts_is_told() {
         let check = |x: &[f32], fs: f64, hz: f64| {
             let map = AngleMap::constant(fs / hz, 0.0, x.len());
-            speed_multiple(&SyncSpectrum::new(x, &map, 4.5 * 14.0).unwrap(), Some(14.0 / 39.0), hz)
+            speed_multiple(&SyncSpectrum::new(x, &map, 4.5 * 14.0).unwrap(), Some(14.0 / 39.0), hz, CheckedSpeed::Given)
         };
         let (cracked, fs) = pinion_at_30_hz(0.3, 0.3);
         let half = check(&cracked, fs, 15.0).expect("half the speed is told");
