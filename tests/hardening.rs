@@ -60,6 +60,42 @@ fn wav_headers_claiming_thousands_of_channels_allocate_only_what_the_file_holds(
     }
 }
 
+/// A WAV cut short is read as far as it goes and said to be cut (it was read silently, the sidecar's frame
+/// count the only witness); a data size left unset by a writer that never closed the file (0 or
+/// 0xFFFFFFFF) reads the samples there, said; a file cut inside its fmt chunk says so (it was "unsupported
+/// WAV sample format"). The bundled healthy recording, its layout read from its header.
+#[test]
+fn a_wav_cut_short_or_never_closed_is_read_and_said() {
+    let dir = temp_dir("wav-cut");
+    let whole = std::fs::read(repo(HEALTHY)).unwrap();
+    let at = whole.windows(4).position(|w| w == b"data").expect("a data chunk");
+    let (size_at, start) = (at + 4, at + 8);
+    let nch = u16::from_le_bytes([whole[22], whole[23]]) as usize;
+    let width = u16::from_le_bytes([whole[34], whole[35]]) as usize / 8;
+    let frame = nch * width;
+    let frames = (whole.len() - start) / frame;
+    let cut = dir.join("cut.wav");
+    std::fs::write(&cut, &whole[..start + frame * (frames / 2)]).unwrap();
+    let rec = gearvib::io::read_recording(&cut).unwrap();
+    assert_eq!(rec.channels[0].len(), frames / 2);
+    assert!(rec.warnings.iter().any(|w| w.contains("cut short") && w.contains("50.0 %")), "{:?}", rec.warnings);
+    for unset in [0u32, u32::MAX] {
+        let mut open = whole.clone();
+        open[size_at..start].copy_from_slice(&unset.to_le_bytes());
+        let path = dir.join(format!("open-{unset}.wav"));
+        std::fs::write(&path, &open).unwrap();
+        let rec = gearvib::io::read_recording(&path).unwrap();
+        assert_eq!(rec.channels[0].len(), frames, "size {unset:#x}");
+        assert!(rec.warnings.iter().any(|w| w.contains("never closed")), "{:?}", rec.warnings);
+    }
+    let whole_rec = gearvib::io::read_recording(std::path::Path::new(&repo(HEALTHY))).unwrap();
+    assert!(whole_rec.warnings.is_empty(), "{:?}", whole_rec.warnings);
+    let fmt_cut = dir.join("fmt-cut.wav");
+    std::fs::write(&fmt_cut, &whole[..30]).unwrap();
+    let run = limited(&["diagnose", fmt_cut.to_str().unwrap()]);
+    assert_one_line_error(&run, &["fmt-cut.wav", "fmt chunk truncated"]);
+}
+
 #[test]
 fn wav_with_an_odd_sized_chunk_and_its_pad_byte_is_read() {
     // scipy reads it as 8000 frames, 2 channels, float32

@@ -144,3 +144,21 @@ fn merge(v: &mut Value, patch: &Value) {
         (v, p) => *v = p.clone(),
     }
 }
+
+/// Healthy recordings of another recorder cannot be one baseline: the bundled healthy WAV with its
+/// sidecar (m/s) and its copy without one (the file's own scale, no unit) are refused naming both, in
+/// either order (the order once decided whether a mixed baseline was learned at all).
+#[test]
+fn healthy_files_in_different_units_are_not_one_baseline() {
+    let dir = temp_dir("mixed-recorders");
+    let bare = dir.join("bare.wav");
+    std::fs::copy("data/recordings/gear-z14z39-fs10kHz-healthy.wav", &bare).unwrap();
+    let bare = bare.to_string_lossy().into_owned();
+    let out = dir.join("p.json").to_string_lossy().into_owned();
+    let with_unit = "data/recordings/gear-z14z39-fs10kHz-healthy.wav";
+    for pair in [[with_unit, bare.as_str()], [bare.as_str(), with_unit]] {
+        let run = gearvib(&["learn", pair[0], pair[1], "--teeth", "14,39", "-o", &out]);
+        assert_one_line_error(&run, &["cannot be one baseline", "units differ", "bare.wav"]);
+        assert!(!std::path::Path::new(&out).exists());
+    }
+}

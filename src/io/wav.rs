@@ -218,7 +218,10 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'s
         pos += 8;
         match &ch[0..4] {
             b"fmt " => {
-                let len = size.min(file_len.saturating_sub(pos)).min(1024) as usize;
+                if size > file_len.saturating_sub(pos) {
+                    return Err(DataError::format(path, "fmt chunk truncated: the file ends inside it (cut short)"));
+                }
+                let len = size.min(1024) as usize;
                 let mut c = vec![0u8; len];
                 r.read_exact(&mut c).map_err(|_| DataError::format(path, "fmt chunk truncated"))?;
                 fmt = Some(parse_fmt(path, &c)?);
@@ -228,15 +231,19 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'s
             b"data" => {
                 let (nch, rate, enc) =
                     fmt.ok_or_else(|| DataError::format(path, "not a readable WAV file: data chunk before fmt chunk"))?;
-                let available = size.min(file_len.saturating_sub(pos));
+                let held = file_len.saturating_sub(pos);
+                // a writer that never closed its file leaves the size 0 or all ones: read what is there
+                let unset = size == 0 || size == u64::from(u32::MAX);
+                let available = if unset { held } else { size.min(held) };
                 let channels = read_frames(path, &mut r, available, nch, enc, keep)?;
                 let names = (1..=nch).map(|i| format!("ch{i}")).collect();
+                let warnings = data_size_warning(size, held, unset).into_iter().collect();
                 return Ok(Recording {
                     channels: channels.into_iter().map(std::borrow::Cow::Owned).collect(),
                     sample_rate_hz: Some(f64::from(rate)),
                     units: vec![String::new(); nch],
                     names,
-                    warnings: Vec::new(),
+                    warnings,
                 });
             }
             _ => {
@@ -247,6 +254,24 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'s
         if pos >= file_len {
             return Err(DataError::format(path, "not a readable WAV file: no data chunk"));
         }
+    }
+}
+
+/// What a data chunk's size says of the file: unset (0 or 0xFFFFFFFF, a recording never closed: the
+/// `held` bytes after the chunk header are read) or more than the file holds (cut short: what is there is
+/// read). `None` when the file holds the chunk whole.
+fn data_size_warning(size: u64, held: u64, unset: bool) -> Option<String> {
+    if unset {
+        Some(format!(
+            "the WAV data chunk's size is unset ({size:#x}: a recording whose writer never closed the file): the {held} bytes the file holds after it are read as the samples"
+        ))
+    } else if size > held {
+        Some(format!(
+            "the WAV data chunk claims {size} bytes but the file holds {held} after its header: the file was cut short (a copy or a logger that stopped), and the {:.1} % that is there is read",
+            100.0 * held as f64 / size as f64
+        ))
+    } else {
+        None
     }
 }
 
