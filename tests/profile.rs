@@ -91,6 +91,18 @@ fn damaged_profiles_are_refused_naming_the_field() {
         ("teeth", serde_json::json!({"processing": {"teeth": [1, 39]}}), &["processing.teeth"]),
         ("block", serde_json::json!({"processing": {"block_revs": 0}}), &["processing.block_revs"]),
         ("type", serde_json::json!({"geometry": {"tsa_points": "many"}}), &["geometry.tsa_points"]),
+        // the command line's bounds, said with the profile's field rather than a flag never given
+        ("blocks", serde_json::json!({"processing": {"block_revs": 1_000_000_000_000u64}}), &["processing.block_revs"]),
+        ("fs", serde_json::json!({"processing": {"fs_hz": -5.0}}), &["processing.fs_hz"]),
+        ("speed", serde_json::json!({"baseline": {"speed_hz": -30.0}}), &["baseline.speed_hz"]),
+        ("rate", serde_json::json!({"baseline": {"sample_rate_hz": 0.0}}), &["baseline.sample_rate_hz"]),
+        ("period", serde_json::json!({"baseline": {"shaft_period_samples": 0.0}}), &["baseline.shaft_period_samples"]),
+        ("band", serde_json::json!({"geometry": {"envelope_band": [3000.0, 1000.0]}}), &["envelope_band"]),
+        (
+            "wide",
+            serde_json::json!({"geometry": {"envelope_band": [1000.0, 1e9]}}),
+            &["half the baseline's sample rate"],
+        ),
     ];
     for (name, patch, needles) in cases {
         let mut v = good.clone();

@@ -162,6 +162,58 @@ fn check(p: &Profile) -> Result<(), String> {
     if p.baseline.channels.is_empty() {
         return Err("field `baseline.channels`: empty".into());
     }
+    check_bounds(p)
+}
+
+/// The bounds the command line puts on the same settings, said with the profile's field (an edited profile
+/// once ran with `block_revs` 1e12 and scored no block, or named `--fs` for its `fs_hz`).
+fn check_bounds(p: &Profile) -> Result<(), String> {
+    let o = &p.processing;
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let (lo, hi) = super::recording::SAMPLE_RATE_RANGE_HZ;
+    let field = |name: &str, why: String| Err(format!("field `{name}`: {why}"));
+    if o.block_revs.is_some_and(|r| r > 10_000) {
+        return field("processing.block_revs", "must be 2 to 10000".into());
+    }
+    if let Some(fs) = o.fs_hz.filter(|f| !(f.is_finite() && (lo..=hi).contains(f))) {
+        return field("processing.fs_hz", format!("{fs:e} Hz is not within {lo} Hz .. {hi:e} Hz"));
+    }
+    if let Some(f) = o.shaft_hz.filter(|&f| f > hi) {
+        return field("processing.shaft_hz", format!("{f:e} Hz is beyond any sample rate"));
+    }
+    if o.tacho_channel.is_some_and(|c| c == 0) || o.channel.is_some_and(|c| c == 0) {
+        return field("processing.channel / tacho_channel", "channels count from 1".into());
+    }
+    if o.pulses_per_rev == 0 || o.shaft_orders > 10_000 || o.kurtogram_levels.is_some_and(|l| !(1..=30).contains(&l)) {
+        return field(
+            "processing.pulses_per_rev / shaft_orders / kurtogram_levels",
+            "pulses per revolution from 1, shaft orders up to 10000, kurtogram levels 1 to 30".into(),
+        );
+    }
+    let band_ok = |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a >= 0.0 && b > a;
+    if o.envelope_band.is_some_and(|b| !band_ok(b)) || p.geometry.envelope_band.is_some_and(|b| !band_ok(b)) {
+        return field("geometry.envelope_band / processing.envelope_band", "need 0 <= LO < HI in Hz".into());
+    }
+    if p.geometry.period_samples.is_some_and(|v| !positive(v)) {
+        return field("geometry.period_samples", "must be positive".into());
+    }
+    let b = &p.baseline;
+    if !positive(b.shaft_period_samples) {
+        return field("baseline.shaft_period_samples", "must be positive".into());
+    }
+    if b.speed_hz.is_some_and(|v| !positive(v)) {
+        return field("baseline.speed_hz", "must be positive".into());
+    }
+    if b.sample_rate_hz.is_some_and(|f| !(f.is_finite() && (lo..=hi).contains(&f))) {
+        return field("baseline.sample_rate_hz", format!("must be within {lo} Hz .. {hi:e} Hz"));
+    }
+    let nyquist = p.baseline.sample_rate_hz.map_or(f64::INFINITY, |f| f / 2.0);
+    if p.geometry.envelope_band.is_some_and(|(_, b)| b > nyquist * 1.001) {
+        return field(
+            "geometry.envelope_band",
+            format!("reaches beyond half the baseline's sample rate ({nyquist} Hz)"),
+        );
+    }
     Ok(())
 }
 
