@@ -103,6 +103,12 @@ fn damaged_profiles_are_refused_naming_the_field() {
             serde_json::json!({"geometry": {"envelope_band": [1000.0, 1e9]}}),
             &["half the baseline's sample rate"],
         ),
+        // found on reading the recording, said with the profile's field too (it named --tacho-channel)
+        (
+            "tacho",
+            serde_json::json!({"processing": {"tacho_channel": 99}}),
+            &["processing.tacho_channel", "channel 99"],
+        ),
     ];
     for (name, patch, needles) in cases {
         let mut v = good.clone();
@@ -173,4 +179,31 @@ fn healthy_files_in_different_units_are_not_one_baseline() {
         assert_one_line_error(&run, &["cannot be one baseline", "units differ", "bare.wav"]);
         assert!(!std::path::Path::new(&out).exists());
     }
+}
+
+/// A CSV without a time column is judged against a profile with its sample rate given (`--fs` describes
+/// the file, not the machine, so it may go with `--profile`): the cracked pinion's samples as such a CSV
+/// get the WAV's verdict and gear against the profile learned from the healthy WAV.
+#[test]
+fn a_csv_without_time_is_judged_against_a_profile_with_its_rate_given() {
+    let dir = temp_dir("profile-csv");
+    let profile = learn(&dir, &["--teeth", "14,39"]);
+    let rec = gearvib::io::read_recording(std::path::Path::new(&repo(FAULTS[0]))).unwrap();
+    let header: Vec<String> = rec
+        .names
+        .iter()
+        .zip(&rec.units)
+        .map(|(n, u)| if u.is_empty() { n.clone() } else { format!("{n} [{u}]") })
+        .collect();
+    let mut text = header.join(",") + "\n";
+    for i in 0..rec.channels[0].len() {
+        let row: Vec<String> = rec.channels.iter().map(|c| format!("{:e}", c[i])).collect();
+        text.push_str(&(row.join(",") + "\n"));
+    }
+    let csv = write(&dir, "cracked.csv", &text);
+    let wav = json_of(&gearvib(&["diagnose", &repo(FAULTS[0]), "--profile", &profile, "--json"]));
+    let run = gearvib(&["diagnose", &csv, "--profile", &profile, "--fs", "10000", "--json"]);
+    let csv_d = json_of(&run);
+    assert_eq!(csv_d["verdict"]["state"], wav["verdict"]["state"], "{}", csv_d["verdict"]);
+    assert_eq!(csv_d["verdict"]["gear"], wav["verdict"]["gear"], "{}", csv_d["verdict"]);
 }

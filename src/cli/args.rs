@@ -166,7 +166,8 @@ pub struct DiagnoseArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(2..=10_000))]
     pub block_revs: Option<u64>,
     /// A healthy profile written by `learn`: the recordings are judged against it with exactly its
-    /// settings (its teeth, speed, channels, tachometer, block length and band).
+    /// settings (its teeth, speed, channels, tachometer, block length and band); only what describes a
+    /// recording's own file (--fs, --fs-override, --unit, --sensitivity) may be given beside it.
     #[arg(long, conflicts_with = "baseline")]
     pub profile: Option<String>,
     /// Scene to simulate at the recording's speed and compare with.

@@ -13,7 +13,7 @@ use crate::Error;
 use crate::jobs::{self, JobError};
 use crate::report::summary::{VerdictState, to_json_line};
 use crate::scene::Scene;
-use restate::restate_for_flags;
+use restate::{restate_for_flags, restate_for_profile};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -336,9 +336,6 @@ fn profile_conflicts(a: &DiagnoseArgs) -> Option<&'static str> {
         (a.channel.is_some(), "--channel"),
         (a.block_revs.is_some(), "--block-revs"),
         (a.envelope_band.is_some(), "--envelope-band"),
-        (a.fs.is_some(), "--fs"),
-        (a.unit.is_some(), "--unit"),
-        (a.sensitivity.is_some(), "--sensitivity"),
     ]
     .into_iter()
     .find(|c| c.0)
@@ -380,6 +377,13 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
             "cannot be given with --profile: the profile fixes the machine and its processing",
         ));
     }
+    let for_profile = |e: Error| restate_for_profile(e, a.profile.as_deref(), a.fs.is_some());
+    diagnose_with(out, a, &for_profile).map_err(for_profile)
+}
+
+/// [`diagnose`] once the flags are checked; `restate` turns a failed recording's error into the user's
+/// terms (a profile's field).
+fn diagnose_with(out: &mut dyn Write, a: &DiagnoseArgs, restate: &dyn Fn(Error) -> Error) -> Result<u8, Error> {
     let job = diagnose_job(a)?;
     if a.json && job.report.is_none() {
         // JSON Lines as the recordings are judged: a directory of any size in bounded memory
@@ -391,8 +395,9 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
                     unjudged |= d.verdict.state == VerdictState::NotJudged;
                     json_line(out, &d)?;
                 }
-                Err(f) => {
+                Err(mut f) => {
                     failed += 1;
+                    f.error = restate(f.error);
                     failure_line(out, f)?;
                 }
             }
@@ -415,7 +420,8 @@ fn diagnose(out: &mut dyn Write, a: &DiagnoseArgs) -> Result<u8, Error> {
     let (worst, failed) =
         (done.diagnoses.iter().map(|d| d.verdict.state).max().unwrap_or(VerdictState::Healthy), done.failures.len());
     let unjudged = done.diagnoses.iter().any(|d| d.verdict.state == VerdictState::NotJudged);
-    for f in done.failures {
+    for mut f in done.failures {
+        f.error = restate(f.error);
         if a.json {
             failure_line(out, f)?;
         } else {

@@ -45,6 +45,31 @@ pub(super) fn restate_for_flags(e: Error) -> Error {
     }
 }
 
+/// With a profile (`profile`, its path), the errors its values caused restated with its field: no flag
+/// gave them (its `processing.fs_hz` of -5 was blamed on `--fs`). A sample rate given with `--fs` beside
+/// the profile (`fs_given`) stays the flag's.
+pub(super) fn restate_for_profile(e: Error, profile: Option<&str>, fs_given: bool) -> Error {
+    let Some(profile) = profile else { return e };
+    let field = |name: &str, message: String| -> Error {
+        Error::Job(JobError::Input { file: profile.to_string(), message: format!("field `{name}`: {message}") })
+    };
+    match e {
+        Error::Job(JobError::Channel { file, role, index, count }) => {
+            let name = match role {
+                ChannelRole::Vibration => "processing.channel",
+                ChannelRole::Tachometer => "processing.tacho_channel",
+            };
+            field(name, format!("channel {index}: {file} has {count} channel(s), numbered from 1"))
+        }
+        Error::Job(JobError::Value { what: Given::SampleRate, message }) if !fs_given => {
+            field("processing.fs_hz", message)
+        }
+        Error::Job(JobError::Value { what: Given::ShaftSpeed, message }) => field("processing.shaft_hz", message),
+        Error::Job(JobError::Value { what: Given::Teeth, message }) => field("processing.teeth", message),
+        other => other,
+    }
+}
+
 /// The flag that gives a value, where one flag does.
 pub(super) fn flag_of(what: Given) -> Option<&'static str> {
     Some(match what {

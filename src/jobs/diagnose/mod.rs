@@ -247,7 +247,18 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
     if let Some(path) = &job.profile {
         let p = profile::load(path)?;
-        let opts = Options { all_spectra: job.options.all_spectra, residual_spectra: true, ..p.processing };
+        // the profile fixes the machine and its processing; what describes the recording's own file (its
+        // sample rate, unit and scale, for a file that names none) may still be given for it
+        let o = &job.options;
+        let opts = Options {
+            all_spectra: o.all_spectra,
+            residual_spectra: true,
+            fs_hz: o.fs_hz.or(p.processing.fs_hz),
+            fs_override: o.fs_override || p.processing.fs_override,
+            unit: o.unit.clone().or_else(|| p.processing.unit.clone()),
+            sensitivity: o.sensitivity.or(p.processing.sensitivity),
+            ..p.processing
+        };
         return Ok(Prepared {
             opts,
             facts: Some(p.baseline),
