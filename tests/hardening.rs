@@ -515,6 +515,36 @@ fn sidecars_are_read_with_a_limit_and_damage_is_named() {
     assert!(warnings.contains("20000 Hz") && warnings.contains("header"), "{warnings}");
 }
 
+/// A time column's gap is found where it is (its first irregular step against the usual one: a gap at row
+/// 501 of 1000 was reported "near data row 2", every step then looking off the mean), and a sample rate
+/// beyond what any front end records (a header's 4 GHz, a time step of 1e300 s) is refused naming the file,
+/// with the way out, instead of being analysed at an absurd speed.
+#[test]
+fn time_gaps_are_found_where_they_are_and_absurd_rates_are_refused() {
+    let dir = temp_dir("time-gaps");
+    let rows = |step: f64, gap_at: Option<usize>| -> String {
+        let mut t = 0.0;
+        let mut text = String::from("time,x\n");
+        for i in 1..=1000 {
+            text.push_str(&format!("{t},{}\n", (i as f64 * 0.7).sin()));
+            t += if Some(i) == gap_at { 50.0 * step } else { step };
+        }
+        text
+    };
+    let gap = write(&dir, "gap.csv", &rows(1e-4, Some(500)));
+    let e = gearvib::io::read_recording(std::path::Path::new(&gap)).unwrap_err().to_string();
+    assert!(e.contains("near data row 501"), "{e}");
+    let huge = write(&dir, "huge-step.csv", &rows(1e300, None));
+    let run = limited(&["diagnose", &huge, "--teeth", "14,39"]);
+    assert_one_line_error(&run, &["huge-step.csv", "outside 0.1 Hz", "--fs-override"]);
+    let mut wav = std::fs::read(repo(HEALTHY)).unwrap();
+    wav[24..28].copy_from_slice(&4_000_000_000u32.to_le_bytes());
+    let fast = dir.join("fast.wav");
+    std::fs::write(&fast, &wav).unwrap();
+    let run = limited(&["diagnose", fast.to_str().unwrap(), "--teeth", "14,39"]);
+    assert_one_line_error(&run, &["fast.wav", "4e9 Hz", "outside"]);
+}
+
 /// Issue 29: a time column headed `time [ms]` was read as seconds (a 10 Hz sample rate). Units s, ms and
 /// us are honoured, others refused naming the column.
 #[test]

@@ -350,7 +350,12 @@ fn apply_sidecar(path: &Path, found: sidecar::Found, rec: &mut Recording<'_>) ->
             rec.warnings.push(format!(
                 "{}: the sidecar states a sample rate of {} Hz, the WAV header {header} Hz: the header's rate is used; check which is right",
                 side_path.display(),
-                side.sample_rate_hz
+                // a damaged rate of 1e300 printed as 300 digits
+                if side.sample_rate_hz == 0.0 || (1e-3..1e9).contains(&side.sample_rate_hz.abs()) {
+                    side.sample_rate_hz.to_string()
+                } else {
+                    format!("{:e}", side.sample_rate_hz)
+                }
             ));
         }
     }

@@ -151,6 +151,8 @@ pub fn read(signal: &Path) -> Result<Found, DataError> {
     let text = std::str::from_utf8(&bytes).map_err(|e| {
         DataError::format(&side, format!("sidecar is not UTF-8 text (byte {}): damaged; move it away", e.valid_up_to()))
     })?;
+    // a byte-order mark (an editor's) is no part of the JSON
+    let text = text.trim_start_matches('\u{feff}');
     let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         DataError::format(
             &side,

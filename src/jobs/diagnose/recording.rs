@@ -260,8 +260,16 @@ pub(super) fn sample_rate(path: &Path, rec: &Recording, o: &Options) -> Result<O
         }
         return Ok(Some(fs));
     }
+    let (lo, hi) = SAMPLE_RATE_RANGE_HZ;
     match rec.sample_rate_hz {
-        Some(fs) if fs > 0.0 => Ok(Some(fs)),
+        Some(fs) if (lo..=hi).contains(&fs) => Ok(Some(fs)),
+        Some(fs) if fs > 0.0 && fs.is_finite() => Err(bad(
+            path,
+            format!(
+                "the file's sample rate, {} Hz, is outside {lo} Hz .. {hi:e} Hz: a damaged header or time column; give the true rate with --fs and --fs-override",
+                crate::report::format::sig(fs, 6)
+            ),
+        )),
         Some(fs) => Err(bad(path, format!("sample rate {fs} Hz is not positive; give the sample rate"))),
         None if o.fs_unknown => Ok(None),
         None => Err(JobError::NoSampleRate { file: path.display().to_string(), for_speed: false }.into()),
