@@ -174,6 +174,9 @@ fn healthy_files_in_different_units_are_not_one_baseline() {
     let bare = bare.to_string_lossy().into_owned();
     let out = dir.join("p.json").to_string_lossy().into_owned();
     let with_unit = "data/recordings/gear-z14z39-fs10kHz-healthy.wav";
+    // "-" is no file: it once wrote a profile named "-"
+    let run = gearvib(&["learn", with_unit, "-o", "-"]);
+    assert_one_line_error(&run, &["-o -", "standard output"]);
     for pair in [[with_unit, bare.as_str()], [bare.as_str(), with_unit]] {
         let run = gearvib(&["learn", pair[0], pair[1], "--teeth", "14,39", "-o", &out]);
         assert_one_line_error(&run, &["cannot be one baseline", "units differ", "bare.wav"]);

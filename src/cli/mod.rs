@@ -355,6 +355,9 @@ fn learn(out: &mut dyn Write, a: &LearnArgs) -> Result<u8, Error> {
             return Err(CliError::flag(flag, "does not apply to learn: it learns a profile from healthy recordings"));
         }
     }
+    if a.output == "-" {
+        return Err(CliError::flag("-o -", "a profile is written to a file, not to standard output: give its path"));
+    }
     let job = diagnose_job(d)?;
     let learn = jobs::diagnose::profile::LearnJob {
         healthy: job.recordings,
