@@ -278,7 +278,7 @@ fn data_size_warning(size: u64, held: u64, unset: bool) -> Option<String> {
 /// Whole frames of `nch` channels from `bytes` bytes of the data chunk.
 fn read_frames(
     path: &Path,
-    r: &mut impl std::io::Read,
+    r: &mut (impl std::io::Read + Send),
     bytes: u64,
     nch: usize,
     enc: Encoding,
@@ -297,18 +297,29 @@ fn read_frames(
     let mut channels: Vec<Vec<f32>> =
         wanted.iter().map(|&w| if w { Vec::with_capacity(frames) } else { Vec::new() }).collect();
     let per_block = ((1usize << 20) / frame).max(1);
-    let mut buf = vec![0u8; per_block * frame];
-    let mut left = frames;
-    while left > 0 {
-        let n = left.min(per_block);
-        let block = &mut buf[..n * frame];
-        r.read_exact(block).map_err(|e| DataError::io(path, e))?;
-        // the channels of a block are decoded in parallel (each into its own vector)
-        use rayon::prelude::*;
-        channels.par_iter_mut().enumerate().filter(|(ch, _)| wanted[*ch]).for_each(|(ch, c)| {
-            decode_channel(block, frame, ch * width, enc, c);
-        });
-        left -= n;
+    // two buffers: the next block is read while the one before is decoded (the read is the kernel's copy
+    // out of the page cache, on one core; the channels of a block are decoded in parallel, each into its
+    // own vector)
+    let (mut current, mut next) = (vec![0u8; per_block * frame], vec![0u8; per_block * frame]);
+    let mut n = frames.min(per_block);
+    r.read_exact(&mut current[..n * frame]).map_err(|e| DataError::io(path, e))?;
+    let mut left = frames - n;
+    loop {
+        let m = left.min(per_block);
+        let decode = || {
+            use rayon::prelude::*;
+            let block = &current[..n * frame];
+            channels.par_iter_mut().enumerate().filter(|(ch, _)| wanted[*ch]).for_each(|(ch, c)| {
+                decode_channel(block, frame, ch * width, enc, c);
+            });
+        };
+        let (read, ()) = rayon::join(|| r.read_exact(&mut next[..m * frame]), decode);
+        read.map_err(|e| DataError::io(path, e))?;
+        if m == 0 {
+            break;
+        }
+        std::mem::swap(&mut current, &mut next);
+        (n, left) = (m, left - m);
     }
     Ok(channels)
 }
