@@ -63,7 +63,7 @@ fn wav_headers_claiming_thousands_of_channels_allocate_only_what_the_file_holds(
 /// A WAV cut short is read as far as it goes and said to be cut (it was read silently, the sidecar's frame
 /// count the only witness); a data size left unset by a writer that never closed the file (0 or
 /// 0xFFFFFFFF) reads the samples there, said; a file cut inside its fmt chunk says so (it was "unsupported
-/// WAV sample format"). The bundled healthy recording, its layout read from its header.
+/// WAV sample format"); a block align that contradicts the channels and sample width is refused. The bundled healthy recording, its layout read from its header.
 #[test]
 fn a_wav_cut_short_or_never_closed_is_read_and_said() {
     let dir = temp_dir("wav-cut");
@@ -90,6 +90,13 @@ fn a_wav_cut_short_or_never_closed_is_read_and_said() {
     }
     let whole_rec = gearvib::io::read_recording(std::path::Path::new(&repo(HEALTHY))).unwrap();
     assert!(whole_rec.warnings.is_empty(), "{:?}", whole_rec.warnings);
+    // a frame size said twice and differently (block align 3 for 2-byte samples) was read silently
+    let mut odd = whole.clone();
+    odd[32..34].copy_from_slice(&3u16.to_le_bytes());
+    let odd_path = dir.join("block-align.wav");
+    std::fs::write(&odd_path, &odd).unwrap();
+    let run = limited(&["diagnose", odd_path.to_str().unwrap()]);
+    assert_one_line_error(&run, &["block-align.wav", "a frame of 3 bytes", "contradicts itself"]);
     let fmt_cut = dir.join("fmt-cut.wav");
     std::fs::write(&fmt_cut, &whole[..30]).unwrap();
     let run = limited(&["diagnose", fmt_cut.to_str().unwrap()]);

@@ -177,6 +177,17 @@ fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError>
     if rate == 0 {
         return Err(DataError::format(path, "fmt chunk: sample rate 0 Hz"));
     }
+    // the frame's size said twice: a header that disagrees with itself cannot say which to believe
+    let block_align = usize::from(u16_at(12));
+    if block_align != channels * enc.width() {
+        return Err(DataError::format(
+            path,
+            format!(
+                "fmt chunk: a frame of {block_align} bytes, but {channels} channel(s) of {bits}-bit samples make {}: the header contradicts itself",
+                channels * enc.width()
+            ),
+        ));
+    }
     Ok((channels, rate, enc))
 }
 
