@@ -99,8 +99,10 @@ pub enum Command {
     },
 }
 
-/// Arguments of `diagnose`.
+/// Arguments of `diagnose`. Negative numbers reach the flags' own checks (`--rpm -5` is refused as a
+/// speed, not as an unknown argument).
 #[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct DiagnoseArgs {
     /// Recordings (.wav or .csv), in time order (NA4 uses that order).
     #[arg(required = true)]
