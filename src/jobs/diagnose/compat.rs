@@ -217,10 +217,7 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
         }
     }
     for (i, c) in d.channels.iter().enumerate() {
-        let j = b.channels.iter().position(|x| x == c);
-        if let Some(j) = j {
-            let now = d.raw.get(i).and_then(|m| m.get(&Indicator::Rms)).copied().unwrap_or(f64::NAN);
-            let r = now / b.raw_rms.get(j).copied().unwrap_or(f64::NAN);
+        if let Some(r) = level_ratio(d, b, i) {
             if levels_comparable && !(1.0 / SCALE_MISMATCH..=SCALE_MISMATCH).contains(&r) {
                 levels_comparable = false;
                 warnings.push(format!(
@@ -234,6 +231,14 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
         }
     }
     Ok(Compatibility { warnings, operating_point, levels_comparable })
+}
+
+/// The raw RMS of `d`'s `i`-th analysed channel over the baseline's of the same channel (`None` when the
+/// baseline did not analyse it; NaN when either level is missing).
+fn level_ratio(d: &Diagnosis, b: &BaselineFacts, i: usize) -> Option<f64> {
+    let j = b.channels.iter().position(|x| Some(x) == d.channels.get(i))?;
+    let now = d.raw.get(i).and_then(|m| m.get(&Indicator::Rms)).copied().unwrap_or(f64::NAN);
+    Some(now / b.raw_rms.get(j).copied().unwrap_or(f64::NAN))
 }
 
 /// Whether a further healthy recording `d` of a baseline is of the same machine and recorder as its first
@@ -269,8 +274,7 @@ pub fn same_recorder(d: &Diagnosis, first: &BaselineFacts) -> Result<(), Error> 
         _ => {}
     }
     for (i, c) in d.channels.iter().enumerate() {
-        let now = d.raw.get(i).and_then(|m| m.get(&Indicator::Rms)).copied().unwrap_or(f64::NAN);
-        let r = now / first.raw_rms.get(i).copied().unwrap_or(f64::NAN);
+        let r = level_ratio(d, first, i).unwrap_or(f64::NAN);
         if r.is_finite() && !(1.0 / SCALE_MISMATCH..=SCALE_MISMATCH).contains(&r) {
             return Err(refuse(format!(
                 "channel {c}'s overall level differs {r:.3e} times, beyond any change of load (another scale or sensor)"
