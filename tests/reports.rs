@@ -190,3 +190,29 @@ fn speed_sweep_finds_the_principal_parametric_resonance() {
     ]);
     assert_one_line_error(&bad, &["--param colour", "no numeric field"]);
 }
+
+/// A batch's page names the recordings that could not be diagnosed, first and with a NOT DIAGNOSED badge,
+/// beside the one that could: a page listing only the judged recordings reads as if the unread one had
+/// passed. When every recording fails the page is still written (a stale page of an earlier run would
+/// otherwise stand in the directory as this run's).
+#[test]
+fn a_batch_report_lists_the_recordings_it_could_not_diagnose() {
+    let dir = temp_dir("report-failed");
+    let bad = dir.join("cut-short.wav");
+    std::fs::write(&bad, b"RIFF\x04\x00\x00\x00WAVE").unwrap();
+    let out = dir.join("report");
+    let (rec, bad_s, out_s) =
+        (repo("data/recordings/gear-z14z39-fs10kHz-healthy.wav"), bad.to_string_lossy(), out.to_string_lossy());
+    let run = gearvib(&["diagnose", &rec, &bad_s, "--tacho-channel", "2", "--channel", "1", "--report", &out_s]);
+    assert_eq!(run.code, 2, "a failed recording makes the batch exit 2: {}", run.stderr);
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let (failed_at, judged_at) =
+        (page.find("cut-short.wav").unwrap(), page.find("gear-z14z39-fs10kHz-healthy").unwrap());
+    assert!(page.contains("NOT DIAGNOSED") && page.contains("1 recording not diagnosed"));
+    assert!(failed_at < judged_at, "the failure opens the page");
+    std::fs::remove_dir_all(&out).unwrap();
+    let run = gearvib(&["diagnose", &bad_s, "--report", &out_s]);
+    assert_eq!(run.code, 2);
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(page.contains("cut-short.wav") && page.contains("NOT DIAGNOSED"));
+}

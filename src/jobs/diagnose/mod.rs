@@ -143,10 +143,17 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
         Ok(())
     })?;
     let mut report_files = Vec::new();
-    if let (Some(dir), false) = (&job.report, done.is_empty()) {
+    if let (Some(dir), false) = (&job.report, done.is_empty() && failures.is_empty()) {
         // every output checked before the first is written: a refusal leaves no half report set
         check_report_outputs(dir, &done, done.len() >= 2 && reference)?;
+        io::create_dir(dir)?;
         let mut sections = Vec::new();
+        if !failures.is_empty() {
+            // a page that lists only what could be judged would pass an unread recording for a good one
+            let failed: Vec<(String, String)> =
+                failures.iter().map(|f| (f.file.clone(), f.error.to_string())).collect();
+            sections.push(crate::report::html::failures_section(&failed));
+        }
         for d in done.iter_mut() {
             d.spectrum_scale = job.spectrum_scale;
             let files = write_report(d, dir)?;
@@ -159,7 +166,7 @@ pub fn run(job: &DiagnoseJob) -> Result<DiagnoseOutcome, Error> {
             let files = trend::write(dir, &done)?;
             let images: Vec<PathBuf> =
                 files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
-            sections.insert(0, crate::report::html::trend_section(&done, &images));
+            sections.insert(usize::from(!failures.is_empty()), crate::report::html::trend_section(&done, &images));
             report_files.extend(files);
         }
         report_files.push(crate::report::html::write(dir, "gearvib diagnosis", &sections)?);

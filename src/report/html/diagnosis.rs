@@ -312,6 +312,38 @@ pub fn trend_section(done: &[Diagnosis], images: &[PathBuf]) -> Section {
     }
 }
 
+/// The section that opens the page of a batch in which some recordings could not be diagnosed: a
+/// NOT DIAGNOSED badge and one row per recording (`(file, error)`) with what stopped it, so that the page
+/// never reads as if every recording given had been judged.
+pub fn failures_section(failed: &[(String, String)]) -> Section {
+    let rows = failed
+        .iter()
+        .map(|(file, error)| {
+            let name = Path::new(file).file_name().and_then(|n| n.to_str()).unwrap_or(file).to_string();
+            (vec![name, error.clone()], true)
+        })
+        .collect();
+    let n = failed.len();
+    Section {
+        heading: format!("{n} recording{} not diagnosed", if n == 1 { "" } else { "s" }),
+        verdict: Some(Badge {
+            state: VerdictState::NotJudged,
+            word: "NOT DIAGNOSED".into(),
+            line: format!(
+                "{} could not be read or analysed: no verdict, healthy or not, is given for {}",
+                if n == 1 { "one recording" } else { "these recordings" },
+                if n == 1 { "it" } else { "them" }
+            ),
+        }),
+        tables: vec![Table {
+            caption: "Recordings not diagnosed and why".into(),
+            header: vec!["recording".into(), "what stopped it".into()],
+            rows,
+        }],
+        ..Default::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

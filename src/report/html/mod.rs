@@ -6,7 +6,7 @@ mod diagnosis;
 mod glossary;
 mod simulate;
 
-pub use diagnosis::{diagnosis_section, trend_section, velocity_words};
+pub use diagnosis::{diagnosis_section, failures_section, trend_section, velocity_words};
 pub use simulate::{bench_section, simulation_section, stability_section, sweep_section};
 
 use super::ReportError;
