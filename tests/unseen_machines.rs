@@ -1136,3 +1136,37 @@ fn a_coast_down_given_its_start_speed_is_followed() {
     assert_eq!(s["verdict"]["state"], "not_judged", "{}", s["verdict"]);
     assert!(s["verdict"]["reasons"].to_string().contains("beyond the +-5.0 % tolerance"), "{}", s["verdict"]);
 }
+
+/// A profile judges only recordings that show its mesh: the 17/29 machine's profile (two healthy recordings,
+/// nameplate speed) leaves the 19/37 machine at the same 25 Hz and the 31/47 machine at 12 Hz not judged
+/// (exit 3), naming the lost mesh, where they came out FAULTY or SUSPECT on indicators the other gearbox's
+/// signal moves; the 17/29 machine's own third healthy recording is still judged. The truth is independent
+/// of the program: the recordings are of other gear pairs by construction. (The check misses a machine whose
+/// mesh falls within the speed tolerance of the profile's: its mesh is tracked there; see
+/// `baseline::MESH_LOST_DB`.)
+#[test]
+fn a_profile_does_not_judge_another_machine() {
+    let own = test_set(&machine("z17z29-25Hz-fs20k")).0;
+    let others: Vec<Case> =
+        ["z19z37-25Hz-fs25k6", "z31z47-12Hz-fs51k2"].iter().map(|n| test_set(&machine(n)).0[2].clone()).collect();
+    ensure(&own.iter().chain(&others).cloned().collect::<Vec<_>>());
+    let dir = temp_dir("unseen-other-machine");
+    let profile = dir.join("z17z29.json").to_string_lossy().into_owned();
+    let (h1, h2) = (own[0].path().to_string_lossy().into_owned(), own[1].path().to_string_lossy().into_owned());
+    let rpm = format!("{}", own[0].machine.rpm());
+    let run = gearvib(&["learn", &h1, &h2, "--channel", "1", "--teeth", "17,29", "--rpm", &rpm, "-o", &profile]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let judge = |c: &Case| {
+        let rec = c.path().to_string_lossy().into_owned();
+        let run = gearvib(&["diagnose", &rec, "--json", "--profile", &profile]);
+        let json: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap_or("null")).unwrap();
+        (run.code, json["verdict"].clone())
+    };
+    for c in &others {
+        let (code, v) = judge(c);
+        assert_eq!((code, v["state"].as_str()), (3, Some("not_judged")), "{}: {v}", c.machine.name);
+        assert!(v["reasons"][0].as_str().unwrap().contains("no gear average shows the baseline's mesh"), "{v}");
+    }
+    let (code, v) = judge(&own[2]);
+    assert!(code == 0 && v["state"] != "not_judged", "the machine's own healthy recording: {v}");
+}

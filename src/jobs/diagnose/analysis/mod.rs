@@ -373,7 +373,7 @@ fn check_teeth<'t, I: Iterator<Item = &'t [f64]>>(
             return Err(bad(
                 path,
                 format!(
-                    "tachometer channel {t}: with {} pulse(s) per revolution the mesh line of {z} teeth stands at order {found} of the pinion's average, not {z}: check the pulses per revolution and the tachometer's pulses",
+                    "tachometer channel {t}: with {} pulse(s) per revolution the mesh line of {z} teeth stands at order {found} of the pinion's average, not {z}: check the pulses per revolution, the tachometer's pulses and that the teeth (or a profile's) are this machine's",
                     o.pulses_per_rev
                 ),
             ));

@@ -577,8 +577,10 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
         .collect()
 }
 
+mod fit;
 mod local;
 mod one_file;
+pub use fit::{MESH_LOST_DB, mesh_change_db, mesh_lost};
 pub use local::SameData;
 #[cfg(test)]
 use local::SidebandNoise;

@@ -1,0 +1,138 @@
+//! Whether a recording shows the mesh its baseline was learned on: a fault raises the lines around the
+//! mesh and spreads energy over the orders, but the mesh lines themselves stay, while a recording of
+//! another machine (other teeth, another speed) averaged on the baseline's teeth holds no mesh at those
+//! orders at all.
+
+use super::{Block, GearIndicators, Reference, log_spectrum, median};
+
+/// Drop in dB of a gear's mesh lines, against the rest of its average, from which a recording is taken not
+/// to show the baseline's mesh. Measured with each generated machine's profile (two healthy recordings,
+/// nameplate speed, vibration only): over its own 126 other recordings (healthy, cracks, spalls, broken
+/// teeth, wear, eccentricity) the largest drop on any gear was 8.0 dB (a worn wheel; then 5.3, a broken
+/// pinion); the real rig's recordings against the healthy file of every load dropped at most 4.4 dB
+/// (healthy) and 7.1 dB (broken tooth). The other machines' healthy recordings against the same profiles
+/// dropped by more than 12 dB in 97 of 182 (median 13.7 dB; some rise instead, where the baseline's own mesh
+/// lines stood low and the other machine's lines fall near them). 12 dB keeps 4 dB from the largest fault.
+pub const MESH_LOST_DB: f64 = FAULT_DROP_SEEN_DB + 4.0;
+
+/// The largest drop of the mesh lines on every gear a fault caused in the measurements of [`MESH_LOST_DB`],
+/// dB (7.6, rounded up).
+const FAULT_DROP_SEEN_DB: f64 = 8.0;
+
+/// The change of `g`'s mesh lines (orders z, 2z, 3z, 4z of its average, z its mesh order) against the
+/// median change of every order, in dB, from the baseline's mean log spectrum to the recording's (the
+/// blocks' mean log amplitudes, on the baseline's floor): 0 for a recording like the baseline at any level
+/// (a sensor's gain moves every order alike), negative when the mesh lines lost against the rest. `None`
+/// when the baseline lacks the gear or no block of the recording is as long as the baseline's.
+pub fn mesh_change_db(r: &Reference, g: &GearIndicators) -> Option<f64> {
+    let r = r.gears.get(&(g.gear.baseline_key(), g.channel))?;
+    let len = r.log_spectrum.len() + 1;
+    let blocks: Vec<&Block> = g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect();
+    if blocks.is_empty() || g.mesh_order == 0 {
+        return None;
+    }
+    let logs: Vec<Vec<f64>> = blocks.iter().map(|b| log_spectrum(&b.amplitudes[..len], r.floor)).collect();
+    let mut change: Vec<f64> =
+        (0..len - 1).map(|k| logs.iter().map(|l| l[k]).sum::<f64>() / logs.len() as f64 - r.log_spectrum[k]).collect();
+    // order o sits at index o - 1 (the spectra start at order 1)
+    let mesh: Vec<f64> = (1..=4).map(|m| m * g.mesh_order).filter(|&o| o < len).map(|o| change[o - 1]).collect();
+    if mesh.is_empty() {
+        return None;
+    }
+    let mesh_mean = mesh.iter().sum::<f64>() / mesh.len() as f64;
+    Some(mesh_mean - median(&mut change))
+}
+
+/// The reason a recording is not judged against `r` when every gear average's mesh lines lost more than
+/// [`MESH_LOST_DB`] against the rest of its average; `None` when any kept its mesh. Every gear, not one: a
+/// broken tooth of the third generator's 22/67 wheel lifted every order of the wheel's own average so far
+/// that its mesh lines stood 31 dB lower against them, while the pinion's average kept its mesh within
+/// 1 dB; the other machines' recordings lose the mesh on every gear.
+pub fn mesh_lost(r: &Reference, gears: &[GearIndicators]) -> Option<String> {
+    let changes: Vec<(&GearIndicators, f64)> =
+        gears.iter().filter_map(|g| mesh_change_db(r, g).map(|db| (g, db))).collect();
+    let least = changes.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
+    (!changes.is_empty() && least < -MESH_LOST_DB).then(|| {
+        let each: Vec<String> = changes
+            .iter()
+            .map(|(g, db)| {
+                let z = g.mesh_order;
+                format!("the {}'s (channel {}) at orders {z}, {}, {}, {}: {:.0} dB", g.gear, g.channel, 2 * z, 3 * z, 4 * z, -db)
+            })
+            .collect();
+        format!(
+            "no gear average shows the baseline's mesh; its lines stand lower against the rest of each average than in the baseline ({}); a fault raises the lines around a mesh but leaves the mesh (at most {FAULT_DROP_SEEN_DB:.0} dB lower on every gear over the generated faults and the rig's broken tooth), so this recording is not of the machine, teeth or speed the baseline was learned on, or its gears no longer mesh; check the baseline, the teeth and the speed",
+            each.join("; ")
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::GearReference;
+    use super::*;
+    use crate::report::summary::Shaft;
+    use std::collections::BTreeMap;
+
+    /// A reference of one pinion average on channel 1 whose mean log spectrum is that of `amplitudes`
+    /// (orders 0..), on a floor far below every line.
+    fn reference(amplitudes: &[f64]) -> Reference {
+        let floor = 1e-12;
+        let g = GearReference {
+            stats: BTreeMap::new(),
+            residual_var: 1.0,
+            log_spectrum: log_spectrum(amplitudes, floor),
+            floor,
+            rms: 1.0,
+            residual_mean: Vec::new(),
+            local_healthy: Vec::new(),
+            sidebands_healthy: Vec::new(),
+            sidebands_beyond_noise: Vec::new(),
+            sidebands_noise: None,
+            pattern_healthy: Vec::new(),
+            pattern_noise: Vec::new(),
+        };
+        Reference { gears: BTreeMap::from([((Shaft::Pinion, 1), g)]), files: 2, tracked_line_db: None }
+    }
+
+    fn pinion(z: usize, blocks: Vec<Vec<f64>>) -> GearIndicators {
+        GearIndicators {
+            gear: Shaft::Pinion,
+            channel: 1,
+            mesh_order: z,
+            revolutions: 8 * blocks.len(),
+            indicators: Default::default(),
+            residual: Vec::new(),
+            difference: Vec::new(),
+            tsa_amplitudes: Vec::new(),
+            tsa: Vec::new(),
+            blocks: blocks.into_iter().map(|amplitudes| Block { amplitudes, ..Default::default() }).collect(),
+        }
+    }
+
+    /// The mesh change against its definition: 0 dB for the baseline's own spectrum at any gain (a sensor's
+    /// sensitivity moves every order alike); 20 log10(1/100) = -40 dB when the four mesh lines fall a
+    /// hundredfold and nothing else moves; 0 - 20 log10(10) = -20 dB when the mesh lines stay and every
+    /// other order (so the median) rises tenfold.
+    #[test]
+    fn the_mesh_change_is_the_mesh_lines_move_less_the_median_move() {
+        let z = 7;
+        let base: Vec<f64> = (0..=40).map(|k| if k > 0 && k % z == 0 { 1.0 } else { 0.01 + 1e-4 * k as f64 }).collect();
+        let r = reference(&base);
+        let close = |g: &GearIndicators, want: f64| {
+            let got = mesh_change_db(&r, g).unwrap();
+            assert!((got - want).abs() < 1e-9, "{got} dB, want {want}");
+        };
+        close(&pinion(z, vec![base.clone(), base.clone()]), 0.0);
+        close(&pinion(z, vec![base.iter().map(|a| 3.0 * a).collect()]), 0.0);
+        let lost: Vec<f64> =
+            base.iter().enumerate().map(|(k, a)| if k > 0 && k % z == 0 { a / 100.0 } else { *a }).collect();
+        close(&pinion(z, vec![lost.clone()]), -40.0);
+        let risen: Vec<f64> = base.iter().enumerate().map(|(k, a)| if k % z == 0 { *a } else { 10.0 * a }).collect();
+        close(&pinion(z, vec![risen]), -20.0);
+        // one gear that lost its mesh is judged; no block as long as the baseline's scores nothing
+        assert!(mesh_lost(&r, &[pinion(z, vec![lost])]).is_some());
+        assert!(mesh_lost(&r, &[pinion(z, vec![base.clone()])]).is_none());
+        assert_eq!(mesh_change_db(&r, &pinion(z, vec![base[..20].to_vec()])), None);
+    }
+}
