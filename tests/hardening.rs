@@ -297,6 +297,22 @@ fn csv_lines_and_fields_are_bounded_and_quoted_names_keep_their_commas() {
     assert_eq!(rec.names, ["index, n", "sensor, 2"]);
     assert_eq!(rec.units[1], "m/s^2");
     assert_eq!(rec.channels[1].len(), 50);
+    // a quoted header name may hold a line break (RFC 4180; a spreadsheet's wrapped cell), LF or CRLF: the
+    // header spans those lines, the name keeps a space there, and later lines keep their own numbers
+    for end in ["\n", "\r\n"] {
+        let text = format!("\"time [s]\",\"housing{end}accel [g]\"{end}0,1.5{end}1e-4,2.5{end}2e-4,x{end}");
+        let wrapped = write(&dir, "wrapped.csv", &text);
+        let e = gearvib::io::read_recording(std::path::Path::new(&wrapped)).unwrap_err().to_string();
+        assert!(e.contains("line 5, column 2") && e.contains("\"x\" is not a number"), "{e}");
+        let fixed = write(&dir, "wrapped.csv", &text.replace(",x", ",3.5"));
+        let rec = gearvib::io::read_recording(std::path::Path::new(&fixed)).unwrap();
+        assert_eq!(
+            (rec.names.as_slice(), rec.units.as_slice()),
+            (&["housing accel".to_string()][..], &["g".to_string()][..])
+        );
+        assert_eq!(rec.channels[0].as_ref(), [1.5f32, 2.5, 3.5]);
+        assert!((rec.sample_rate_hz.unwrap() - 1e4).abs() < 1e-6);
+    }
 }
 
 #[cfg(unix)]

@@ -5,6 +5,7 @@
 //! actually present, never with a claimed size.
 
 use super::{AtomicFile, DataError, Recording};
+use std::borrow::Cow;
 use std::io::{BufRead, BufWriter, Read, Write};
 use std::path::Path;
 
@@ -82,52 +83,26 @@ fn time_unit(name: &str) -> Result<f64, String> {
 }
 
 /// Reads a delimited text signal. Channels are the non-time columns; the sample rate comes from a time
-/// column when there is one (which must be uniformly sampled).
+/// column when there is one (which must be uniformly sampled). The channels are stored as f32 as they are
+/// read (the time column as f64), so a file's values take 4 bytes each, never 8 first. A quoted header
+/// field may hold a line break (RFC 4180): the header then runs over the lines its quotes span.
 ///
 /// # Errors
-/// Unreadable file, no data rows, a row with a different field count, a non-numeric or non-finite value
-/// (named with its line and column), or a non-uniform time column.
+/// Unreadable file, no data rows, a row with a different field count, a non-numeric or non-finite value or
+/// one beyond the f32 range (named with its line and column), or a non-uniform time column.
 pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     let file = std::fs::File::open(path).map_err(|e| DataError::io(path, format!("cannot read: {e}")))?;
-    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
-    let mut raw: Vec<u8> = Vec::new();
+    let mut lines = Lines { reader: std::io::BufReader::with_capacity(1 << 16, file), raw: Vec::new(), lineno: 0 };
     let mut delim = None;
     let mut header: Option<Vec<String>> = None;
-    let mut columns: Vec<Vec<f64>> = Vec::new();
-    let mut ncols = 0;
+    let mut columns: Option<Columns> = None;
     let mut field = String::new();
-    // first value per column beyond the f32 range of the stored channels: (line, text)
-    let mut overflow: Vec<Option<(usize, String)>> = Vec::new();
-    for lineno in 1.. {
-        raw.clear();
-        let read = (&mut reader)
-            .take(MAX_LINE_BYTES + 1)
-            .read_until(b'\n', &mut raw)
-            .map_err(|e| DataError::io(path, format!("line {lineno}: cannot read: {e}")))?;
-        if read == 0 {
-            break;
-        }
-        if raw.len() as u64 > MAX_LINE_BYTES && raw.last() != Some(&b'\n') {
-            let why = if raw.contains(&b'\r') {
-                "its lines end in a carriage return alone (old Mac text): convert the line ends to LF or CRLF"
-            } else {
-                "not a delimited text signal"
-            };
-            return Err(DataError::format(
-                path,
-                format!("line {lineno} runs over {MAX_LINE_BYTES} bytes without a line break: {why}"),
-            ));
-        }
-        let line = std::str::from_utf8(&raw)
-            .map_err(|_| DataError::format(path, format!("line {lineno}: not UTF-8 text (a binary file?)")))?;
-        // a UTF-8 byte-order mark (spreadsheet exports) is no part of the first field
-        let line = if lineno == 1 { line.trim_start_matches('\u{feff}') } else { line };
-        let line = line.trim_end_matches('\n').trim_end_matches('\r');
+    while let Some((lineno, line)) = lines.next(path, header.is_none() && columns.is_none())? {
         if line.trim().is_empty() {
             continue;
         }
-        let d = *delim.get_or_insert_with(|| delimiter(line));
-        let fields = split_fields(line, d);
+        let d = *delim.get_or_insert_with(|| delimiter(&line));
+        let fields = split_fields(&line, d);
         if fields.len() > MAX_COLUMNS {
             return Err(DataError::format(
                 path,
@@ -140,71 +115,159 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
         if fields.iter().all(|f| f.trim().is_empty()) {
             continue; // an empty row such as ",,,"
         }
-        if columns.is_empty() && header.is_none() {
-            let numeric = fields.iter().all(|f| parse(f, d, &mut field).is_some());
-            ncols = fields.len();
-            columns = vec![Vec::new(); ncols];
-            overflow = vec![None; ncols];
-            if !numeric {
-                header = Some(fields.iter().map(|f| f.trim().trim_matches('"').to_string()).collect());
-                continue;
+        let cols = match &mut columns {
+            Some(c) => c,
+            None => {
+                let numeric = fields.iter().all(|f| parse(f, d, &mut field).is_some());
+                let names: Option<Vec<String>> =
+                    (!numeric).then(|| fields.iter().map(|f| f.trim().trim_matches('"').to_string()).collect());
+                let time = names.as_ref().and_then(|h| h.iter().position(|n| is_time_name(n)));
+                let c = columns.insert(Columns::new(fields.len(), time));
+                if names.is_some() {
+                    header = names;
+                    continue;
+                }
+                c
             }
-        }
-        if fields.len() != ncols {
-            return Err(DataError::format(path, format!("line {lineno}: {} fields, expected {ncols}", fields.len())));
-        }
-        for (c, f) in fields.iter().enumerate() {
-            let v = parse(f, d, &mut field).ok_or_else(|| {
-                DataError::format(path, format!("line {lineno}, column {}: {} is not a number", c + 1, quoted(f)))
-            })?;
-            if !v.is_finite() {
-                return Err(DataError::format(
-                    path,
-                    format!("line {lineno}, column {}: non-finite value {}", c + 1, quoted(f)),
-                ));
-            }
-            if v.abs() > f64::from(f32::MAX) && overflow[c].is_none() {
-                overflow[c] = Some((lineno, quoted(f)));
-            }
-            columns[c].push(v);
-        }
+        };
+        cols.push(path, lineno, &fields, d, &mut field)?;
     }
-    if columns.first().is_none_or(Vec::is_empty) {
+    let Some(cols) = columns.filter(|c| c.rows > 0) else {
         let what = if header.is_some() { "header only, no data rows" } else { "no data rows" };
         return Err(DataError::format(path, what));
-    }
-    let names = header.clone().unwrap_or_else(|| (1..=ncols).map(|i| format!("ch{i}")).collect());
-    let time_col = header.as_ref().and_then(|h| h.iter().position(|n| is_time_name(n)));
-    if let Some((c, (lineno, text))) =
-        overflow.iter().enumerate().find_map(|(c, o)| o.clone().filter(|_| Some(c) != time_col).map(|o| (c, o)))
-    {
-        return Err(DataError::format(
-            path,
-            format!("line {lineno}, column {}: {text} is out of range for 32-bit samples (|x| > 3.4e38)", c + 1),
-        ));
-    }
+    };
+    let names = header.unwrap_or_else(|| (1..=cols.channels.len()).map(|i| format!("ch{i}")).collect());
     let mut sample_rate_hz = None;
-    if let Some(tc) = time_col {
-        let seconds = time_unit(&names[tc]).map_err(|m| DataError::format(path, m))?;
-        sample_rate_hz = Some(rate_from_time(path, &columns[tc])? / seconds);
+    if let Some((tc, t)) = &cols.time {
+        let seconds = time_unit(&names[*tc]).map_err(|m| DataError::format(path, m))?;
+        sample_rate_hz = Some(rate_from_time(path, t)? / seconds);
     }
-    // channels are kept as f32 (see `Recording`); each f64 column is dropped as soon as it is converted
-    let (names, channels): (Vec<String>, Vec<Vec<f32>>) = names
-        .into_iter()
-        .zip(columns)
-        .enumerate()
-        .filter(|(i, _)| Some(*i) != time_col)
-        .map(|(_, (name, col))| (name, col.into_iter().map(|v| v as f32).collect()))
-        .unzip();
+    let time_col = cols.time.as_ref().map(|t| t.0);
+    let names: Vec<String> = names.into_iter().enumerate().filter(|(i, _)| Some(*i) != time_col).map(|x| x.1).collect();
     // "accel [m/s^2]" names the unit in brackets (gearvib writes its CSV headers that way)
     let (names, units): (Vec<String>, Vec<String>) = names.iter().map(|n| split_unit(n)).unzip();
     Ok(Recording {
         units,
-        channels: channels.into_iter().map(std::borrow::Cow::Owned).collect(),
+        channels: cols.channels.into_iter().map(Cow::Owned).collect(),
         sample_rate_hz,
         names,
         warnings: Vec::new(),
     })
+}
+
+/// The file's lines, each read to at most [`MAX_LINE_BYTES`], with the number of the last one read.
+struct Lines<R> {
+    reader: R,
+    raw: Vec<u8>,
+    lineno: usize,
+}
+
+impl<R: BufRead> Lines<R> {
+    /// The next line's number and text without its line end (and without a byte-order mark on the first),
+    /// or `None` at the end. With `header`, a line whose double quotes are not closed runs on over the next
+    /// lines until they are (a quoted name holding a line break), within [`MAX_LINE_BYTES`] in all.
+    fn next(&mut self, path: &Path, header: bool) -> Result<Option<(usize, Cow<'_, str>)>, DataError> {
+        self.raw.clear();
+        let first = self.lineno + 1;
+        loop {
+            self.lineno += 1;
+            let room = MAX_LINE_BYTES + 1 - (self.raw.len() as u64).min(MAX_LINE_BYTES);
+            let read = (&mut self.reader)
+                .take(room)
+                .read_until(b'\n', &mut self.raw)
+                .map_err(|e| DataError::io(path, format!("line {}: cannot read: {e}", self.lineno)))?;
+            if read == 0 && self.raw.is_empty() {
+                return Ok(None);
+            }
+            if self.raw.len() as u64 > MAX_LINE_BYTES && self.raw.last() != Some(&b'\n') {
+                let why = if self.raw.contains(&b'\r') {
+                    "its lines end in a carriage return alone (old Mac text): convert the line ends to LF or CRLF"
+                } else {
+                    "not a delimited text signal"
+                };
+                return Err(DataError::format(
+                    path,
+                    format!("line {first} runs over {MAX_LINE_BYTES} bytes without a line break: {why}"),
+                ));
+            }
+            let open_quote = self.raw.iter().filter(|&&b| b == b'"').count() % 2 == 1;
+            if !(header && open_quote) || read == 0 {
+                break;
+            }
+        }
+        let line = std::str::from_utf8(&self.raw)
+            .map_err(|_| DataError::format(path, format!("line {first}: not UTF-8 text (a binary file?)")))?;
+        // a UTF-8 byte-order mark (spreadsheet exports) is no part of the first field
+        let line = if first == 1 { line.trim_start_matches('\u{feff}') } else { line };
+        // a line break inside a quoted name is a space in the name
+        let line = line.trim_end_matches('\n').trim_end_matches('\r');
+        let text = if line.contains('\n') {
+            Cow::Owned(line.replace("\r\n", " ").replace('\n', " "))
+        } else {
+            Cow::Borrowed(line)
+        };
+        Ok(Some((self.lineno, text)))
+    }
+}
+
+/// The data read so far: the time column (its index among the fields, its values) and the channels, each
+/// stored as it will be kept.
+struct Columns {
+    fields: usize,
+    time: Option<(usize, Vec<f64>)>,
+    channels: Vec<Vec<f32>>,
+    rows: usize,
+}
+
+impl Columns {
+    fn new(fields: usize, time: Option<usize>) -> Self {
+        let channels = fields - usize::from(time.is_some());
+        Self { fields, time: time.map(|t| (t, Vec::new())), channels: vec![Vec::new(); channels], rows: 0 }
+    }
+
+    /// Adds the row `fields` of line `lineno`.
+    ///
+    /// # Errors
+    /// Another field count than the first row's; a field that is not a finite number, or a channel's beyond
+    /// the f32 range.
+    fn push(
+        &mut self,
+        path: &Path,
+        lineno: usize,
+        fields: &[&str],
+        d: char,
+        buf: &mut String,
+    ) -> Result<(), DataError> {
+        if fields.len() != self.fields {
+            let (n, want) = (fields.len(), self.fields);
+            return Err(DataError::format(path, format!("line {lineno}: {n} fields, expected {want}")));
+        }
+        let time_col = self.time.as_ref().map(|t| t.0);
+        let mut channel = 0;
+        for (c, f) in fields.iter().enumerate() {
+            let at = || format!("line {lineno}, column {}", c + 1);
+            let v = parse(f, d, buf)
+                .ok_or_else(|| DataError::format(path, format!("{}: {} is not a number", at(), quoted(f))))?;
+            if !v.is_finite() {
+                return Err(DataError::format(path, format!("{}: non-finite value {}", at(), quoted(f))));
+            }
+            match &mut self.time {
+                Some((_, t)) if Some(c) == time_col => t.push(v),
+                _ => {
+                    if v.abs() > f64::from(f32::MAX) {
+                        return Err(DataError::format(
+                            path,
+                            format!("{}: {} is out of range for 32-bit samples (|x| > 3.4e38)", at(), quoted(f)),
+                        ));
+                    }
+                    self.channels[channel].push(v as f32);
+                    channel += 1;
+                }
+            }
+        }
+        self.rows += 1;
+        Ok(())
+    }
 }
 
 /// Splits a column name "name [unit]" into name and unit (empty when there are no brackets).
