@@ -325,6 +325,9 @@ fn a_recording_path_that_is_a_pipe_or_a_device_is_refused_without_reading() {
     // nothing writes the pipe: reading it would block for ever
     let run = limited(&["diagnose", fifo.to_str().unwrap(), "--teeth", "14,39"]);
     assert_one_line_error(&run, &["pipe.wav", "not a regular file"]);
+    // "-" is no file: said so, not read as standard input (which would block on a terminal)
+    let run = limited(&["diagnose", "-", "--teeth", "14,39"]);
+    assert_one_line_error(&run, &["-:", "not read from standard input", ".wav or .csv file"]);
     let zero = std::path::Path::new(&dir).join("zero.csv");
     std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
     let run = limited(&["diagnose", zero.to_str().unwrap(), "--fs", "10000"]);

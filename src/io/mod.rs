@@ -305,6 +305,10 @@ pub fn read_recording_channels(path: &Path, keep: Option<&[usize]>) -> Result<Re
             }
             Ok(rec)
         }
+        _ if path.as_os_str() == "-" => Err(DataError::format(
+            path,
+            "a recording is not read from standard input (its sample rate, sidecar and size are a file's): save it as a .wav or .csv file and give its path",
+        )),
         _ => Err(DataError::format(path, "unknown extension: expected .wav or .csv")),
     }
 }
