@@ -47,6 +47,7 @@ pub(super) fn shaft_from_teeth(fft: &mut Fft, y: &[f64], cycle: f64, zp: usize, 
         close_second: second.map(|c| c.score / top.score),
         turns: None,
         comb_peak: None,
+        assumed: None,
     })
 }
 
@@ -96,6 +97,9 @@ pub(super) struct MeshShaft {
     /// moved the comb's 17.36 Hz (true mean 17.32) to 17.46 Hz, the top of the speed's range, from where
     /// the mesh line's angle ended 0.8 % away and was dropped.
     pub(super) comb_peak: Option<f64>,
+    /// What the speed rests on when it rests on an assumption (the strongest line read as the mesh
+    /// fundamental over a comb that could not clear its own): a doubt, so no verdict of health rests on it.
+    pub(super) assumed: Option<String>,
 }
 
 /// Confidence of a speed estimated from the teeth (the mesh comb's) under which no verdict of health rests
@@ -127,6 +131,7 @@ impl MeshShaft {
                 )
             })
             .or_else(|| self.turns.clone())
+            .or_else(|| self.assumed.clone())
     }
 
     /// The constant nominal speed over `n` samples, its note added to `warnings`.
@@ -446,6 +451,7 @@ pub(super) fn shaft_from_comb(
         close_second,
         turns,
         comb_peak,
+        assumed: None,
     })
 }
 
@@ -503,6 +509,7 @@ pub(super) fn shaft_through_mesh(
             close_second: None,
             turns: None,
             comb_peak: None,
+            assumed: None,
         }));
     };
     let confidence = c[q];
@@ -539,6 +546,7 @@ pub(super) fn shaft_through_mesh(
         close_second: None,
         turns: None,
         comb_peak: None,
+        assumed: None,
     }))
 }
 
@@ -560,6 +568,7 @@ pub(super) mod tests {
             close_second,
             turns: None,
             comb_peak: None,
+            assumed: None,
         }
     }
 

@@ -75,5 +75,6 @@ pub(super) fn from_the_baseline(period: f64, fs: Option<f64>) -> MeshShaft {
         close_second: None,
         turns: None,
         comb_peak: None,
+        assumed: None,
     }
 }
