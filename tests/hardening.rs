@@ -315,6 +315,54 @@ fn csv_lines_and_fields_are_bounded_and_quoted_names_keep_their_commas() {
     }
 }
 
+/// What a helper's differential test against Python's csv module found (forty-first session): a header
+/// quote left open was read on through the whole file, rescanning it at every line (67 s for 1.2 MB); a
+/// tab- or semicolon-separated header with commas inside its quoted names, and semicolon rows with decimal
+/// commas, were split at the commas; a doubled quote in a name stayed doubled; f32::MAX as gearvib's own
+/// writer prints it was "out of range"; `timestamp [ms]` and `time ms` were read as seconds; a time
+/// column spanning 2e308 gave a sample rate of 0. Each expected value is the file's own content.
+#[test]
+fn csv_quotes_delimiters_units_and_ranges_read_as_written() {
+    let dir = temp_dir("csv-as-written");
+    let read = |name: &str, text: &str| gearvib::io::read_recording(std::path::Path::new(&write(&dir, name, text)));
+    // a quote never closed: refused at once, naming line 1, however long the file
+    let open = format!("\"a,b\n{}", "1,2\n".repeat(300_000));
+    let t0 = std::time::Instant::now();
+    let e = read("open.csv", &open).unwrap_err().to_string();
+    assert!(e.contains("line 1") && e.contains("not closed within 16 lines"), "{e}");
+    // (a bound far above the milliseconds this takes, far below the minute it took: not a timing test)
+    assert!(t0.elapsed().as_secs() < 20);
+    let e = read("open-end.csv", "a,\"b\n1,2\n").unwrap_err().to_string();
+    assert!(e.contains("line 1") && e.contains("before the end of the file"), "{e}");
+    // delimiters outside quotes; a semicolon file's decimal commas
+    let rec = read("tabs.csv", "\"accel, x\"\t\"accel, y\"\n1\t2\n3\t4\n").unwrap();
+    assert_eq!(
+        (rec.names.clone(), rec.channels[1].to_vec()),
+        (vec!["accel, x".to_string(), "accel, y".into()], vec![2.0, 4.0])
+    );
+    let rec = read("semi.csv", "\"a, b\";\"c, d\"\n1;2\n").unwrap();
+    assert_eq!(rec.names, ["a, b", "c, d"]);
+    let rec = read("decimal.csv", "1,5;2,5\n3,5;4,5\n").unwrap();
+    assert_eq!((rec.channels[0].to_vec(), rec.channels[1].to_vec()), (vec![1.5, 3.5], vec![2.5, 4.5]));
+    // RFC 4180's doubled quote
+    let rec = read("escaped.csv", "\"a \"\"b\"\"\",c\n1,2\n").unwrap();
+    assert_eq!(rec.names[0], "a \"b\"");
+    // f32::MAX in nine digits (3.402823466e38) and Rust's shortest form (3.4028235e38) are f32::MAX
+    let rec = read("max.csv", "a\n3.402823466e38\n3.4028235e38\n-3.4028235e38\n").unwrap();
+    assert_eq!(rec.channels[0].as_ref(), [f32::MAX, f32::MAX, -f32::MAX]);
+    assert!(read("over.csv", "a\n3.5e38\n").unwrap_err().to_string().contains("out of range"));
+    // the time column's unit wherever the name puts it
+    for (name, rate) in
+        [("timestamp [ms]", 1e4), ("time ms", 1e4), ("time (us)", 1e7), ("time", 10.0), ("timestamp", 10.0)]
+    {
+        let rec = read("unit.csv", &format!("{name},a\n0,1\n0.1,2\n0.2,3\n")).unwrap();
+        let got = rec.sample_rate_hz.unwrap();
+        assert!((got / rate - 1.0).abs() < 1e-9, "{name}: {got}");
+    }
+    let e = read("span.csv", "t,a\n-1e308,1\n1e308,2\n").unwrap_err().to_string();
+    assert!(e.contains("no finite sample rate"), "{e}");
+}
+
 #[cfg(unix)]
 #[test]
 fn a_recording_path_that_is_a_pipe_or_a_device_is_refused_without_reading() {

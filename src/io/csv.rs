@@ -16,6 +16,10 @@ const MAX_LINE_BYTES: u64 = 1 << 20;
 /// Most fields a row may hold: a recording's channels (and a time column).
 const MAX_COLUMNS: usize = 1024;
 
+/// Most physical lines a header row may span (a quoted name holding line breaks): a quote left open is
+/// refused there, not read on through the data.
+const MAX_HEADER_LINES: usize = 16;
+
 /// Longest field quoted in a message, characters (a longer one is cut, with its length said).
 const QUOTED_CHARS: usize = 40;
 
@@ -44,9 +48,35 @@ fn split_fields(line: &str, delim: char) -> Vec<&str> {
     fields
 }
 
+/// A header field without its surrounding double quotes, a doubled quote inside read as one (RFC 4180).
+fn unquote(f: &str) -> String {
+    let t = f.trim();
+    match t.strip_prefix('"').and_then(|u| u.strip_suffix('"')) {
+        Some(inner) => inner.replace("\"\"", "\""),
+        None => t.to_string(),
+    }
+}
+
+/// The delimiter of a file from its first row, outside double quotes: a tab when there is one, else a
+/// semicolon when there is one (its numbers may then use a decimal comma: "1,5;2,5"), else a comma.
 fn delimiter(line: &str) -> char {
-    let count = |c| line.matches(c).count();
-    [('\t', count('\t')), (';', count(';')), (',', count(','))].into_iter().max_by_key(|x| x.1).map_or(',', |x| x.0)
+    let mut quoted = false;
+    let (mut tab, mut semicolon) = (false, false);
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            '\t' if !quoted => tab = true,
+            ';' if !quoted => semicolon = true,
+            _ => {}
+        }
+    }
+    if tab {
+        '\t'
+    } else if semicolon {
+        ';'
+    } else {
+        ','
+    }
 }
 
 fn is_time_name(name: &str) -> bool {
@@ -54,31 +84,38 @@ fn is_time_name(name: &str) -> bool {
     n == "t" || n.starts_with("time") || n.starts_with("t [") || n.starts_with("t (")
 }
 
-/// Seconds per unit of a time column, from its header: a unit in brackets or parentheses (`time [ms]`,
-/// `t (us)`) or after an underscore (`time_ms`); none means seconds. Honoured: s, ms, us (also µs, μs).
+/// Seconds per unit of a time column, from its header: a unit in brackets or parentheses at the end of
+/// the name (`time [ms]`, `t (us)`, `timestamp [ms]`), after an underscore right after the name
+/// (`time_ms`), or a unit word after a space (`time ms`); none means seconds. Honoured: s, ms, us (also µs,
+/// μs).
 ///
 /// # Errors
 /// Any other unit, named.
 fn time_unit(name: &str) -> Result<f64, String> {
     let n = name.trim().trim_matches('"').to_lowercase();
+    let enclosed = |open: char, close: char| n.strip_suffix(close).and_then(|r| r.rfind(open).map(|i| &r[i + 1..]));
     let rest = n.strip_prefix("time").or_else(|| n.strip_prefix('t')).unwrap_or(&n).trim();
-    let unit = if let Some(u) = rest.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
-        u
-    } else if let Some(u) = rest.strip_prefix('(').and_then(|r| r.strip_suffix(')')) {
-        u
-    } else if let Some(u) = rest.strip_prefix('_') {
-        u
-    } else {
+    let word = n.rsplit_once(' ').map(|(_, w)| w).filter(|w| seconds_per(w).is_some());
+    let Some(unit) = enclosed('[', ']').or_else(|| enclosed('(', ')')).or_else(|| rest.strip_prefix('_')).or(word)
+    else {
         return Ok(1.0); // "time", "t", "timestamp": seconds
     };
-    match unit.trim() {
-        "s" | "sec" | "second" | "seconds" => Ok(1.0),
-        "ms" | "msec" => Ok(1e-3),
-        "us" | "µs" | "μs" | "usec" => Ok(1e-6),
-        other => Err(format!(
-            "time column {:?}: unit {other:?} is not one of s, ms, us; convert the column or give the sample rate (and drop the column)",
-            name.trim()
-        )),
+    seconds_per(unit.trim()).ok_or_else(|| {
+        format!(
+            "time column {:?}: unit {:?} is not one of s, ms, us; convert the column or give the sample rate (and drop the column)",
+            name.trim(),
+            unit.trim()
+        )
+    })
+}
+
+/// Seconds per time unit `u` (s, ms, us and their spellings).
+fn seconds_per(u: &str) -> Option<f64> {
+    match u {
+        "s" | "sec" | "second" | "seconds" => Some(1.0),
+        "ms" | "msec" => Some(1e-3),
+        "us" | "µs" | "μs" | "usec" => Some(1e-6),
+        _ => None,
     }
 }
 
@@ -119,8 +156,7 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
             Some(c) => c,
             None => {
                 let numeric = fields.iter().all(|f| parse(f, d, &mut field).is_some());
-                let names: Option<Vec<String>> =
-                    (!numeric).then(|| fields.iter().map(|f| f.trim().trim_matches('"').to_string()).collect());
+                let names: Option<Vec<String>> = (!numeric).then(|| fields.iter().map(|f| unquote(f)).collect());
                 let time = names.as_ref().and_then(|h| h.iter().position(|n| is_time_name(n)));
                 let c = columns.insert(Columns::new(fields.len(), time));
                 if names.is_some() {
@@ -163,36 +199,56 @@ struct Lines<R> {
 }
 
 impl<R: BufRead> Lines<R> {
-    /// The next line's number and text without its line end (and without a byte-order mark on the first),
-    /// or `None` at the end. With `header`, a line whose double quotes are not closed runs on over the next
-    /// lines until they are (a quoted name holding a line break), within [`MAX_LINE_BYTES`] in all.
+    /// The next line's number (its first physical line) and text without its line end (and without a
+    /// byte-order mark on the first), or `None` at the end. With `header`, a line whose double quotes are
+    /// not closed runs on over the next lines until they are (a quoted name holding a line break), at most
+    /// [`MAX_HEADER_LINES`] physical lines.
+    ///
+    /// # Errors
+    /// A line over [`MAX_LINE_BYTES`], not UTF-8, or a header quote left open.
     fn next(&mut self, path: &Path, header: bool) -> Result<Option<(usize, Cow<'_, str>)>, DataError> {
         self.raw.clear();
         let first = self.lineno + 1;
+        let mut quotes = 0usize;
         loop {
             self.lineno += 1;
-            let room = MAX_LINE_BYTES + 1 - (self.raw.len() as u64).min(MAX_LINE_BYTES);
+            let start = self.raw.len();
             let read = (&mut self.reader)
-                .take(room)
+                .take(MAX_LINE_BYTES + 1)
                 .read_until(b'\n', &mut self.raw)
                 .map_err(|e| DataError::io(path, format!("line {}: cannot read: {e}", self.lineno)))?;
             if read == 0 && self.raw.is_empty() {
                 return Ok(None);
             }
-            if self.raw.len() as u64 > MAX_LINE_BYTES && self.raw.last() != Some(&b'\n') {
-                let why = if self.raw.contains(&b'\r') {
+            if read as u64 > MAX_LINE_BYTES && self.raw.last() != Some(&b'\n') {
+                let why = if self.raw[start..].contains(&b'\r') {
                     "its lines end in a carriage return alone (old Mac text): convert the line ends to LF or CRLF"
                 } else {
                     "not a delimited text signal"
                 };
+                let at = self.lineno;
                 return Err(DataError::format(
                     path,
-                    format!("line {first} runs over {MAX_LINE_BYTES} bytes without a line break: {why}"),
+                    format!("line {at} runs over {MAX_LINE_BYTES} bytes without a line break: {why}"),
                 ));
             }
-            let open_quote = self.raw.iter().filter(|&&b| b == b'"').count() % 2 == 1;
-            if !(header && open_quote) || read == 0 {
+            // the quotes of the part just read: the whole is never scanned again
+            quotes += self.raw[start..].iter().filter(|&&b| b == b'"').count();
+            if !header || quotes % 2 == 0 {
                 break;
+            }
+            if read == 0 || self.lineno + 1 - first >= MAX_HEADER_LINES {
+                return Err(DataError::format(
+                    path,
+                    format!(
+                        "line {first}: a double quote opened in the header is not closed{}: close the quoted name",
+                        if read == 0 {
+                            " before the end of the file".to_string()
+                        } else {
+                            format!(" within {MAX_HEADER_LINES} lines")
+                        }
+                    ),
+                ));
             }
         }
         let line = std::str::from_utf8(&self.raw)
@@ -206,7 +262,7 @@ impl<R: BufRead> Lines<R> {
         } else {
             Cow::Borrowed(line)
         };
-        Ok(Some((self.lineno, text)))
+        Ok(Some((first, text)))
     }
 }
 
@@ -254,7 +310,8 @@ impl Columns {
             match &mut self.time {
                 Some((_, t)) if Some(c) == time_col => t.push(v),
                 _ => {
-                    if v.abs() > f64::from(f32::MAX) {
+                    // (the f32 nearest: f32::MAX written with nine digits is 3.402823466e38, over it in f64)
+                    if (v as f32).is_infinite() {
                         return Err(DataError::format(
                             path,
                             format!("{}: {} is out of range for 32-bit samples (|x| > 3.4e38)", at(), quoted(f)),
@@ -317,7 +374,14 @@ fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
             ));
         }
     }
-    Ok(1.0 / dt)
+    let rate = 1.0 / dt;
+    if !(dt.is_finite() && rate.is_finite()) {
+        return Err(DataError::format(
+            path,
+            format!("time column: its mean step {dt:e} (in the column's unit) gives no finite sample rate"),
+        ));
+    }
+    Ok(rate)
 }
 
 /// Streaming CSV writer (time column first) behind an [`AtomicFile`].

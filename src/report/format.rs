@@ -68,7 +68,9 @@ pub fn compact_numerals(text: &str) -> String {
         }
         let token: String = chars[i..j].iter().collect();
         let digits = token.chars().filter(char::is_ascii_digit).count();
-        let ends = j == chars.len() || matches!(chars[j], ' ' | ',' | ';' | ':' | ')' | ']' | '"' | '\'' | '.');
+        // (a full stop ends it, the dot of a file name's extension does not: "1234...5.csv" is a name)
+        let full_stop = chars[j..].first() == Some(&'.') && chars.get(j + 1).is_none_or(|c| c.is_whitespace());
+        let ends = j == chars.len() || matches!(chars[j], ' ' | ',' | ';' | ':' | ')' | ']' | '"' | '\'') || full_stop;
         match token.parse::<f64>() {
             Ok(v) if ends && digits > 20 && v.is_finite() => out.push_str(&num(v)),
             _ => out.push_str(&token),
@@ -91,6 +93,9 @@ mod tests {
         assert_eq!(compact_numerals(&line), "--x: must be in (0, 1), got 1e308; and -1e-300.");
         assert_eq!(compact_numerals(&format!("(got {})", f64::MAX)), "(got 1.798e308)");
         assert_eq!(compact_numerals("got 0.000000000000000000001"), "got 1e-21");
+        // a file named by a long numeral keeps its name
+        let name = "123456789012345678901234.csv: line 2: NaN";
+        assert_eq!(compact_numerals(name), name);
         // ordinary numbers, numerals in file names and words, and 64-bit integers are left as they are
         for keep in [
             "got 0.0234 at 420 Hz, 1800.5 rpm",
