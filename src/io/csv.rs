@@ -234,7 +234,7 @@ impl<R: BufRead> Lines<R> {
             }
             // the quotes of the part just read: the whole is never scanned again
             quotes += self.raw[start..].iter().filter(|&&b| b == b'"').count();
-            if !header || quotes % 2 == 0 {
+            if !header || quotes.is_multiple_of(2) {
                 break;
             }
             if read == 0 || self.lineno + 1 - first >= MAX_HEADER_LINES {
