@@ -359,6 +359,9 @@ fn csv_quotes_delimiters_units_and_ranges_read_as_written() {
         let got = rec.sample_rate_hz.unwrap();
         assert!((got / rate - 1.0).abs() < 1e-9, "{name}: {got}");
     }
+    // a short file of carriage-return line ends (they were "header only, no data rows")
+    let e = read("mac.csv", "a,b\r1,2\r3,4\r").unwrap_err().to_string();
+    assert!(e.contains("line 1") && e.contains("carriage return alone"), "{e}");
     let e = read("span.csv", "t,a\n-1e308,1\n1e308,2\n").unwrap_err().to_string();
     assert!(e.contains("no finite sample rate"), "{e}");
 }

@@ -257,6 +257,16 @@ impl<R: BufRead> Lines<R> {
         let line = if first == 1 { line.trim_start_matches('\u{feff}') } else { line };
         // a line break inside a quoted name is a space in the name
         let line = line.trim_end_matches('\n').trim_end_matches('\r');
+        // a carriage return left inside a line ends lines on its own (old Mac text): the whole file would
+        // read as one row
+        if line.contains('\r') && line.replace("\r\n", "").contains('\r') {
+            return Err(DataError::format(
+                path,
+                format!(
+                    "line {first}: holds a carriage return that ends no line: its lines end in a carriage return alone (old Mac text): convert the line ends to LF or CRLF"
+                ),
+            ));
+        }
         let text = if line.contains('\n') {
             Cow::Owned(line.replace("\r\n", " ").replace('\n', " "))
         } else {
