@@ -614,7 +614,11 @@ fn time_gaps_are_found_where_they_are_and_absurd_rates_are_refused() {
     };
     let gap = write(&dir, "gap.csv", &rows(1e-4, Some(500)));
     let e = gearvib::io::read_recording(std::path::Path::new(&gap)).unwrap_err().to_string();
-    assert!(e.contains("near data row 501"), "{e}");
+    // data row 501 is line 502 under the header; with two blank lines after the header, line 504
+    assert!(e.contains("line 502") && e.contains("data row 501"), "{e}");
+    let spaced = write(&dir, "gap-spaced.csv", &rows(1e-4, Some(500)).replacen('\n', "\n\n\n", 1));
+    let e = gearvib::io::read_recording(std::path::Path::new(&spaced)).unwrap_err().to_string();
+    assert!(e.contains("line 504") && e.contains("from line 503"), "{e}");
     let huge = write(&dir, "huge-step.csv", &rows(1e300, None));
     let run = limited(&["diagnose", &huge, "--teeth", "14,39"]);
     assert_one_line_error(&run, &["huge-step.csv", "outside 0.1 Hz", "--fs-override"]);

@@ -176,7 +176,7 @@ pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     let mut sample_rate_hz = None;
     if let Some((tc, t)) = &cols.time {
         let seconds = time_unit(&names[*tc]).map_err(|m| DataError::format(path, m))?;
-        sample_rate_hz = Some(rate_from_time(path, t)? / seconds);
+        sample_rate_hz = Some(rate_from_time(path, t, &|row| cols.line_of(row))? / seconds);
     }
     let time_col = cols.time.as_ref().map(|t| t.0);
     let names: Vec<String> = names.into_iter().enumerate().filter(|(i, _)| Some(*i) != time_col).map(|x| x.1).collect();
@@ -283,12 +283,27 @@ struct Columns {
     time: Option<(usize, Vec<f64>)>,
     channels: Vec<Vec<f32>>,
     rows: usize,
+    /// (row, line) where a row's line is not the one after the row before's (the first row, and after
+    /// blank or empty lines): the line of every row, for messages, without a number kept per row.
+    breaks: Vec<(usize, usize)>,
 }
 
 impl Columns {
     fn new(fields: usize, time: Option<usize>) -> Self {
         let channels = fields - usize::from(time.is_some());
-        Self { fields, time: time.map(|t| (t, Vec::new())), channels: vec![Vec::new(); channels], rows: 0 }
+        Self {
+            fields,
+            time: time.map(|t| (t, Vec::new())),
+            channels: vec![Vec::new(); channels],
+            rows: 0,
+            breaks: Vec::new(),
+        }
+    }
+
+    /// The file's line of data row `row` (0-based).
+    fn line_of(&self, row: usize) -> usize {
+        let i = self.breaks.partition_point(|b| b.0 <= row).saturating_sub(1);
+        self.breaks.get(i).map_or(row + 1, |&(r, l)| l + (row - r))
     }
 
     /// Adds the row `fields` of line `lineno`.
@@ -332,6 +347,9 @@ impl Columns {
                 }
             }
         }
+        if self.breaks.last().is_none_or(|&(r, l)| l + (self.rows - r) != lineno) {
+            self.breaks.push((self.rows, lineno));
+        }
         self.rows += 1;
         Ok(())
     }
@@ -359,7 +377,13 @@ fn parse(f: &str, delim: char, buf: &mut String) -> Option<f64> {
     t.parse().ok()
 }
 
-fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
+/// The sample rate (per the column's unit) of the time column `t`, whose row i stands on line
+/// `line_of(i)` of the file.
+///
+/// # Errors
+/// Fewer than 2 rows, a column that does not increase, a step off the usual one by over 1 % (named at its
+/// line), or no finite rate.
+fn rate_from_time(path: &Path, t: &[f64], line_of: &dyn Fn(usize) -> usize) -> Result<f64, DataError> {
     if t.len() < 2 {
         return Err(DataError::format(path, "time column needs at least 2 rows to give a sample rate"));
     }
@@ -378,8 +402,10 @@ fn rate_from_time(path: &Path, t: &[f64]) -> Result<f64, DataError> {
             return Err(DataError::format(
                 path,
                 format!(
-                    "time column is not uniformly sampled near data row {} (step {step}, the usual step {usual}, in the column's unit)",
-                    i + 2
+                    "line {}: the time column is not uniformly sampled there (data row {}: step {step} from line {}, the usual step {usual}, in the column's unit)",
+                    line_of(i + 1),
+                    i + 2,
+                    line_of(i)
                 ),
             ));
         }
