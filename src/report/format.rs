@@ -43,8 +43,10 @@ pub fn percent(fraction: f64) -> String {
 /// `text` with every long plain numeral (more than 20 digits: how Rust writes a huge or tiny `f64` such as
 /// 1e308, a 1 and 308 zeros; a 64-bit integer, at most 20 digits, is kept as typed) in four significant digits as [`num`] writes it ("1e308", "1.798e308",
 /// "1e-300"). A numeral counts when it stands alone: after the start, a space or one of `([="'` and
-/// before the end, a space or one of `,;:)]"'.`; digits inside words and paths are left alone. Every
-/// error line passes through this (see `crate::Error`), so no message prints a value 300 digits long.
+/// before the end, a space, one of `,;:)]"'` or a full stop (a dot before a space or the end: the dot of
+/// `1234...5.csv` is a name's); digits inside words and paths are left alone, and so is a numeral in double
+/// quotes on both sides (a quoted field of the user's file, already cut at 40 characters). Every error line
+/// passes through this (see `crate::Error`), so no message prints a value 300 digits long.
 pub fn compact_numerals(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
@@ -71,8 +73,10 @@ pub fn compact_numerals(text: &str) -> String {
         // (a full stop ends it, the dot of a file name's extension does not: "1234...5.csv" is a name)
         let full_stop = chars[j..].first() == Some(&'.') && chars.get(j + 1).is_none_or(|c| c.is_whitespace());
         let ends = j == chars.len() || matches!(chars[j], ' ' | ',' | ';' | ':' | ')' | ']' | '"' | '\'') || full_stop;
+        // a numeral in double quotes is the user's own text quoted (a CSV field, cut at 40 characters)
+        let in_quotes = i > 0 && chars[i - 1] == '"' && chars.get(j) == Some(&'"');
         match token.parse::<f64>() {
-            Ok(v) if ends && digits > 20 && v.is_finite() => out.push_str(&num(v)),
+            Ok(v) if ends && digits > 20 && v.is_finite() && !in_quotes => out.push_str(&num(v)),
             _ => out.push_str(&token),
         }
         i = j;
@@ -96,6 +100,9 @@ mod tests {
         // a file named by a long numeral keeps its name
         let name = "123456789012345678901234.csv: line 2: NaN";
         assert_eq!(compact_numerals(name), name);
+        // a quoted field is shown as written
+        let field = format!("line 2, column 1: \"{}\"... (41 characters) is out of range", "9".repeat(40));
+        assert_eq!(compact_numerals(&field), field);
         // ordinary numbers, numerals in file names and words, and 64-bit integers are left as they are
         for keep in [
             "got 0.0234 at 420 Hz, 1800.5 rpm",
