@@ -1166,6 +1166,14 @@ fn a_profile_does_not_judge_another_machine() {
         let (code, v) = judge(c);
         assert_eq!((code, v["state"].as_str()), (3, Some("not_judged")), "{}: {v}", c.machine.name);
         assert!(v["reasons"][0].as_str().unwrap().contains("no gear average shows the baseline's mesh"), "{v}");
+        // its scores are kept and marked as deciding nothing
+        let (code, json) = {
+            let rec = c.path().to_string_lossy().into_owned();
+            let run = gearvib(&["diagnose", &rec, "--json", "--profile", &profile]);
+            (run.code, serde_json::from_str::<serde_json::Value>(run.stdout.lines().next().unwrap()).unwrap())
+        };
+        let scores = json["scores"].as_array().unwrap();
+        assert!(code == 3 && !scores.is_empty() && scores.iter().all(|s| s["decides"] == false), "{}", json["scores"]);
     }
     let (code, v) = judge(&own[2]);
     assert!(code == 0 && v["state"] != "not_judged", "the machine's own healthy recording: {v}");

@@ -486,9 +486,10 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             shared_period::shared_period_evidence(&mut d);
         }
     }
-    if let Some(why) = reference.and_then(|r| baseline::mesh_lost(r, &d.gears)) {
+    if let Some(why) = reference.and_then(|r| baseline::mesh_lost(r, &d.gears, &d.teeth_misfit)) {
         // the scores stay in the tables, but a baseline of another mesh decides nothing, faulty or healthy
         d.verdict = crate::report::summary::Verdict::new(VerdictState::NotJudged, VerdictGear::None, vec![why]);
+        d.scores.iter_mut().for_each(|s| s.decides = false);
     } else if let Some(why) = cap {
         verdict::cap_at_suspect(&mut d, why);
     }

@@ -107,7 +107,10 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
                 .map(|(k, name)| Series {
                     name: name.label().to_string(),
                     points: (0..done.len())
-                        .filter_map(|i| scores(i).find(|s| &s.indicator == *name).map(|s| ((i + 1) as f64, s.spreads)))
+                        // what decides (not a near-zero SI, nor a recording that lost its baseline's mesh)
+                        .filter_map(|i| {
+                            scores(i).find(|s| &s.indicator == *name && s.decides).map(|s| ((i + 1) as f64, s.spreads))
+                        })
                         .collect(),
                     style: Style::LinePoints,
                     color: [0, 2, 4, 5, 7, 3, 6, 1][k % 8],

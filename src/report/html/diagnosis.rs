@@ -134,7 +134,13 @@ pub fn diagnosis_section(
                     cell(s.value),
                     cell(s.baseline_centre),
                     format!("{} to {}", cell(s.baseline_range[0]), cell(s.baseline_range[1])),
-                    if s.decides { crate::report::format::sig(s.spreads, 3) } else { "near zero".into() },
+                    match (s.decides, d.verdict.state) {
+                        (true, _) => crate::report::format::sig(s.spreads, 3),
+                        (false, VerdictState::NotJudged) => {
+                            format!("{} (decides nothing)", crate::report::format::sig(s.spreads, 3))
+                        }
+                        (false, _) => "near zero".into(),
+                    },
                     crate::report::format::sig(s.suspect_at, 3),
                     crate::report::format::sig(s.faulty_at, 3),
                 ],

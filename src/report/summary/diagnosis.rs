@@ -126,6 +126,10 @@ pub struct Diagnosis {
     /// per-planet averages.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine: Option<MachineDiagnosis>,
+    /// The gears whose averages hold a stronger mesh family than the given teeth's (the warning says at
+    /// which order); absent when the teeth fit every gear.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub teeth_misfit: Vec<Shaft>,
 }
 
 impl Diagnosis {

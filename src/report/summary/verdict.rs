@@ -137,7 +137,8 @@ pub struct Score {
     /// baseline file `suspect_at` and `faulty_at` are raised over it by what a neighbouring load moves a
     /// healthy recording (`baseline::one_file`), else the two are equal.
     pub suspect_at_one_load: f64,
-    /// Whether this indicator takes part in the verdict (a near-zero amplitude does not).
+    /// Whether this indicator takes part in the verdict (a near-zero amplitude does not, nor any score of
+    /// a recording that does not show its baseline's mesh).
     pub decides: bool,
 }
 

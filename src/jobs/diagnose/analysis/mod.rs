@@ -264,6 +264,8 @@ pub(super) struct GearResults {
     pub other_gear: Option<OtherGear>,
     /// Why the given wheel teeth do not fit the wheel's sidebands, when they do not.
     pub wheel_misfit: Option<String>,
+    /// The gears whose averages put their mesh family elsewhere than the given teeth ([`teeth_misfit`]).
+    pub teeth_misfit: Vec<Shaft>,
 }
 
 /// Indicators stage: each gear's mesh order (given, the baseline's, or from its averages), its checks
@@ -302,6 +304,7 @@ fn gear_results(
     }
     let mut pending = Vec::new();
     let mut mesh_orders = Vec::new();
+    let mut teeth_misfit = Vec::new();
     for (gi, (name, _, known)) in plan.gears.iter().enumerate() {
         let averages = || tsas.iter().filter(move |t| t.1 == gi).map(|t| t.2.samples.as_slice());
         let z = match known {
@@ -319,7 +322,9 @@ fn gear_results(
             warnings.extend(doubled_family(fft, averages(), z).map(|db| doubled_note(z, db)));
         }
         check_mesh_order(path, z, plan.points, *name, shaft.source)?;
-        check_teeth(path, checked.tacho, o, *name, z, averages, warnings)?;
+        if check_teeth(path, checked.tacho, o, *name, z, averages, warnings)? {
+            teeth_misfit.push(*name);
+        }
         mesh_orders.push(z);
         for (i, (c, _, t)) in tsas.iter().enumerate().filter(|(_, t)| t.1 == gi) {
             pending.push((*name, *c, z, plan.others(gi), t, std::mem::take(&mut block_lists[i])));
@@ -354,11 +359,11 @@ fn gear_results(
         Some(WheelCheck::Misfit { text, ratio }) if ratio >= WHEEL_DOUBT_RATIO => Some(text),
         _ => None,
     };
-    Ok(GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit })
+    Ok(GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit, teeth_misfit })
 }
 
 /// The checks of a gear's mesh order `z` against the tachometer's pulses per revolution (an error) and
-/// against the given teeth (warnings), on the gear's averages.
+/// against the given teeth (warnings), on the gear's averages: whether the given teeth do not fit them.
 fn check_teeth<'t, I: Iterator<Item = &'t [f64]>>(
     path: &Path,
     tacho: Option<usize>,
@@ -367,7 +372,7 @@ fn check_teeth<'t, I: Iterator<Item = &'t [f64]>>(
     z: usize,
     averages: impl Fn() -> I,
     warnings: &mut Vec<String>,
-) -> Result<(), Error> {
+) -> Result<bool, Error> {
     if let (Some(t), Some(_), Shaft::Pinion) = (tacho, o.teeth, name) {
         if let Some(found) = teeth::pulses_misfit(averages(), z) {
             return Err(bad(
@@ -379,9 +384,11 @@ fn check_teeth<'t, I: Iterator<Item = &'t [f64]>>(
             ));
         }
     }
+    let mut misfit = false;
     if o.teeth.is_some() && o.machine.is_none() {
         if let Some(w) = teeth_misfit(averages(), z, name) {
             warnings.push(w);
+            misfit = true;
         }
     }
     if let (Some((zp, zw)), Shaft::Wheel) = (o.teeth, name) {
@@ -391,7 +398,7 @@ fn check_teeth<'t, I: Iterator<Item = &'t [f64]>>(
             ));
         }
     }
-    Ok(())
+    Ok(misfit)
 }
 
 /// The diagnosis of the stages so far (its verdict still to be judged, its envelope and cepstrum still to
@@ -409,7 +416,7 @@ fn diagnosis(
     warnings: Vec<String>,
 ) -> Diagnosis {
     let Checked { channels, moments, samples, fs, .. } = checked;
-    let GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit } = results;
+    let GearResults { gears, mesh_orders, teeth_source, other_gear, wheel_misfit, teeth_misfit } = results;
     let shaft_hz = fs.map(|fs| fs / shaft.period);
     let shafts = match (&plan.machine_shafts, o.teeth) {
         (Some(_), _) => super::machine::shaft_hz(o, shaft_hz),
@@ -464,6 +471,7 @@ fn diagnosis(
         baseline_tsas: Vec::new(),
         order_map: None,
         machine: None,
+        teeth_misfit,
     }
 }
 

@@ -89,6 +89,7 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
         baseline_tsas: Vec::new(),
         order_map: None,
         machine: None,
+        teeth_misfit: Vec::new(),
     }
 }
 

@@ -48,8 +48,9 @@ const OTHER_SPEED: f64 = 0.03;
 
 /// The teeth's mesh comb's shaft `found` that could not clear its own, or the shaft of the spectrum's
 /// strongest line over its local floor (between the slowest mesh the record's revolutions allow and
-/// [`MESH_HIGHEST`]) read as the mesh fundamental of `zp` teeth and followed ([`shaft_through_mesh`]),
-/// when that reading repeats better than the comb's confidence. A mesh whose speed wanders by a percent
+/// [`MESH_HIGHEST`]) followed and read as a mesh line of `zp` teeth ([`shaft_through_mesh`]: the
+/// fundamental, or the harmonic whose sidebands stand on the followed angle), when that reading's confidence
+/// is higher than the comb's (the scales differ: an engineering choice, checked on the sets below). A mesh whose speed wanders by a percent
 /// keeps its fundamental as the spectrum's strongest hump while its higher harmonics smear into the floor,
 /// and the comb then reads other lines: on the third generator's 25/50 machine at 96 kHz the comb gave
 /// 9.1 times the speed on all eleven recordings, the line the true speed on ten; over the four generated
@@ -76,14 +77,14 @@ fn over_weak_comb(
     let hz = |period: f64| revolution_text(period, fs);
     let line_hz = fs.map_or(format!("{f:.5} cycles per sample"), |fs| format!("{:.1} Hz", f * fs));
     warnings.push(format!(
-        "the teeth's mesh comb gave the pinion {} but could not clear it (confidence {:.2}); the spectrum's strongest line ({line_hz}), read as the mesh fundamental of {zp} teeth and followed, gives {} and repeats better (confidence {:.2}): that speed is used",
+        "the teeth's mesh comb gave the pinion {} without confirming it (confidence {:.2}); the spectrum's strongest line ({line_hz}), followed and read as a mesh line of {zp} teeth, gives {} with a higher confidence ({:.2}): that speed is used",
         hz(found.period_samples),
         found.confidence,
         hz(line.period_samples),
         line.confidence
     ));
     let assumed = format!(
-        "the shaft speed rests on the spectrum's strongest line ({line_hz}) being the mesh fundamental, over a mesh comb that could not clear its own: a line that is a mesh harmonic or another machine's would put the averages on a wrong speed, so the indicators cannot clear the machine; give the shaft speed or a tachometer channel"
+        "the shaft speed rests on the spectrum's strongest line ({line_hz}) being a mesh line of the given teeth, the mesh comb having given another speed it could not confirm: were the line another harmonic or another machine's, the averages would run on a wrong speed, so the indicators cannot clear the machine; give the shaft speed or a tachometer channel"
     );
     MeshShaft { assumed: Some(assumed), ..line }
 }
@@ -296,7 +297,7 @@ mod tests {
         let mut warnings = Vec::new();
         let found = over_weak_comb(comb(0.1), &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut warnings);
         assert!((found.period_samples / turn - 1.0).abs() < 2e-3, "{}", found.period_samples);
-        assert!(found.doubt().is_some_and(|d| d.contains("mesh fundamental")), "{:?}", found.doubt());
+        assert!(found.doubt().is_some_and(|d| d.contains("mesh line of the given teeth")), "{:?}", found.doubt());
         assert!(warnings[0].contains("strongest line"), "{warnings:?}");
         let kept =
             over_weak_comb(comb(0.99), &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut Vec::new());
