@@ -199,7 +199,7 @@ pub fn compatibility(d: &Diagnosis, b: &BaselineFacts) -> Result<Compatibility, 
     let wander = 0.01 * d.speed_profile.fluctuation_percent.max(b.fluctuation_percent);
     let operating_point = (ratio.abs() > OPERATING_POINT_SPEED_DIFFERENCE.max(wander)).then(|| {
         format!(
-            "the shaft runs {:.2} % {} than in the baseline{} ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; a fault is judged only against a baseline at the same operating point, so this verdict is at most suspect",
+            "the shaft runs {:.2} % {} than in the baseline{} ({} ppm is normal drift; within the recordings the speed wanders by +-{:.2} %): a different load or operating point, which changes the vibration by itself; against a baseline at another operating point a fault is judged at most suspect",
             100.0 * ratio.abs(),
             if ratio > 0.0 { "faster" } else { "slower" },
             match b.speed_span {

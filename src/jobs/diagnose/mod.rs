@@ -419,7 +419,7 @@ fn ramp_without_baseline(d: &Diagnosis, tolerance: f64) -> Option<String> {
     let change = d.speed_profile.change_percent;
     (change.abs() > 100.0 * tolerance).then(|| {
         format!(
-            "the speed changed by {change:+.1} % within the recording (a run-up or coast-down): the absolute limits hold for a steady speed, and a mesh sweeping through the housing's resonances raises the averages' peaks by itself, so without a baseline this verdict is at most suspect; a healthy recording of the same run makes it firm"
+            "the speed changed by {change:+.1} % within the recording (a run-up or coast-down): the absolute limits hold for a steady speed, and a mesh sweeping through the housing's resonances raises the averages' peaks by itself, so without a baseline a fault is judged at most suspect; a healthy recording of the same run makes the verdict firm"
         )
     })
 }
