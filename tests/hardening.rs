@@ -352,9 +352,14 @@ fn csv_quotes_delimiters_units_and_ranges_read_as_written() {
     assert_eq!(rec.channels[0].as_ref(), [f32::MAX, f32::MAX, -f32::MAX]);
     assert!(read("over.csv", "a\n3.5e38\n").unwrap_err().to_string().contains("out of range"));
     // the time column's unit wherever the name puts it
-    for (name, rate) in
-        [("timestamp [ms]", 1e4), ("time ms", 1e4), ("time (us)", 1e7), ("time", 10.0), ("timestamp", 10.0)]
-    {
+    for (name, rate) in [
+        ("timestamp [ms]", 1e4),
+        ("time ms", 1e4),
+        ("time (us)", 1e7),
+        ("time [s] (UTC)", 10.0),
+        ("time", 10.0),
+        ("timestamp", 10.0),
+    ] {
         let rec = read("unit.csv", &format!("{name},a\n0,1\n0.1,2\n0.2,3\n")).unwrap();
         let got = rec.sample_rate_hz.unwrap();
         assert!((got / rate - 1.0).abs() < 1e-9, "{name}: {got}");

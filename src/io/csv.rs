@@ -84,20 +84,21 @@ fn is_time_name(name: &str) -> bool {
     n == "t" || n.starts_with("time") || n.starts_with("t [") || n.starts_with("t (")
 }
 
-/// Seconds per unit of a time column, from its header: a unit in brackets or parentheses at the end of
-/// the name (`time [ms]`, `t (us)`, `timestamp [ms]`), after an underscore right after the name
-/// (`time_ms`), or a unit word after a space (`time ms`); none means seconds. Honoured: s, ms, us (also µs,
-/// μs).
+/// Seconds per unit of a time column, from its header: a unit in brackets (`time [ms]`, `timestamp [ms]`,
+/// `time [s] (UTC)`), in parentheses at the end of the name (`t (us)`), after an underscore right after
+/// the name (`time_ms`), or a unit word after a space (`time ms`); none means seconds. Honoured: s, ms, us
+/// (also µs, μs).
 ///
 /// # Errors
 /// Any other unit, named.
 fn time_unit(name: &str) -> Result<f64, String> {
     let n = name.trim().trim_matches('"').to_lowercase();
     let enclosed = |open: char, close: char| n.strip_suffix(close).and_then(|r| r.rfind(open).map(|i| &r[i + 1..]));
+    // a unit in brackets anywhere ("time [s] (UTC)"), before one in parentheses at the end
+    let bracketed = n.rfind('[').and_then(|i| n[i + 1..].find(']').map(|j| &n[i + 1..i + 1 + j]));
     let rest = n.strip_prefix("time").or_else(|| n.strip_prefix('t')).unwrap_or(&n).trim();
     let word = n.rsplit_once(' ').map(|(_, w)| w).filter(|w| seconds_per(w).is_some());
-    let Some(unit) = enclosed('[', ']').or_else(|| enclosed('(', ')')).or_else(|| rest.strip_prefix('_')).or(word)
-    else {
+    let Some(unit) = bracketed.or_else(|| enclosed('(', ')')).or_else(|| rest.strip_prefix('_')).or(word) else {
         return Ok(1.0); // "time", "t", "timestamp": seconds
     };
     seconds_per(unit.trim()).ok_or_else(|| {
