@@ -77,8 +77,15 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
         }
     }
     let files: Vec<String> = done.iter().map(|d| d.file.clone()).collect();
-    let ticks: Vec<(f64, String)> =
-        short_names(&files).into_iter().enumerate().map(|(i, n)| ((i + 1) as f64, n)).collect();
+    // a recording not judged has no point: its tick says why the column is empty
+    let ticks: Vec<(f64, String)> = short_names(&files)
+        .into_iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let empty = done[i].verdict.state == crate::report::summary::VerdictState::NotJudged;
+            ((i + 1) as f64, if empty { format!("{n} (not judged)") } else { n })
+        })
+        .collect();
     let last = done.len() as f64;
     let mut charts = Vec::new();
     for gear in gears {
@@ -101,21 +108,32 @@ pub fn trend_charts(done: &[Diagnosis]) -> Result<Vec<Chart>, ReportError> {
             if members.is_empty() {
                 continue;
             }
-            let mut series: Vec<Series> = members
-                .iter()
-                .enumerate()
-                .map(|(k, name)| Series {
-                    name: name.label().to_string(),
-                    points: (0..done.len())
-                        // what decides (not a near-zero SI, nor a recording that lost its baseline's mesh)
-                        .filter_map(|i| {
-                            scores(i).find(|s| &s.indicator == *name && s.decides).map(|s| ((i + 1) as f64, s.spreads))
-                        })
-                        .collect(),
-                    style: Style::LinePoints,
-                    color: [0, 2, 4, 5, 7, 3, 6, 1][k % 8],
-                })
-                .collect();
+            // each indicator's deciding scores (not a near-zero SI, nor a recording that lost its
+            // baseline's mesh), drawn as runs of consecutive recordings: no line crosses one without a
+            // point (the first run carries the legend's name)
+            let mut series: Vec<Series> = Vec::new();
+            for (k, name) in members.iter().enumerate() {
+                let points: Vec<(f64, f64)> = (0..done.len())
+                    .filter_map(|i| {
+                        scores(i).find(|s| &s.indicator == *name && s.decides).map(|s| ((i + 1) as f64, s.spreads))
+                    })
+                    .collect();
+                let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
+                for p in points {
+                    match runs.last_mut() {
+                        Some(run) if run.last().is_some_and(|q| p.0 - q.0 < 1.5) => run.push(p),
+                        _ => runs.push(vec![p]),
+                    }
+                }
+                for (r, run) in runs.into_iter().enumerate() {
+                    series.push(Series {
+                        name: if r == 0 { name.label().to_string() } else { String::new() },
+                        points: run,
+                        style: Style::LinePoints,
+                        color: [0, 2, 4, 5, 7, 3, 6, 1][k % 8],
+                    });
+                }
+            }
             let limit = |f: fn(&crate::report::summary::Score) -> f64| {
                 (0..done.len()).flat_map(|i| scores(i).map(f)).fold(0.0, f64::max)
             };
