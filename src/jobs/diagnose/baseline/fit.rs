@@ -3,7 +3,7 @@
 //! another machine (other teeth, another speed) averaged on the baseline's teeth holds no mesh at those
 //! orders at all.
 
-use super::{Block, GearIndicators, Reference, Shaft, log_spectrum, median};
+use super::{GearIndicators, Reference, Shaft, log_spectrum, median};
 
 /// Drop in dB of the mesh lines, against the rest of the average, that every gear average of a recording
 /// must show for it to be taken not to show the baseline's mesh. Measured with each generated machine's
@@ -29,8 +29,7 @@ const FAULT_DROP_SEEN_DB: f64 = 8.0;
 /// when the baseline lacks the gear or no block of the recording is as long as the baseline's.
 pub fn mesh_change_db(r: &Reference, g: &GearIndicators) -> Option<f64> {
     let r = r.gears.get(&(g.gear.baseline_key(), g.channel))?;
-    let len = r.log_spectrum.len() + 1;
-    let blocks: Vec<&Block> = g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect();
+    let (blocks, len) = r.comparable(g);
     if blocks.is_empty() || g.mesh_order == 0 {
         return None;
     }
@@ -96,7 +95,7 @@ pub fn mesh_lost(r: &Reference, gears: &[GearIndicators], misfit: &[Shaft]) -> O
 
 #[cfg(test)]
 mod tests {
-    use super::super::GearReference;
+    use super::super::{Block, GearReference};
     use super::*;
     use crate::report::summary::Shaft;
     use std::collections::BTreeMap;

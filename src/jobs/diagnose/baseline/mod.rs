@@ -531,9 +531,17 @@ pub fn score_one(g: &GearIndicators, r: &Reference) -> Vec<Score> {
     r.gears.get(&(g.gear.baseline_key(), g.channel)).map(|gr| score_gear(g, gr)).unwrap_or_default()
 }
 
+impl GearReference {
+    /// The blocks of `g` whose averages reach every order of this reference's log spectrum (a block of a
+    /// shorter average cannot be compared), and the number of orders compared plus one (order 0).
+    fn comparable<'a>(&self, g: &'a GearIndicators) -> (Vec<&'a Block>, usize) {
+        let len = self.log_spectrum.len() + 1;
+        (g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect(), len)
+    }
+}
+
 fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
-    let len = r.log_spectrum.len() + 1;
-    let blocks: Vec<&Block> = g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect();
+    let (blocks, len) = r.comparable(g);
     Indicator::DECIDING
         .into_iter()
         .filter_map(|k| {
