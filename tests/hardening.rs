@@ -272,6 +272,20 @@ fn csv_with_a_byte_order_mark_keeps_its_first_row_and_huge_values_are_out_of_ran
     assert!(e.contains("line 3") && e.contains("out of range"), "{e}");
 }
 
+/// A record of two or three rows holds two values on every channel, as a digital tachometer does: it was
+/// refused as "no channel left to analyse besides the tachometer". Too short is what it is.
+#[test]
+fn a_record_of_a_few_rows_is_too_short_not_a_tachometer() {
+    let dir = temp_dir("csv-few-rows");
+    for (name, text) in [("one.csv", "accel\n1\n2\n"), ("two.csv", "a,b\n1,2\n3,4\n"), ("three.csv", "a\n1\n2\n1\n")] {
+        let path = write(&dir, name, text);
+        let r = gearvib(&["diagnose", &path, "--fs", "1000", "--rpm", "60", "--teeth", "14,39"]);
+        assert_eq!(r.code, 2, "{name}: {}", r.stderr);
+        assert!(!r.stderr.contains("tachometer") && r.stderr.contains("samples of"), "{name}: {}", r.stderr);
+        assert_eq!(r.stderr.trim().lines().count(), 1, "{name}: {}", r.stderr);
+    }
+}
+
 #[test]
 fn csv_lines_and_fields_are_bounded_and_quoted_names_keep_their_commas() {
     let dir = temp_dir("csv-bounds");

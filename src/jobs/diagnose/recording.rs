@@ -121,7 +121,8 @@ const PULSE_EDGES: usize = 4;
 /// Samples a pulse train holds each level for on average, at least.
 const PULSE_HELD: f64 = 3.0;
 
-/// Exactly two distinct values (a synthetic or digital tachometer).
+/// Exactly two distinct values (a synthetic or digital tachometer), changing [`PULSE_EDGES`] times or
+/// more: a step, or a record of two or three samples, also holds two values but no pulse.
 fn two_levels(x: &[f32]) -> bool {
     let mut levels: Vec<u32> = Vec::with_capacity(3);
     for v in x {
@@ -133,7 +134,8 @@ fn two_levels(x: &[f32]) -> bool {
             }
         }
     }
-    levels.len() == 2
+    let changes = x.windows(2).filter(|w| w[0].to_bits() != w[1].to_bits()).count();
+    levels.len() == 2 && changes >= PULSE_EDGES
 }
 
 /// Nearly every sample near the least or the largest value, both levels held for [`PULSE_HELD`] samples
@@ -517,5 +519,11 @@ mod tests {
         // the exact two-level form (a synthetic tachometer) still counts
         let square: Vec<f32> = (0..n).map(|i| if i % 1000 < 80 { 1.0 } else { 0.0 }).collect();
         assert!(looks_like_pulses(&square));
+        // two values without two pulses: a step, or a record of a few samples (which is then too short,
+        // not a tachometer)
+        let step: Vec<f32> = (0..n).map(|i| if i < n / 2 { 0.0 } else { 1.0 }).collect();
+        assert!(!looks_like_pulses(&step));
+        assert!(!looks_like_pulses(&[1.0, 2.0]));
+        assert!(!looks_like_pulses(&[1.0, 2.0, 1.0]));
     }
 }
