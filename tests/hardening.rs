@@ -137,8 +137,9 @@ fn absurd_speeds_and_rates_are_refused() {
         (&["--sensitivity=-1e308"], &["--sensitivity", "got -1e308"]),
         (&["--shaft-hz", "1e-300"], &["--rpm/--shaft-hz", "1e-300 Hz gives only"]),
         // a negative value after a space reaches the flag's check (clap took "-5" for an unknown flag)
-        (&["--rpm", "-5"], &["--rpm", "must be positive"]),
-        (&["--fs", "-10000"], &["--fs", "must be positive"]),
+        (&["--rpm", "-5"], &["--rpm", "must be a finite positive number"]),
+        (&["--fs", "-10000"], &["--fs", "must be a finite positive number"]),
+        (&["--rpm", "inf"], &["--rpm", "must be a finite positive number, got inf"]),
         (&["--speed-tolerance", "-0.1"], &["--speed-tolerance", "between 0 and 0.2"]),
     ] {
         let mut a = vec!["diagnose", HEALTHY];

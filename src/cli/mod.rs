@@ -225,7 +225,11 @@ fn scene_teeth(path: &str) -> Result<Option<(usize, usize)>, Error> {
 }
 
 fn positive(flag: &str, v: f64) -> Result<f64, Error> {
-    if v.is_finite() && v > 0.0 { Ok(v) } else { Err(CliError::flag(flag, format!("must be positive, got {v}"))) }
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(CliError::flag(flag, format!("must be a finite positive number, got {v}")))
+    }
 }
 
 /// The diagnose job the flags describe.
