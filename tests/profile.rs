@@ -93,6 +93,12 @@ fn damaged_profiles_are_refused_naming_the_field() {
         ("type", serde_json::json!({"geometry": {"tsa_points": "many"}}), &["geometry.tsa_points"]),
         // the command line's bounds, said with the profile's field rather than a flag never given
         ("blocks", serde_json::json!({"processing": {"block_revs": 1_000_000_000_000u64}}), &["processing.block_revs"]),
+        (
+            "revolutions",
+            serde_json::json!({"processing": {"min_revolutions": 1_000_000_000_000u64}}),
+            &["processing.min_revolutions"],
+        ),
+        ("no revolutions", serde_json::json!({"processing": {"min_revolutions": 0}}), &["processing.min_revolutions"]),
         ("fs", serde_json::json!({"processing": {"fs_hz": -5.0}}), &["processing.fs_hz"]),
         ("speed", serde_json::json!({"baseline": {"speed_hz": -30.0}}), &["baseline.speed_hz"]),
         ("rate", serde_json::json!({"baseline": {"sample_rate_hz": 0.0}}), &["baseline.sample_rate_hz"]),

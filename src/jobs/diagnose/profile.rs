@@ -175,6 +175,9 @@ fn check_bounds(p: &Profile) -> Result<(), String> {
     if o.block_revs.is_some_and(|r| r > 10_000) {
         return field("processing.block_revs", "must be 2 to 10000".into());
     }
+    if !(2..=10_000).contains(&o.min_revolutions) {
+        return field("processing.min_revolutions", format!("{} is not within 2 to 10000", o.min_revolutions));
+    }
     if let Some(fs) = o.fs_hz.filter(|f| !(f.is_finite() && (lo..=hi).contains(f))) {
         return field("processing.fs_hz", format!("{fs:e} Hz is not within {lo} Hz .. {hi:e} Hz"));
     }
