@@ -103,6 +103,59 @@ fn a_wav_cut_short_or_never_closed_is_read_and_said() {
     assert_one_line_error(&run, &["fmt-cut.wav", "fmt chunk truncated"]);
 }
 
+/// The bundled WAV's chunks rewritten as RF64 (EBU Tech 3306): "RF64", a ds64 chunk holding the 64-bit
+/// sizes, the fmt chunk, and a data chunk whose 32-bit size is 0xFFFFFFFF. `ds64_data` is the data size
+/// the ds64 chunk claims.
+fn rf64_of(whole: &[u8], ds64_data: u64) -> Vec<u8> {
+    let fmt_at = whole.windows(4).position(|w| w == b"fmt ").expect("a fmt chunk");
+    let fmt_len = u32::from_le_bytes(whole[fmt_at + 4..fmt_at + 8].try_into().unwrap()) as usize;
+    let data_at = whole.windows(4).position(|w| w == b"data").expect("a data chunk");
+    let data = &whole[data_at + 8..];
+    let mut out = b"RF64".to_vec();
+    out.extend_from_slice(&u32::MAX.to_le_bytes());
+    out.extend_from_slice(b"WAVE");
+    out.extend_from_slice(b"ds64");
+    out.extend_from_slice(&28u32.to_le_bytes());
+    out.extend_from_slice(&(whole.len() as u64 + 28).to_le_bytes());
+    out.extend_from_slice(&ds64_data.to_le_bytes());
+    out.extend_from_slice(&0u64.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&whole[fmt_at..fmt_at + 8 + fmt_len]);
+    out.extend_from_slice(b"data");
+    out.extend_from_slice(&u32::MAX.to_le_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+/// An RF64 file (the WAV of recordings beyond 4 GiB) was refused as "no RIFF/WAVE header": it reads as
+/// the same samples as the RIFF file it was made from, a ds64 data size beyond the file is read as far as
+/// the file goes (said), and a ds64 chunk cut short is one line naming it.
+#[test]
+fn an_rf64_wav_reads_as_its_riff_original() {
+    let dir = temp_dir("wav-rf64");
+    let whole = std::fs::read(repo(HEALTHY)).unwrap();
+    let data_len = (whole.len() - whole.windows(4).position(|w| w == b"data").unwrap() - 8) as u64;
+    // the RIFF file without its sidecar (whose full scale would rescale the samples)
+    let riff = dir.join("riff.wav");
+    std::fs::write(&riff, &whole).unwrap();
+    let original = gearvib::io::read_recording(&riff).unwrap();
+    let path = dir.join("rf64.wav");
+    std::fs::write(&path, rf64_of(&whole, data_len)).unwrap();
+    let rec = gearvib::io::read_recording(&path).unwrap();
+    assert!(rec.channels == original.channels, "the samples differ");
+    assert_eq!(rec.sample_rate_hz, original.sample_rate_hz);
+    assert!(rec.warnings.is_empty(), "{:?}", rec.warnings);
+    let long = dir.join("rf64-long.wav");
+    std::fs::write(&long, rf64_of(&whole, 2 * data_len)).unwrap();
+    let rec = gearvib::io::read_recording(&long).unwrap();
+    assert!(rec.channels == original.channels, "the samples differ");
+    assert!(rec.warnings.iter().any(|w| w.contains("cut short") && w.contains("50.0 %")), "{:?}", rec.warnings);
+    let cut = dir.join("rf64-ds64-cut.wav");
+    std::fs::write(&cut, &rf64_of(&whole, data_len)[..24]).unwrap();
+    let run = limited(&["diagnose", cut.to_str().unwrap()]);
+    assert_one_line_error(&run, &["rf64-ds64-cut.wav", "ds64 chunk truncated"]);
+}
+
 #[test]
 fn wav_with_an_odd_sized_chunk_and_its_pad_byte_is_read() {
     // scipy reads it as 8000 frames, 2 channels, float32

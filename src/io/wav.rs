@@ -195,10 +195,12 @@ fn parse_fmt(path: &Path, c: &[u8]) -> Result<(usize, u32, Encoding), DataError>
 /// of odd size are followed by their pad byte (as the RIFF rules say), unknown chunks are skipped, a data
 /// chunk longer than the file is read as far as the file goes (with the whole frames kept). Memory is
 /// reserved from the bytes the file really holds, never from a header's claim, and read in blocks of at
-/// most 1 MiB whatever the channel count.
+/// most 1 MiB whatever the channel count. RF64 and BW64 files (the WAV of recordings beyond 4 GiB, EBU
+/// Tech 3306 and ITU-R BS.2088) are read with the data size of their ds64 chunk.
 ///
 /// # Errors
-/// Not a RIFF/WAVE file, no fmt or data chunk, an unsupported encoding, no whole frame.
+/// Not a RIFF/WAVE (or RF64/BW64) file, no fmt or data chunk, an unsupported encoding, no whole frame, an
+/// RF64 ds64 chunk cut short.
 pub fn read(path: &Path) -> Result<Recording<'static>, DataError> {
     read_channels(path, None)
 }
@@ -215,19 +217,36 @@ pub fn read_channels(path: &Path, keep: Option<&[usize]>) -> Result<Recording<'s
     let mut r = std::io::BufReader::new(file);
     let mut head = [0u8; 12];
     r.read_exact(&mut head).map_err(|_| DataError::format(path, "not a WAV file: shorter than a RIFF header"))?;
-    if &head[0..4] != b"RIFF" || &head[8..12] != b"WAVE" {
-        return Err(DataError::format(path, "not a WAV file: no RIFF/WAVE header"));
+    // RF64 (EBU Tech 3306) and BW64 (ITU-R BS.2088): a WAV whose sizes beyond 4 GiB sit in a ds64 chunk
+    let wide = matches!(&head[0..4], b"RF64" | b"BW64");
+    if !(&head[0..4] == b"RIFF" || wide) || &head[8..12] != b"WAVE" {
+        return Err(DataError::format(path, "not a WAV file: no RIFF/WAVE (or RF64/BW64) header"));
     }
     let mut pos = 12u64;
     let mut fmt: Option<(usize, u32, Encoding)> = None;
+    // the data chunk's 64-bit size from an RF64 file's ds64 chunk
+    let mut wide_data: Option<u64> = None;
     loop {
         let mut ch = [0u8; 8];
         if r.read_exact(&mut ch).is_err() {
             return Err(DataError::format(path, "not a readable WAV file: no data chunk"));
         }
-        let size = u64::from(u32::from_le_bytes([ch[4], ch[5], ch[6], ch[7]]));
+        let mut size = u64::from(u32::from_le_bytes([ch[4], ch[5], ch[6], ch[7]]));
         pos += 8;
+        if &ch[0..4] == b"data" && size == u64::from(u32::MAX) {
+            size = wide_data.unwrap_or(size);
+        }
         match &ch[0..4] {
+            b"ds64" if wide => {
+                // riff size, data size, sample count (u64 each), then a table of other chunks' sizes
+                let mut c = [0u8; 16];
+                if size < 16 || r.read_exact(&mut c).is_err() {
+                    return Err(DataError::format(path, "ds64 chunk truncated: an RF64 file needs its 64-bit sizes"));
+                }
+                wide_data = Some(u64::from_le_bytes(c[8..16].try_into().expect("8 bytes")));
+                let skip = size + (size & 1) - 16;
+                r.seek(SeekFrom::Current(skip as i64)).map_err(|e| DataError::io(path, e))?;
+            }
             b"fmt " => {
                 if size > file_len.saturating_sub(pos) {
                     return Err(DataError::format(path, "fmt chunk truncated: the file ends inside it (cut short)"));
