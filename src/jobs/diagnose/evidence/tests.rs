@@ -230,3 +230,53 @@ fn an_excess_within_the_other_gears_noise_names_nothing() {
     assert_eq!(with_patterns((0.80, 0.035), (1.715, 0.376)), VerdictGear::Wheel);
     assert_eq!(with_patterns((0.093, 0.21), (0.346, 0.127)), VerdictGear::Wheel);
 }
+
+/// [`suspect_pinion`] with the pinion's average holding one decaying ring from the start of tooth 5's pitch
+/// (20 teeth), its state `state`, and the pinion's local change against the baseline `local` times its limit
+/// (`None`: no baseline's change measured).
+fn ringing_pinion(state: VerdictState, local: Option<f64>) -> Diagnosis {
+    let (n, z, k) = (1024, 20, 5);
+    let start = (k - 1) * n / z;
+    let ring: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = ((i + n - start) % n) as f64 / (n / z) as f64;
+            if t < 3.0 { (-1.2 * t).exp() * (2.0 * std::f64::consts::PI * 2.1 * t).sin() } else { 0.0 }
+        })
+        .collect();
+    let mut d = suspect_pinion(0.1, 4.0);
+    d.verdict.state = state;
+    d.gears = vec![GearIndicators {
+        gear: Shaft::Pinion,
+        channel: 1,
+        mesh_order: z,
+        revolutions: 300,
+        indicators: Default::default(),
+        residual: ring.clone(),
+        difference: ring,
+        tsa_amplitudes: Vec::new(),
+        tsa: Vec::new(),
+        blocks: Vec::new(),
+    }];
+    match local {
+        None => d.local_change.clear(),
+        Some(times) => d.local_change[0].value = times * d.local_change[0].limit,
+    }
+    d
+}
+
+/// A suspect pinion whose difference signal rings at tooth 5 is given that tooth without a baseline's
+/// change, and the local change's own tooth (9) when that change counts; when the change was measured and
+/// does not count (spread over the revolution, as wear and eccentricity spread it) a suspect verdict names
+/// no tooth, a faulty one still names the ring's.
+#[test]
+fn a_suspect_change_that_is_not_local_names_no_tooth() {
+    let tooth = |state, local| {
+        let mut d = ringing_pinion(state, local);
+        place_tooth(&mut d);
+        d.verdict.tooth
+    };
+    assert_eq!(tooth(VerdictState::Suspect, None), Some(5));
+    assert_eq!(tooth(VerdictState::Suspect, Some(1.5)), Some(9));
+    assert_eq!(tooth(VerdictState::Suspect, Some(0.5)), None);
+    assert_eq!(tooth(VerdictState::Faulty, Some(0.5)), Some(5));
+}
