@@ -2,6 +2,7 @@
 //! local change against the baseline) placed on the tooth whose mesh holds it, counted from the
 //! tachometer's pulse or from the tracked angle's arbitrary start.
 
+use crate::report::format::num;
 use crate::report::summary::{Diagnosis, Score, Shaft, ToothOrigin, VerdictState};
 
 /// How many times its share of the revolution's energy one pitch of the difference signal must hold for
@@ -9,6 +10,9 @@ use crate::report::summary::{Diagnosis, Score, Shaft, ToothOrigin, VerdictState}
 /// about 1.5-2 times its share (the maximum of z chi-square sums), a crack or a spall 4-10 times; a
 /// distributed fault (wear, eccentricity) spreads over every tooth and is not placed.
 pub(super) const LOCAL_CONCENTRATION: f64 = 3.0;
+
+/// How the reason that a suspect verdict names no tooth starts ([`place_tooth`]).
+pub(super) const NO_TOOTH: &str = "no tooth named";
 
 /// Puts a local fault on its tooth: the deciding gear's difference signal (its average less the mesh
 /// lines) holds one impulse per revolution for a crack, a spall or a broken tooth. Counted from the
@@ -18,6 +22,8 @@ pub(super) const LOCAL_CONCENTRATION: f64 = 3.0;
 /// profile) that took the tooth off 49 suspect worn or eccentric gears and 6 local faults (3 teeth wrong
 /// on the tachometer's angle, 3 counted from an arbitrary origin), and no right tooth.
 pub(super) fn place_tooth(d: &mut Diagnosis) {
+    // placed again after the verdict's gear or state moved: the last placing's word on no tooth goes
+    d.verdict.reasons.retain(|r| !r.starts_with(NO_TOOTH));
     if d.verdict.state < VerdictState::Suspect {
         return;
     }
@@ -37,7 +43,13 @@ pub(super) fn place_tooth(d: &mut Diagnosis) {
     }
     // a suspect verdict names a tooth only when its change against the baseline is local: measured and
     // not counting, the change is spread over the revolution, as wear and eccentricity spread it
-    if d.verdict.state == VerdictState::Suspect && changed.is_none() && d.local_change.iter().any(|c| c.gear == shaft) {
+    let measured = d.local_change.iter().filter(|c| c.gear == shaft).max_by(|a, b| a.value.total_cmp(&b.value));
+    if let Some(c) = measured.filter(|_| d.verdict.state == VerdictState::Suspect && changed.is_none()) {
+        d.verdict.reasons.push(format!(
+            "{NO_TOOTH}: the {shaft}'s change against the baseline's average is not local (its largest tooth pitch holds {} times the median pitch's energy, under the {} a local fault is counted from): a change spread over the revolution, as wear, eccentricity or a change of load spread it",
+            num(c.value),
+            num(c.limit)
+        ));
         return;
     }
     let Some(g) = d.gears.iter().find(|g| g.gear == shaft) else { return };

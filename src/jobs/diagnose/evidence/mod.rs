@@ -125,11 +125,13 @@ fn name_on(d: &mut Diagnosis, shaft: Shaft, reason: String) {
     }
 }
 
-/// Puts the verdict on shaft `to`'s gear, that shaft deciding; the tooth named for the other gear goes.
+/// Puts the verdict on shaft `to`'s gear, that shaft deciding; the tooth named for the other gear goes, and
+/// the word on why it had none.
 fn move_verdict(d: &mut Diagnosis, to: Shaft) {
     d.verdict.gear = VerdictGear::from(to);
     d.verdict.deciding = Some(to);
     (d.verdict.tooth, d.verdict.tooth_origin) = (None, None);
+    d.verdict.reasons.retain(|r| !r.starts_with(tooth::NO_TOOTH));
 }
 
 /// Rise of a shaft's first envelope order over the baseline's (dB) that moves a verdict to that shaft's gear

@@ -278,5 +278,15 @@ fn a_suspect_change_that_is_not_local_names_no_tooth() {
     assert_eq!(tooth(VerdictState::Suspect, None), Some(5));
     assert_eq!(tooth(VerdictState::Suspect, Some(1.5)), Some(9));
     assert_eq!(tooth(VerdictState::Suspect, Some(0.5)), None);
+    // placed twice (after a verdict moved), the word on no tooth stands once
+    let mut d = ringing_pinion(VerdictState::Suspect, Some(0.5));
+    place_tooth(&mut d);
+    place_tooth(&mut d);
+    assert_eq!(d.verdict.reasons.iter().filter(|r| r.starts_with("no tooth named")).count(), 1);
+    assert!(
+        d.verdict.reasons.last().is_some_and(|r| r.starts_with("no tooth named") && r.contains("1.5 times")),
+        "{:?}",
+        d.verdict.reasons
+    );
     assert_eq!(tooth(VerdictState::Faulty, Some(0.5)), Some(5));
 }
