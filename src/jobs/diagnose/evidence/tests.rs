@@ -267,7 +267,7 @@ fn ringing_pinion(state: VerdictState, local: Option<f64>) -> Diagnosis {
 /// A suspect pinion whose difference signal rings at tooth 5 is given that tooth without a baseline's
 /// change, and the local change's own tooth (9) when that change counts; when the change was measured and
 /// does not count (spread over the revolution, as wear and eccentricity spread it) a suspect verdict names
-/// no tooth, a faulty one still names the ring's.
+/// no tooth, a faulty one the ring's while FM4 stands over its limit, none on ER alone.
 #[test]
 fn a_suspect_change_that_is_not_local_names_no_tooth() {
     let tooth = |state, local| {
@@ -289,4 +289,9 @@ fn a_suspect_change_that_is_not_local_names_no_tooth() {
         d.verdict.reasons
     );
     assert_eq!(tooth(VerdictState::Faulty, Some(0.5)), Some(5));
+    // faulty on ER alone (FM4 under its suspect limit), the change not local: no impulse, no tooth
+    let mut d = ringing_pinion(VerdictState::Faulty, Some(0.5));
+    d.scores.retain(|s| s.indicator != Indicator::Fm4);
+    place_tooth(&mut d);
+    assert_eq!(d.verdict.tooth, None);
 }
