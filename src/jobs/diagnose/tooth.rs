@@ -11,7 +11,7 @@ use crate::report::summary::{Diagnosis, Indicator, Score, Shaft, ToothOrigin, Ve
 /// distributed fault (wear, eccentricity) spreads over every tooth and is not placed.
 pub(super) const LOCAL_CONCENTRATION: f64 = 3.0;
 
-/// How the reason that a suspect verdict names no tooth starts ([`place_tooth`]).
+/// How the reason that a verdict names no tooth starts ([`place_tooth`]).
 pub(super) const NO_TOOTH: &str = "no tooth named";
 
 /// Puts a local fault on its tooth: the deciding gear's difference signal (its average less the mesh
