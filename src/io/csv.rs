@@ -93,12 +93,12 @@ fn is_time_name(name: &str) -> bool {
 /// Any other unit, named.
 fn time_unit(name: &str) -> Result<f64, String> {
     let n = name.trim().trim_matches('"').to_lowercase();
-    let enclosed = |open: char, close: char| n.strip_suffix(close).and_then(|r| r.rfind(open).map(|i| &r[i + 1..]));
     // a unit in brackets anywhere ("time [s] (UTC)"), before one in parentheses at the end
     let bracketed = n.rfind('[').and_then(|i| n[i + 1..].find(']').map(|j| &n[i + 1..i + 1 + j]));
+    let parenthesized = n.strip_suffix(')').and_then(|r| r.rfind('(').map(|i| &r[i + 1..]));
     let rest = n.strip_prefix("time").or_else(|| n.strip_prefix('t')).unwrap_or(&n).trim();
     let word = n.rsplit_once(' ').map(|(_, w)| w).filter(|w| seconds_per(w).is_some());
-    let Some(unit) = bracketed.or_else(|| enclosed('(', ')')).or_else(|| rest.strip_prefix('_')).or(word) else {
+    let Some(unit) = bracketed.or(parenthesized).or_else(|| rest.strip_prefix('_')).or(word) else {
         return Ok(1.0); // "time", "t", "timestamp": seconds
     };
     seconds_per(unit.trim()).ok_or_else(|| {

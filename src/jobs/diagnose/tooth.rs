@@ -133,12 +133,12 @@ pub fn impulse_tooth(x: &[f64], z: usize) -> Option<usize> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// A decaying ring starting at the start of tooth `k`'s pitch of `z` (what a crack's stiffness drop
     /// excites) on a revolution of `n` samples, plus a small even ripple over every tooth.
-    fn ring(n: usize, z: usize, k: usize) -> Vec<f64> {
+    pub(in crate::jobs::diagnose) fn ring(n: usize, z: usize, k: usize) -> Vec<f64> {
         let start = (k - 1) * n / z;
         (0..n)
             .map(|i| {

@@ -235,14 +235,8 @@ fn an_excess_within_the_other_gears_noise_names_nothing() {
 /// (20 teeth), its state `state`, and the pinion's local change against the baseline `local` times its limit
 /// (`None`: no baseline's change measured).
 fn ringing_pinion(state: VerdictState, local: Option<f64>) -> Diagnosis {
-    let (n, z, k) = (1024, 20, 5);
-    let start = (k - 1) * n / z;
-    let ring: Vec<f64> = (0..n)
-        .map(|i| {
-            let t = ((i + n - start) % n) as f64 / (n / z) as f64;
-            if t < 3.0 { (-1.2 * t).exp() * (2.0 * std::f64::consts::PI * 2.1 * t).sin() } else { 0.0 }
-        })
-        .collect();
+    let z = 20;
+    let ring = super::super::tooth::tests::ring(1024, z, 5);
     let mut d = suspect_pinion(0.1, 4.0);
     d.verdict.state = state;
     d.gears = vec![GearIndicators {
