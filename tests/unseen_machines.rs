@@ -250,7 +250,11 @@ struct Outcome {
 }
 
 fn diagnose(case: &Case, mode: Mode, baselines: &[&Case]) -> Outcome {
-    let m = &case.machine;
+    diagnose_as(case, &case.machine, mode, baselines)
+}
+
+/// [`diagnose`] with the teeth and nominal speed of machine `m` given, whatever machine recorded `case`.
+fn diagnose_as(case: &Case, m: &Machine, mode: Mode, baselines: &[&Case]) -> Outcome {
     let rec = case.path().to_string_lossy().into_owned();
     let teeth = format!("{},{}", m.zp, m.zw);
     let rpm = format!("{}", m.rpm());
@@ -373,6 +377,28 @@ fn healthy_and_fault(name: &str, label: &str) -> (Vec<Case>, Case) {
     let fault = faults.into_iter().find(|c| c.label() == label).unwrap();
     ensure(&healthy.iter().chain([&fault]).cloned().collect::<Vec<_>>());
     (healthy, fault)
+}
+
+/// A recording of another machine whose mesh lies 3 % from the baseline's (19/31 teeth at 23 Hz against the
+/// 17/29 machine at 25 Hz, the same physics and sample rate), judged with the baseline's teeth and nominal
+/// speed: its mesh is tracked and stands at the baseline's orders, so the mesh check cannot tell it; but
+/// averaged over 17 of its mesh cycles (its pinion turns once in 19) its shafts' own lines (run-out, tooth
+/// errors) average away, which an average of the baseline's machine keeps whatever its fault. It is not
+/// judged (exit 3), never healthy; the baseline machine's own third healthy recording stays judged.
+#[test]
+fn another_machine_whose_mesh_lies_near_the_baselines_is_not_judged() {
+    let a = machine("z17z29-25Hz-fs20k");
+    let (healthy, _) = test_set(&a);
+    let b = Machine { name: "z19z31-near-z17z29", zp: 19, zw: 31, shaft_hz: 25.0 * 17.0 * 1.03 / 19.0, ..a.clone() };
+    let other = Case { machine: b, fault: None, seed: 1 };
+    ensure(&healthy.iter().chain([&other]).cloned().collect::<Vec<_>>());
+    let base = [&healthy[0], &healthy[1]];
+    let o = diagnose_as(&other, &a, Mode::Speed, &base);
+    let reasons = o.json["verdict"]["reasons"].to_string();
+    assert_eq!((o.state.as_str(), o.code), ("not_judged", 3), "{reasons} {}", o.stderr);
+    assert!(reasons.contains("shaft-synchronous") || reasons.contains("mesh"), "{reasons}");
+    let own = diagnose(&healthy[2], Mode::Speed, &base);
+    assert_ne!(own.state, "not_judged", "{}", own.json["verdict"]);
 }
 
 macro_rules! machine_tests {

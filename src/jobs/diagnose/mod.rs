@@ -486,7 +486,14 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             shared_period::shared_period_evidence(&mut d);
         }
     }
-    if let Some(why) = reference.and_then(|r| baseline::mesh_lost(r, &d.gears, &d.teeth_misfit)) {
+    // the energy ratio's drop was measured on pairs; a planetary carrier's average swings from 0.5 to 1.2
+    // times its baseline's ER between healthy seeds (the planets' passes, not a mesh, dominate it)
+    let pair = p.opts.machine.is_none();
+    let misfit = reference.and_then(|r| {
+        baseline::mesh_lost(r, &d.gears, &d.teeth_misfit)
+            .or_else(|| pair.then(|| baseline::synchronous_lost(&d.scores)).flatten())
+    });
+    if let Some(why) = misfit {
         // the scores stay in the tables, but a baseline of another mesh decides nothing, faulty or healthy
         d.verdict = crate::report::summary::Verdict::new(VerdictState::NotJudged, VerdictGear::None, vec![why]);
         d.scores.iter_mut().for_each(|s| s.decides = false);

@@ -588,7 +588,7 @@ fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
 mod fit;
 mod local;
 mod one_file;
-pub use fit::{MESH_LOST_DB, mesh_change_db, mesh_lost};
+pub use fit::{MESH_LOST_DB, SYNCHRONOUS_LOST_SHARE, mesh_change_db, mesh_lost, synchronous_lost};
 pub use local::SameData;
 #[cfg(test)]
 use local::SidebandNoise;
