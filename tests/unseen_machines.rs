@@ -381,12 +381,13 @@ fn healthy_and_fault(name: &str, label: &str) -> (Vec<Case>, Case) {
 
 /// A recording of another machine whose mesh lies 3 % from the baseline's (19/31 teeth at 23 Hz against the
 /// 17/29 machine at 25 Hz, the same physics and sample rate), judged with the baseline's teeth and nominal
-/// speed: its mesh is tracked and stands at the baseline's orders, so the mesh check cannot tell it; but
-/// averaged over 17 of its mesh cycles (its pinion turns once in 19) its shafts' own lines (run-out, tooth
-/// errors) average away, which an average of the baseline's machine keeps whatever its fault. It is not
-/// judged (exit 3), never healthy; the baseline machine's own third healthy recording stays judged.
+/// speed: its mesh is tracked and stands at the baseline's orders, so the mesh check cannot tell it, but
+/// averaged over 17 of its mesh cycles (its pinion turns once in 19) its shafts' own lines average away
+/// (ER 0.47 and 0.38 of the baseline's). Never healthy: here its spectral change makes it suspect (where
+/// nothing else moved, the ER drop withdraws a healthy verdict: `baseline::synchronous_lost`, measured
+/// on the Python hold-out sets' cross runs); the baseline machine's own third healthy recording is judged.
 #[test]
-fn another_machine_whose_mesh_lies_near_the_baselines_is_not_judged() {
+fn another_machine_whose_mesh_lies_near_the_baselines_is_never_healthy() {
     let a = machine("z17z29-25Hz-fs20k");
     let (healthy, _) = test_set(&a);
     let b = Machine { name: "z19z31-near-z17z29", zp: 19, zw: 31, shaft_hz: 25.0 * 17.0 * 1.03 / 19.0, ..a.clone() };
@@ -394,9 +395,19 @@ fn another_machine_whose_mesh_lies_near_the_baselines_is_not_judged() {
     ensure(&healthy.iter().chain([&other]).cloned().collect::<Vec<_>>());
     let base = [&healthy[0], &healthy[1]];
     let o = diagnose_as(&other, &a, Mode::Speed, &base);
-    let reasons = o.json["verdict"]["reasons"].to_string();
-    assert_eq!((o.state.as_str(), o.code), ("not_judged", 3), "{reasons} {}", o.stderr);
-    assert!(reasons.contains("shaft-synchronous") || reasons.contains("mesh"), "{reasons}");
+    assert!(["suspect", "faulty", "not_judged"].contains(&o.state.as_str()), "{} {}", o.json["verdict"], o.stderr);
+    let er: Vec<f64> = o.json["scores"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["indicator"] == "er")
+        .map(|s| s["value"].as_f64().unwrap() / s["baseline_centre"].as_f64().unwrap())
+        .collect();
+    // the physics the rule rests on: every gear's average lost the baseline's non-mesh content
+    assert!(
+        !er.is_empty() && er.iter().all(|&share| share < gearvib::jobs::diagnose::baseline::SYNCHRONOUS_LOST_SHARE),
+        "{er:?}"
+    );
     let own = diagnose(&healthy[2], Mode::Speed, &base);
     assert_ne!(own.state, "not_judged", "{}", own.json["verdict"]);
 }

@@ -486,12 +486,14 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             shared_period::shared_period_evidence(&mut d);
         }
     }
-    // the energy ratio's drop was measured on pairs; a planetary carrier's average swings from 0.5 to 1.2
-    // times its baseline's ER between healthy seeds (the planets' passes, not a mesh, dominate it)
-    let pair = p.opts.machine.is_none();
+    // a healthy verdict only: the energy ratio also falls on the baseline's own machine (a speed a few %
+    // off, a far higher load, the rig's broken tooth on one channel), where a flagged verdict must stand;
+    // measured on pairs (a planetary carrier's average swings from 0.5 to 1.2 times its baseline's ER
+    // between healthy seeds: the planets' passes, not a mesh, dominate it)
+    let withdraw = p.opts.machine.is_none() && d.verdict.state == VerdictState::Healthy;
     let misfit = reference.and_then(|r| {
         baseline::mesh_lost(r, &d.gears, &d.teeth_misfit)
-            .or_else(|| pair.then(|| baseline::synchronous_lost(&d.scores)).flatten())
+            .or_else(|| withdraw.then(|| baseline::synchronous_lost(&d.scores)).flatten())
     });
     if let Some(why) = misfit {
         // the scores stay in the tables, but a baseline of another mesh decides nothing, faulty or healthy
