@@ -136,7 +136,7 @@ pub fn synchronous_lost(scores: &[Score]) -> Option<String> {
         })
         .collect();
     Some(format!(
-        "no indicator is over its limit, but that cannot be read as healthy: every gear average holds less shaft-synchronous content than the baseline's, its energy ratio (the difference signal's RMS over the mesh lines') under {SYNCHRONOUS_LOST_SHARE} of the baseline's ({}), where no recording of a generated machine's own baseline fell (0.74 at least, healthy or faulty); the averages then do not look like the baseline's: another machine whose mesh lies near the baseline's (its shafts' lines average away over the baseline's period), a speed a few % from the baseline's or a far higher load (the mesh moves over the housing's resonances), or a baseline with more noise or hum than this recording; judge it against a baseline of this machine at its speed and load",
+        "no indicator is over its limit, but that cannot be read as healthy: every gear average holds less shaft-synchronous content than the baseline's, its energy ratio (the difference signal's RMS over the mesh lines') under {SYNCHRONOUS_LOST_SHARE} of the baseline's ({}), where no recording of the generated sets' machines at their baseline's operating point fell (0.74 at least, healthy or faulty); the averages then do not look like the baseline's: another machine whose mesh lies near the baseline's (its shafts' lines average away over the baseline's period), a speed a few % from the baseline's or a far higher load (the mesh moves over the housing's resonances), or a baseline with more noise or hum than this recording; judge it against a baseline of this machine at its speed and load",
         each.join("; ")
     ))
 }
