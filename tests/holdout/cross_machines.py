@@ -30,7 +30,7 @@ DEFAULT_BIN = os.path.join(HERE, "..", "..", "target", "release", "gearvib")
 
 
 def machines(sets):
-    """(name, set dir, truth of healthy-s1, truth of healthy-s3) of every machine."""
+    """(name, set dir, {healthy-s1/-s2/-s3: truth}) of every machine."""
     out = []
     for data in sets:
         for mdir in sorted(glob.glob(os.path.join(data, "m*-z*"))):

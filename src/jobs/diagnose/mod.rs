@@ -496,7 +496,8 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             .or_else(|| withdraw.then(|| baseline::synchronous_lost(&d.scores)).flatten())
     });
     if let Some(why) = misfit {
-        // the scores stay in the tables, but a baseline of another mesh decides nothing, faulty or healthy
+        // the scores stay in the tables, but a baseline of another mesh (or a withdrawn healthy verdict)
+        // decides nothing
         d.verdict = crate::report::summary::Verdict::new(VerdictState::NotJudged, VerdictGear::None, vec![why]);
         d.scores.iter_mut().for_each(|s| s.decides = false);
     } else if let Some(why) = cap {

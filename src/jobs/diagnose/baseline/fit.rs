@@ -184,10 +184,8 @@ mod tests {
         }
     }
 
-    /// The mesh change against its definition: 0 dB for the baseline's own spectrum at any gain (a sensor's
-    /// sensitivity moves every order alike); 20 log10(1/100) = -40 dB when the four mesh lines fall a
-    /// hundredfold and nothing else moves; 0 - 20 log10(10) = -20 dB when the mesh lines stay and every
-    /// other order (so the median) rises tenfold.
+    /// An ER score of `gear` on channel 1: `value` (median of the recording's blocks) against the
+    /// baseline's median `centre`.
     fn er(gear: Shaft, value: f64, centre: f64) -> Score {
         Score {
             gear,
@@ -228,6 +226,10 @@ mod tests {
         assert_eq!(synchronous_lost(&[fm4]), None);
     }
 
+    /// The mesh change against its definition: 0 dB for the baseline's own spectrum at any gain (a sensor's
+    /// sensitivity moves every order alike); 20 log10(1/100) = -40 dB when the four mesh lines fall a
+    /// hundredfold and nothing else moves; 0 - 20 log10(10) = -20 dB when the mesh lines stay and every
+    /// other order (so the median) rises tenfold.
     #[test]
     fn the_mesh_change_is_the_mesh_lines_move_less_the_median_move() {
         let z = 7;
