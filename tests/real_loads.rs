@@ -84,3 +84,79 @@ fn a_single_file_profile_keeps_the_allowance() {
         assert!((a - x).abs() <= 1e-12 * x.abs() && (c - y).abs() <= 1e-12 * y.abs(), "{a} {c} against {x} {y}");
     }
 }
+
+fn judged_on(channel: &str, x: &str, y: &str, same_load: bool) -> serde_json::Value {
+    let (rec, base) = (real(x), real(y));
+    let mut args = vec!["diagnose", &rec, "--fs-unknown", "--channel", channel, "--json", "--baseline", &base];
+    if same_load {
+        args.push("--same-load");
+    }
+    let run = gearvib(&args);
+    assert!((0..=1).contains(&run.code), "{x} against {y}: {}", run.stderr);
+    serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap()
+}
+
+fn flagged(d: &serde_json::Value) -> bool {
+    matches!(d["verdict"]["state"].as_str(), Some("suspect" | "faulty"))
+}
+
+/// The broken tooth on channel 3 alone, against the healthy file of its own load: the spectral change
+/// (3-5 spreads over that file's blocks) and the sideband growth (0.29-0.51 of the sidebands' energy)
+/// stand over the limits of the file's own load but under the allowance kept for a neighbouring load,
+/// so without a word on the load the verdict is healthy (with the doubt said); `--same-load` (the user
+/// knows both were recorded at one load) drops the allowance and the tooth is flagged at 0, 80 and 90 %,
+/// through `--baseline` and through a profile of that one file alike.
+#[test]
+fn the_same_load_said_judges_one_file_on_its_own_limits() {
+    let dir = temp_dir("real-loads-same");
+    for load in ["0", "80", "90"] {
+        let (x, y) = (format!("b30hz{load}"), format!("h30hz{load}"));
+        let open = judged_on("3", &x, &y, false);
+        assert_eq!(open["verdict"]["state"], "healthy", "{x} on channel 3: {}", open["verdict"]);
+        assert!(load_warning(&open).is_some(), "{x}: the doubt is said: {}", open["warnings"]);
+        let same = judged_on("3", &x, &y, true);
+        assert!(flagged(&same), "{x} on channel 3 at its own load: {}", same["verdict"]);
+        assert!(load_warning(&same).is_none(), "{x}: no doubt on the load left: {}", same["warnings"]);
+        let said = same["warnings"].as_array().unwrap().iter().filter_map(|w| w.as_str());
+        assert_eq!(said.filter(|w| w.contains("as stated")).count(), 1, "{}", same["warnings"]);
+        // every limit is the file's own: none raised
+        for s in same["scores"].as_array().unwrap() {
+            assert_eq!(s["suspect_at"], s["suspect_at_one_load"], "{s}");
+        }
+        for c in same["local_change"].as_array().unwrap() {
+            assert_eq!(c["sidebands_limit"], c["sidebands_limit_one_load"], "{c}");
+        }
+        let profile = dir.join(format!("p{load}.json")).to_string_lossy().into_owned();
+        let run = gearvib(&["learn", &real(&y), "--fs-unknown", "--channel", "3", "-o", &profile]);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        let run = gearvib(&["diagnose", &real(&x), "--profile", &profile, "--same-load", "--json"]);
+        assert!((0..=1).contains(&run.code), "{}", run.stderr);
+        let p: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+        assert_eq!(p["verdict"], same["verdict"], "{x}: profile and baseline");
+    }
+}
+
+/// What `--same-load` costs when it is not so: the healthy 10 % file against the 20 % file alone is healthy
+/// with the allowance (`a_healthy_file_against_the_next_load_is_healthy_and_the_doubt_said`) and suspect
+/// once the load is said to be the same (channel 4: its sideband growth 0.38 over the own-load limit 0.25); the
+/// healthy verdict against itself is untouched.
+#[test]
+fn the_same_load_said_wrongly_costs_a_suspect_verdict() {
+    let d = judged_on("4", "h30hz10", "h30hz20", true);
+    assert_eq!(d["verdict"]["state"], "suspect", "{}", d["verdict"]);
+    let d = judged_on("4", "h30hz10", "h30hz20", false);
+    assert_eq!(d["verdict"]["state"], "healthy", "{}", d["verdict"]);
+}
+
+/// `--same-load` names where a baseline was recorded: without one, and with `learn`, it is refused naming
+/// the flag.
+#[test]
+fn the_same_load_without_a_baseline_is_refused() {
+    let run = gearvib(&["diagnose", &real("h30hz10"), "--fs-unknown", "--same-load"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.stderr.contains("--same-load") && run.stderr.contains("--baseline"), "{}", run.stderr);
+    let out = temp_dir("real-loads-same-learn").join("p.json").to_string_lossy().into_owned();
+    let run = gearvib(&["learn", &real("h30hz10"), "--fs-unknown", "--same-load", "-o", &out]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.stderr.contains("--same-load"), "{}", run.stderr);
+}

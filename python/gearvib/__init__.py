@@ -102,6 +102,7 @@ def diagnose(
     baseline: Union[None, str, "os.PathLike[str]", Iterable[Union[str, "os.PathLike[str]"]]] = None,
     arrays: bool = True,
     profile: Union[None, str, "os.PathLike[str]"] = None,
+    same_load: bool = False,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
     ``fs`` Hz, a WAV/CSV path, a directory (its .wav and .csv recordings in name order), or a list of them
@@ -111,7 +112,9 @@ def diagnose(
     1-based tachometer channel; ``channel``: analyse only this 1-based channel; ``unit``: the samples'
     physical unit; ``baseline``: healthy recordings of the same machine (paths or directories);
     ``profile``: a healthy profile written by :func:`learn` (its settings replace rpm, teeth, tacho, channel
-    and unit, and its reference replaces a baseline).
+    and unit, and its reference replaces a baseline); ``same_load``: the baseline or profile was recorded at
+    the recordings' load and speed, so a single baseline file's limits keep no allowance for a neighbouring
+    load (``diagnose --same-load``).
     Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...) with, unless
     ``arrays`` is False, numpy arrays: ``spectra`` (per channel: ``frequency_hz`` [Hz], ``amplitude`` [unit]),
     in each entry of ``gears`` the ``tsa``, ``residual`` and ``difference`` signals over one revolution
@@ -132,7 +135,10 @@ def diagnose(
     if profile is not None and base:
         raise ValueError("baseline and profile: give one (a profile is a learned baseline)")
     prof = os.fspath(profile) if profile is not None else None
-    raw = _gearvib.diagnose(paths, data, fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit, base, prof)
+    if same_load and not base and prof is None:
+        raise ValueError("same_load needs a baseline or a profile: it says where the baseline was recorded")
+    teeth_pair = tuple(teeth) if teeth else None
+    raw = _gearvib.diagnose(paths, data, fs, rpm, teeth_pair, tacho, channel, unit, base, prof, bool(same_load))
     # files come back first (a directory as all its recordings, in name order), then arrays: restore the
     # order given, a directory expanded in its place
     n_files = len(raw) - len(data)

@@ -32,6 +32,7 @@ def diagnose(
     baseline: Union[None, PathLike, Iterable[PathLike]] = ...,
     arrays: bool = ...,
     profile: Optional[PathLike] = ...,
+    same_load: bool = ...,
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
     """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys plus
     numpy arrays (unless `arrays` is False): `spectra` [Hz, unit], per gear `tsa`, `residual`,

@@ -3,7 +3,7 @@
 //! package `gearvib` wraps them. Every call releases the GIL while it computes.
 
 use gearvib::io::Recording;
-use gearvib::jobs::diagnose::{DiagnoseJob, Options, Prepared};
+use gearvib::jobs::diagnose::{BaselineLoad, DiagnoseJob, Options, Prepared};
 use gearvib::scene::Scene;
 use numpy::ndarray::Axis;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
@@ -149,11 +149,11 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     })
 }
 
-/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline) -> list of (`diagnose --json`
+/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline, profile, same_load) -> list of (`diagnose --json`
 /// object as a JSON string, its curves as numpy arrays (see `Curves::into_py`)): files first, then the
 /// in-memory recordings (channels x samples, float32 or float64, any layout) named "array 1", "array 2", ...
 #[pyfunction]
-#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None))]
+#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None, same_load=false))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
     py: Python<'_>,
@@ -167,6 +167,7 @@ fn diagnose(
     unit: Option<String>,
     baseline: Vec<String>,
     profile: Option<String>,
+    same_load: bool,
 ) -> PyResult<Vec<(String, Py<PyDict>)>> {
     // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
     // place, others are converted once
@@ -184,6 +185,7 @@ fn diagnose(
             baselines: baseline.iter().map(PathBuf::from).collect(),
             profile: profile.map(PathBuf::from),
             in_memory,
+            baseline_load: if same_load { BaselineLoad::Same } else { BaselineLoad::Unknown },
             ..Default::default()
         };
         let prepared = prepared_for(&job)?;
@@ -304,8 +306,9 @@ fn prepared_for(job: &DiagnoseJob) -> Result<Arc<Prepared>, gearvib::Error> {
         std::fs::metadata(p).map(|m| (m.len(), m.modified().ok())).map_or_else(|e| e.to_string(), |m| format!("{m:?}"))
     };
     let key = format!(
-        "{:?}|{:?}|{:?}",
+        "{:?}|{:?}|{:?}|{:?}",
         job.options,
+        job.baseline_load,
         job.baselines.iter().map(|b| (b.clone(), stamp(b))).collect::<Vec<_>>(),
         job.profile.as_ref().map(|p| (p.clone(), stamp(p)))
     );

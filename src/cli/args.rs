@@ -169,9 +169,16 @@ pub struct DiagnoseArgs {
     pub block_revs: Option<u64>,
     /// A healthy profile written by `learn`: the recordings are judged against it with exactly its
     /// settings (its teeth, speed, channels, tachometer, block length and band); only what describes a
-    /// recording's own file (--fs, --fs-override, --unit, --sensitivity) may be given beside it.
+    /// recording's own file (--fs, --fs-override, --unit, --sensitivity, --same-load) may be given beside
+    /// it.
     #[arg(long, conflicts_with = "baseline")]
     pub profile: Option<String>,
+    /// The baseline (--baseline or --profile) was recorded at this recording's load and speed: the limits
+    /// of a single baseline file are then its own blocks', without the allowance kept for a neighbouring
+    /// load (which one file cannot show). Say it only when it is so: a healthy recording at another load
+    /// may then be called suspect.
+    #[arg(long)]
+    pub same_load: bool,
     /// Scene to simulate at the recording's speed and compare with.
     #[arg(long)]
     pub scene: Option<String>,

@@ -248,6 +248,12 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
             "is also the --tacho-channel: tachometer pulses are not a vibration signal",
         ));
     }
+    if a.same_load && a.baseline.is_empty() && a.profile.is_none() {
+        return Err(CliError::flag(
+            "--same-load",
+            "needs --baseline or --profile: it says where the baseline was recorded",
+        ));
+    }
     if a.pulses_per_rev == 0 {
         return Err(CliError::flag("--pulses-per-rev", "0: a tachometer gives at least 1 pulse per revolution"));
     }
@@ -326,6 +332,11 @@ pub fn diagnose_job(a: &DiagnoseArgs) -> Result<jobs::diagnose::DiagnoseJob<'sta
             .as_deref()
             .and_then(crate::report::summary::SpectrumScale::from_name)
             .unwrap_or_default(),
+        baseline_load: if a.same_load {
+            jobs::diagnose::BaselineLoad::Same
+        } else {
+            jobs::diagnose::BaselineLoad::Unknown
+        },
     })
 }
 
@@ -354,6 +365,7 @@ fn learn(out: &mut dyn Write, a: &LearnArgs) -> Result<u8, Error> {
         (d.scene.is_some(), "--scene"),
         (d.report.is_some(), "--report"),
         (d.fail_on.is_some(), "--fail-on"),
+        (d.same_load, "--same-load"),
     ] {
         if given {
             return Err(CliError::flag(flag, "does not apply to learn: it learns a profile from healthy recordings"));

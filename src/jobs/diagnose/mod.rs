@@ -44,6 +44,7 @@ use teeth::{
 };
 use tracking::{Tracked, nominal_speed, strongest_low_harmonic, track};
 
+pub use baseline::BaselineLoad;
 pub use compare::compare;
 pub use options::{DEFAULT_SPEED_TOLERANCE, Geometry, Options};
 pub use verdict::{Thresholds, ensemble_na4, judge};
@@ -92,6 +93,8 @@ pub struct DiagnoseJob<'a> {
     pub iso_class: Option<crate::signal::velocity::MachineClass>,
     /// How the report's spectrum images show their levels.
     pub spectrum_scale: crate::report::summary::SpectrumScale,
+    /// Whether the baseline (files or profile) was recorded at the recordings' load and speed.
+    pub baseline_load: baseline::BaselineLoad,
 }
 
 /// What [`run`] produced: one diagnosis per recording that could be diagnosed, in the order given, the
@@ -253,6 +256,22 @@ type BaselinePlots = (Vec<(usize, crate::signal::Spectrum)>, Vec<(usize, Shaft, 
 /// A baseline cannot be read or analysed, baselines that do not fit each other, too short a baseline, an
 /// unreadable profile or comparison scene.
 pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
+    let mut p = prepare_sides(job)?;
+    if job.baseline_load == baseline::BaselineLoad::Same
+        && let Some(r) = p.reference.take()
+    {
+        p.notes.push(if r.files == 1 {
+            "the baseline file is taken as recorded at this recording's load and speed, as stated: its limits are its own blocks', with no allowance for another operating point (which one file cannot show)".to_string()
+        } else {
+            format!("the baseline's {} files were stated to be recorded at this recording's load and speed: with two files or more that changes no limit (how far the files differ sets their spread)", r.files)
+        });
+        p.reference = Some(r.with_load(job.baseline_load));
+    }
+    Ok(p)
+}
+
+/// [`prepare`] before the baseline's operating point is applied.
+fn prepare_sides(job: &DiagnoseJob) -> Result<Prepared, Error> {
     let scene = job.scene.as_deref().map(compare::ModelScene::load).transpose()?;
     if let Some(path) = &job.profile {
         let p = profile::load(path)?;

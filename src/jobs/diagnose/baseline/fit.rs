@@ -166,7 +166,12 @@ mod tests {
             pattern_healthy: Vec::new(),
             pattern_noise: Vec::new(),
         };
-        Reference { gears: BTreeMap::from([((Shaft::Pinion, 1), g)]), files: 2, tracked_line_db: None }
+        Reference {
+            gears: BTreeMap::from([((Shaft::Pinion, 1), g)]),
+            files: 2,
+            tracked_line_db: None,
+            same_load: false,
+        }
     }
 
     fn pinion(z: usize, blocks: Vec<Vec<f64>>) -> GearIndicators {

@@ -140,12 +140,13 @@ fn aligned_blocks(blocks: &[OrderSpectrum], reference: &[(f64, f64)], z: usize) 
 /// residual or healthy values, or the recording's residual does not line up with it (correlation under
 /// [`MIN_ALIGNMENT`]); `Some(Err(SameData))` when the recording is the baseline's data ([`SameData`]).
 /// `shared_step` is z / gcd(z, z_other) on a pair whose teeth share a factor (its
-/// orders shared with the other gear are its multiples), else 1.
+/// orders shared with the other gear are its multiples), else 1. `(one_file, same_load)`: the baseline is
+/// a single file; it was stated to be recorded at the recording's load ([`BaselineLoad::Same`]).
 pub(super) fn local_change_of(
     fft: &mut Fft,
     g: &GearIndicators,
     r: &GearReference,
-    one_file: bool,
+    (one_file, same_load): (bool, bool),
     shared_step: usize,
 ) -> Option<Result<LocalChange, SameData>> {
     // the largest of the baseline files' figures (NaN when there are none)
@@ -196,9 +197,11 @@ pub(super) fn local_change_of(
     } else {
         files_limit
     };
-    // a single file cannot show what a change of operating point does to the sidebands
+    // a single file cannot show what a change of operating point does to the sidebands (unless the
+    // recording is stated to be at the file's)
     let sidebands_limit_one_load = sidebands_limit;
-    let sidebands_limit = if one_file { sidebands_limit.max(super::one_file::SIDEBAND_LEAST) } else { sidebands_limit };
+    let sidebands_limit =
+        if one_file && !same_load { sidebands_limit.max(super::one_file::SIDEBAND_LEAST) } else { sidebands_limit };
     let pattern = tsa_change::pattern_parts(&mean, &reference, z)
         .map_or(f64::NAN, |p| at_baseline_noise(p, pattern_scatter, &r.pattern_noise));
     let pattern_healthy = largest(&r.pattern_healthy);

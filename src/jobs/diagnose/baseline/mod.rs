@@ -296,6 +296,8 @@ pub struct Reference {
     /// The weakest mesh line the baseline files' angles were followed on (dB over its band), when every
     /// file was tracked on its mesh phase: how clean an angle the baseline's averages rest on.
     pub tracked_line_db: Option<f64>,
+    /// The files were stated to be recorded at the recording's load ([`BaselineLoad::Same`]; never stored).
+    same_load: bool,
 }
 
 /// A [`Reference`] as stored in a profile: one entry per gear and channel (JSON has no tuple keys).
@@ -360,7 +362,7 @@ impl TryFrom<ReferenceFile> for Reference {
         if gears.is_empty() {
             return Err("no gear".into());
         }
-        Ok(Self { gears, files: f.files, tracked_line_db: f.tracked_line_db })
+        Ok(Self { gears, files: f.files, tracked_line_db: f.tracked_line_db, same_load: false })
     }
 }
 
@@ -485,7 +487,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
         .collect();
     let tracked_line_db =
         lines.iter().copied().collect::<Option<Vec<f64>>>().and_then(|v| v.into_iter().reduce(f64::min));
-    Ok(Reference { gears, files: baselines.len(), tracked_line_db })
+    Ok(Reference { gears, files: baselines.len(), tracked_line_db, same_load: false })
 }
 
 /// `values` (one per pooled block, the files' blocks one after the other) cut back into the files.
@@ -522,7 +524,7 @@ impl Reference {
     /// teeth share a factor, else 1.
     pub fn local_change(&self, g: &GearIndicators, shared_step: usize) -> Option<Result<LocalChange, SameData>> {
         let r = self.gears.get(&(g.gear.baseline_key(), g.channel))?;
-        local_change_of(&mut Fft::new(), g, r, self.files == 1, shared_step)
+        local_change_of(&mut Fft::new(), g, r, (self.files == 1, self.same_load), shared_step)
     }
 }
 
@@ -590,9 +592,8 @@ mod local;
 mod one_file;
 pub use fit::{MESH_LOST_DB, SYNCHRONOUS_LOST_SHARE, mesh_change_db, mesh_lost, synchronous_lost};
 pub use local::SameData;
-#[cfg(test)]
-use local::SidebandNoise;
 use local::{LocalReference, local_change_of, local_reference};
+pub use one_file::BaselineLoad;
 
 #[cfg(test)]
 mod tests;

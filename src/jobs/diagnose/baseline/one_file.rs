@@ -10,7 +10,7 @@
 //! median seen there; the rig's broken tooth stands 18-37 spreads over its own load's healthy file on the
 //! spectral change (5-15 dB), far beyond these.
 
-use super::{MEDIAN_SCATTER, Stat};
+use super::{MEDIAN_SCATTER, Reference, Stat};
 use crate::report::summary::Indicator;
 
 /// Factor on the largest rise seen on the rig between neighbouring loads.
@@ -61,5 +61,40 @@ impl Stat {
         let of_median = MEDIAN_SCATTER * self.spread / (blocks.max(1) as f64).sqrt();
         let raise = |at: f64| ((a + at * of_median) / spread).max(at);
         (raise(suspect_at), raise(faulty_at))
+    }
+}
+
+/// Whether the baseline's files were recorded at the load and speed of the recordings judged against
+/// them: what the user knows and the files cannot show.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BaselineLoad {
+    /// Not known: a single file's limits keep the [`allowance`] and [`SIDEBAND_LEAST`] for a neighbouring
+    /// load.
+    #[default]
+    Unknown,
+    /// Stated to be the recordings' own operating point: a single file's limits are its blocks' own (the
+    /// limits `suspect_at_one_load` and `sidebands_limit_one_load` of the scores). On the rig's broken
+    /// tooth, channel 3 alone against the healthy file of its load: healthy at every load with the
+    /// allowance (spectral change 3.1-5.1 spreads, sideband growth 0.29-0.51), flagged at every load
+    /// without it.
+    Same,
+}
+
+impl Reference {
+    /// This reference with the operating point of its files as stated: [`BaselineLoad::Same`] drops every
+    /// load allowance of a single file (two files or more keep none).
+    pub fn with_load(mut self, load: BaselineLoad) -> Self {
+        self.same_load = load == BaselineLoad::Same;
+        if self.same_load {
+            for g in self.gears.values_mut() {
+                g.stats.values_mut().for_each(|s| s.load_allowance = None);
+            }
+        }
+        self
+    }
+
+    /// Whether the files were stated to be recorded at the recordings' load ([`Self::with_load`]).
+    pub fn same_load(&self) -> bool {
+        self.same_load
     }
 }

@@ -1,6 +1,7 @@
 //! Tests of the statistical baseline: the robust spread of Gaussian values, the Student-t quantiles
 //! against the published table, the spread's floor.
 
+use super::local::SidebandNoise;
 use super::*;
 
 #[test]

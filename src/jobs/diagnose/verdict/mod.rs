@@ -477,8 +477,10 @@ fn healthy_reason(d: &Diagnosis, reference: Option<&Reference>, t: &Thresholds) 
                 d.scores.iter().filter(|s| s.suspect_at > s.suspect_at_one_load).count(),
                 "with the limit raised to what a neighbouring load moves a healthy recording (a single baseline file cannot show it)",
             );
+            let load =
+                if r.same_load() && r.files == 1 { ", at this recording's load and speed as stated" } else { "" };
             format!(
-                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){files}{raised})",
+                "every condition indicator lies below its suspect limit ({range} spreads above the centre of the baseline's blocks, for a false-alarm rate of 1e-3 per indicator; {} healthy recording(s){load}{files}{raised})",
                 r.files
             )
         }
