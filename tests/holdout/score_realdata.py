@@ -14,6 +14,8 @@ broken tooth, sample rate and teeth unknown, so every run is `diagnose REC --fs-
   healthy-vs-rest    h30hzL against a profile learned from the nine other loads' healthy files (`learn`)
                                                                 must be healthy
   broken-vs-rest     b30hzL against that profile                must be flagged
+  broken-own-chN     b30hzL on channel N alone against h30hzL   flagged or not (reported, no requirement)
+  broken-own-chN-same  the same with --same-load (the file was recorded at that load): reported
 The files are the same data set's copies in kokikwbt/predictive-maintenance `datasets/gfd/*.csv.gz`,
 decompressed into --data (four of them, and three more loads, are in data/realdata). Nothing is written
 but the table on stdout (and the profiles, in a temporary directory).
@@ -35,7 +37,7 @@ LOADS = list(range(0, 100, 10))
 
 
 def cases():
-    """(kind, recording, baselines, requirement) for every comparison of the scorecard."""
+    """(kind, recording, baselines, requirement, further flags) for every comparison of the scorecard."""
     out = []
     for load in LOADS:
         near = [m for m in (load - 10, load + 10) if 0 <= m <= 90]
@@ -51,7 +53,14 @@ def cases():
             out.append(("broken-vs-two", f"b30hz{load}", [f"h30hz{m}" for m in near], "flag"))
         out.append(("healthy-vs-rest", f"h30hz{load}", [f"profile-without-{load}"], "keep"))
         out.append(("broken-vs-rest", f"b30hz{load}", [f"profile-without-{load}"], "flag"))
-    return out
+    # one channel alone against the healthy file of its own load, without and with the word that the
+    # file was recorded at that load (`--same-load`): reported, no requirement (a sensor may not see it)
+    for same in (False, True):
+        for ch in range(1, 5):
+            kind = f"broken-own-ch{ch}" + ("-same" if same else "")
+            flags = ["--channel", str(ch)] + (["--same-load"] if same else [])
+            out += [(kind, f"b30hz{load}", [f"h30hz{load}"], "any", flags) for load in LOADS]
+    return [c if len(c) == 5 else c + ([],) for c in out]
 
 
 def learn_profiles(binary, data, into):
@@ -64,8 +73,8 @@ def learn_profiles(binary, data, into):
 
 def run(binary, data, profiles, case):
     """The verdict of one case: (state, gear, first reason, exit code)."""
-    _, rec, bases, _ = case
-    cmd = [binary, "diagnose", os.path.join(data, rec + ".csv"), "--json"]
+    _, rec, bases, _, flags = case
+    cmd = [binary, "diagnose", os.path.join(data, rec + ".csv"), "--json", *flags]
     if bases and bases[0].startswith("profile-"):
         cmd += ["--profile", os.path.join(profiles, bases[0] + ".json")]
     else:
@@ -93,7 +102,7 @@ def main():
             results = list(ex.map(lambda c: run(a.bin, a.data, profiles, c), all_cases))
     tally = collections.OrderedDict()
     for case, (state, gear, reason, code) in zip(all_cases, results):
-        kind, rec, bases, want = case
+        kind, rec, bases, want, _ = case
         ok = {"flag": state in ("suspect", "faulty"), "keep": state == "healthy", "any": state != "error"}[want]
         t = tally.setdefault(kind, [0, 0, 0, want])
         t[0] += ok
