@@ -103,6 +103,7 @@ def diagnose(
     arrays: bool = True,
     profile: Union[None, str, "os.PathLike[str]"] = None,
     same_load: bool = False,
+    fs_unknown: bool = False,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
     ``fs`` Hz, a WAV/CSV path, a directory (its .wav and .csv recordings in name order), or a list of them
@@ -114,7 +115,8 @@ def diagnose(
     ``profile``: a healthy profile written by :func:`learn` (its settings replace rpm, teeth, tacho, channel
     and unit, and its reference replaces a baseline); ``same_load``: the baseline or profile was recorded at
     the recordings' load and speed, so a single baseline file's limits keep no allowance for a neighbouring
-    load (``diagnose --same-load``).
+    load (``diagnose --same-load``); ``fs_unknown``: no sample rate is known (a CSV without a time column),
+    so the recording is analysed in orders of its estimated shaft period (``diagnose --fs-unknown``).
     Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...) with, unless
     ``arrays`` is False, numpy arrays: ``spectra`` (per channel: ``frequency_hz`` [Hz], ``amplitude`` [unit]),
     in each entry of ``gears`` the ``tsa``, ``residual`` and ``difference`` signals over one revolution
@@ -138,7 +140,8 @@ def diagnose(
     if same_load and not base and prof is None:
         raise ValueError("same_load needs a baseline or a profile: it says where the baseline was recorded")
     teeth_pair = tuple(teeth) if teeth else None
-    raw = _gearvib.diagnose(paths, data, fs, rpm, teeth_pair, tacho, channel, unit, base, prof, bool(same_load))
+    args = (paths, data, fs, rpm, teeth_pair, tacho, channel, unit, base, prof, bool(same_load), bool(fs_unknown))
+    raw = _gearvib.diagnose(*args)
     # files come back first (a directory as all its recordings, in name order), then arrays: restore the
     # order given, a directory expanded in its place
     n_files = len(raw) - len(data)
@@ -245,10 +248,13 @@ def learn(
     tacho: Optional[int] = None,
     channel: Optional[int] = None,
     unit: Optional[str] = None,
+    fs_unknown: bool = False,
 ) -> dict:
     """Learn a healthy profile from healthy recordings of one machine (paths or directories) and write it to
     ``output`` (``gearvib learn ... -o output``); returns the profile as a dictionary. Pass ``output`` as
-    ``profile=`` to :func:`diagnose` to judge recordings against it with exactly its settings."""
+    ``profile=`` to :func:`diagnose` to judge recordings against it with exactly its settings. ``fs_unknown``:
+    no sample rate is known (``learn --fs-unknown``); the profile keeps it."""
     paths = [os.fspath(healthy)] if isinstance(healthy, (str, os.PathLike)) else [os.fspath(h) for h in healthy]
-    text = _gearvib.learn(paths, os.fspath(output), fs, rpm, tuple(teeth) if teeth else None, tacho, channel, unit)
+    teeth_pair = tuple(teeth) if teeth else None
+    text = _gearvib.learn(paths, os.fspath(output), fs, rpm, teeth_pair, tacho, channel, unit, bool(fs_unknown))
     return json.loads(text)

@@ -33,6 +33,7 @@ def diagnose(
     arrays: bool = ...,
     profile: Optional[PathLike] = ...,
     same_load: bool = ...,
+    fs_unknown: bool = ...,
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
     """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys plus
     numpy arrays (unless `arrays` is False): `spectra` [Hz, unit], per gear `tsa`, `residual`,
@@ -76,5 +77,6 @@ def learn(
     tacho: Optional[int] = ...,
     channel: Optional[int] = ...,
     unit: Optional[str] = ...,
+    fs_unknown: bool = ...,
 ) -> dict[str, Any]:
     """The healthy profile learned from `healthy` and written to `output` (the `learn` JSON)."""

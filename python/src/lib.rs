@@ -115,9 +115,18 @@ struct Kw {
     tacho: Option<usize>,
     channel: Option<usize>,
     unit: Option<String>,
+    /// No sample rate is known: analyse in orders of the estimated shaft period (`--fs-unknown`).
+    fs_unknown: bool,
 }
 
 fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
+    if fs.is_some() && k.fs_unknown {
+        return Err(gearvib::jobs::JobError::Value {
+            what: gearvib::jobs::Given::SampleRate,
+            message: "fs and fs_unknown: give the sample rate or say it is unknown".into(),
+        }
+        .into());
+    }
     if let Some(r) = k.rpm {
         if !(r.is_finite() && r > 0.0) {
             return Err(gearvib::jobs::JobError::Value {
@@ -138,6 +147,7 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     }
     Ok(Options {
         fs_hz: fs,
+        fs_unknown: k.fs_unknown,
         shaft_hz: k.rpm.map(|r| r / 60.0),
         teeth: k.teeth,
         tacho_channel: k.tacho,
@@ -149,11 +159,11 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     })
 }
 
-/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline, profile, same_load) -> list of (`diagnose --json`
+/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline, profile, same_load, fs_unknown) -> list of (`diagnose --json`
 /// object as a JSON string, its curves as numpy arrays (see `Curves::into_py`)): files first, then the
 /// in-memory recordings (channels x samples, float32 or float64, any layout) named "array 1", "array 2", ...
 #[pyfunction]
-#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None, same_load=false))]
+#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None, same_load=false, fs_unknown=false))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
     py: Python<'_>,
@@ -168,6 +178,7 @@ fn diagnose(
     baseline: Vec<String>,
     profile: Option<String>,
     same_load: bool,
+    fs_unknown: bool,
 ) -> PyResult<Vec<(String, Py<PyDict>)>> {
     // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
     // place, others are converted once
@@ -176,7 +187,7 @@ fn diagnose(
     for (i, h) in held.iter().enumerate() {
         in_memory.push((PathBuf::from(format!("array {}", i + 1)), recording_of(h, fs)?));
     }
-    let kw = Kw { rpm, teeth, tacho, channel, unit };
+    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown };
     let job_options = options(&kw, fs).map_err(to_py)?;
     py.detach(|| {
         let job = DiagnoseJob {
@@ -202,10 +213,10 @@ fn diagnose(
     .and_then(|all| all.into_iter().map(|(text, curves)| Ok((text, curves.into_py(py)?))).collect())
 }
 
-/// learn(paths, output, fs, rpm, teeth, tacho, channel, unit) -> the profile written to `output`, as JSON
+/// learn(paths, output, fs, rpm, teeth, tacho, channel, unit, fs_unknown) -> the profile written to `output`, as JSON
 /// text (`gearvib learn ... -o output`).
 #[pyfunction]
-#[pyo3(signature = (paths, output, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None))]
+#[pyo3(signature = (paths, output, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, fs_unknown=false))]
 #[allow(clippy::too_many_arguments)]
 fn learn(
     py: Python<'_>,
@@ -217,8 +228,9 @@ fn learn(
     tacho: Option<usize>,
     channel: Option<usize>,
     unit: Option<String>,
+    fs_unknown: bool,
 ) -> PyResult<String> {
-    let kw = Kw { rpm, teeth, tacho, channel, unit };
+    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown };
     let options = options(&kw, fs).map_err(to_py)?;
     py.detach(|| {
         let job = gearvib::jobs::diagnose::profile::LearnJob {

@@ -304,6 +304,26 @@ def test_same_load_drops_the_single_file_allowance_as_the_cli(tmp_path):
         gearvib.diagnose(cracked, teeth=(14, 39), same_load=True)
 
 
+def test_a_real_recording_of_unknown_rate_as_the_cli(tmp_path):
+    # the real rig's CSVs carry no time column: without fs_unknown the call is refused, with it the recording
+    # is judged in orders as `--fs-unknown`; the broken tooth on channel 3 alone against its own load's
+    # healthy file is healthy until the load is said to be the same (tests/real_loads.rs)
+    real = os.path.join(ROOT, "data", "realdata", "{}.csv")
+    broken, healthy = real.format("b30hz0"), real.format("h30hz0")
+    with pytest.raises(ValueError, match="sample rate"):
+        gearvib.diagnose(broken, arrays=False)
+    with pytest.raises(ValueError):
+        gearvib.diagnose(broken, 20000.0, fs_unknown=True, arrays=False)
+    kw = dict(fs_unknown=True, channel=3, baseline=healthy, arrays=False)
+    open_load, same = gearvib.diagnose(broken, **kw), gearvib.diagnose(broken, same_load=True, **kw)
+    assert open_load["verdict"]["state"] == "healthy" and same["verdict"]["state"] in ("suspect", "faulty")
+    cli = ("diagnose", broken, "--fs-unknown", "--channel", "3", "--baseline", healthy)
+    assert open_load == cli_json(*cli)[0] and same == cli_json(*cli, "--same-load")[0]
+    p = gearvib.learn(healthy, tmp_path / "p.json", fs_unknown=True, channel=3)
+    assert p["processing"]["fs_unknown"] is True
+    assert gearvib.diagnose(broken, profile=tmp_path / "p.json", same_load=True, arrays=False)["verdict"] == same["verdict"]
+
+
 def test_a_directory_gives_every_recording(tmp_path):
     # issue 29: diagnose(DIR) returned the first recording only
     for name in ["healthy", "pitted-pinion-tooth3"]:
