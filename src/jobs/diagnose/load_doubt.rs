@@ -49,26 +49,17 @@ pub fn warning(scores: &[Score], changes: &[LocalChange]) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::summary::{Indicator, Scale, Shaft};
+    use crate::report::summary::{Indicator, Shaft};
 
     fn score(spreads: f64, decides: bool) -> Score {
         Score {
-            gear: Shaft::Pinion,
-            channel: 1,
-            indicator: Indicator::Fm0,
             value: 1.0,
-            blocks: 30,
-            baseline_centre: 1.0,
             baseline_spread: 0.05,
-            spread_from_files: false,
-            scale: Scale::Log,
             baseline_range: [0.9, 1.1],
-            baseline_blocks: 30,
-            spreads,
             suspect_at: 7.0,
             faulty_at: 9.5,
-            suspect_at_one_load: 3.4,
             decides,
+            ..Score::test(Shaft::Pinion, Indicator::Fm0, spreads)
         }
     }
 

@@ -149,6 +149,33 @@ impl Score {
     }
 }
 
+#[cfg(test)]
+impl Score {
+    /// A deciding score for unit tests: `indicator` of `gear` on channel 1 at `spreads`, on the log scale
+    /// with centre 1 and spread 0.1 over 30 blocks against 30, limits 3.4 and 5.6 spreads at the file's own
+    /// load; a test sets what else it reads (`Score { value, ..Score::test(...) }`).
+    pub(crate) fn test(gear: Shaft, indicator: Indicator, spreads: f64) -> Self {
+        Self {
+            gear,
+            channel: 1,
+            indicator,
+            value: (0.1 * spreads).exp(),
+            blocks: 30,
+            baseline_centre: 1.0,
+            baseline_spread: 0.1,
+            spread_from_files: false,
+            scale: Scale::Log,
+            baseline_range: [0.8, 1.2],
+            baseline_blocks: 30,
+            spreads,
+            suspect_at: 3.4,
+            suspect_at_one_load: 3.4,
+            faulty_at: 5.6,
+            decides: true,
+        }
+    }
+}
+
 /// Where one gear's average changed against the baseline's: the phase-aligned difference of its residual
 /// signal from the baseline's mean residual, how much of that difference's energy one tooth pitch holds, and
 /// how much its first-order mesh sidebands grew.

@@ -193,22 +193,11 @@ mod tests {
     /// baseline's median `centre`.
     fn er(gear: Shaft, value: f64, centre: f64) -> Score {
         Score {
-            gear,
-            channel: 1,
-            indicator: Indicator::Er,
             value,
             blocks: 12,
             baseline_centre: centre,
-            baseline_spread: 0.1,
-            spread_from_files: false,
-            scale: crate::report::summary::Scale::Log,
             baseline_range: [0.8 * centre, 1.2 * centre],
-            baseline_blocks: 30,
-            spreads: (value / centre).ln() / 0.1,
-            suspect_at: 3.4,
-            suspect_at_one_load: 3.4,
-            faulty_at: 5.6,
-            decides: true,
+            ..Score::test(gear, Indicator::Er, (value / centre).ln() / 0.1)
         }
     }
 

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::report::summary::{
-    LocalChange, Scale, Score, ShaftHz, SpectrumScale, SpeedProfile, SpeedSource, TeethSource, Tracking,
+    LocalChange, Score, ShaftHz, SpectrumScale, SpeedProfile, SpeedSource, TeethSource, Tracking,
 };
 
 /// A diagnosis suspect on the pinion from ER alone (an energy measure both averages share), with the given
@@ -10,22 +10,9 @@ use crate::report::summary::{
 /// gears' patterns known and unchanged.
 fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
     let score = |indicator: Indicator, spreads: f64| Score {
-        gear: Shaft::Pinion,
-        channel: 1,
-        indicator,
         value: 1.0,
-        blocks: 30,
-        baseline_centre: 1.0,
-        baseline_spread: 0.1,
-        spread_from_files: false,
-        scale: Scale::Log,
-        baseline_range: [0.8, 1.2],
-        baseline_blocks: 30,
-        spreads,
-        suspect_at: 3.4,
-        suspect_at_one_load: 3.4,
         faulty_at: 5.5,
-        decides: true,
+        ..Score::test(Shaft::Pinion, indicator, spreads)
     };
     let change = |gear: Shaft, value: f64| LocalChange {
         gear,

@@ -109,22 +109,13 @@ fn the_mesh_ratios_count_as_one_towards_faulty() {
 
 fn score(indicator: Indicator, spreads: f64) -> Score {
     Score {
-        gear: Shaft::Pinion,
-        channel: 1,
-        indicator,
         value: 0.12,
-        blocks: 32,
         baseline_centre: 0.05,
         baseline_spread: 0.24,
-        spread_from_files: false,
-        scale: crate::report::summary::Scale::Log,
         baseline_range: [0.02, 0.07],
-        baseline_blocks: 32,
-        spreads,
         suspect_at: 3.43,
         suspect_at_one_load: 3.43,
-        faulty_at: 5.6,
-        decides: true,
+        ..Score::test(Shaft::Pinion, indicator, spreads)
     }
 }
 
