@@ -68,8 +68,9 @@ impl Stat {
 /// them: what the user knows and the files cannot show.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BaselineLoad {
-    /// Not known: a single file's limits keep the [`allowance`] and [`SIDEBAND_LEAST`] for a neighbouring
-    /// load.
+    /// Not known: a single file's limits keep an allowance for a neighbouring load (1.25 times each
+    /// indicator's largest rise between the real rig's loads 10 % apart) and count the sideband growth
+    /// from 0.88.
     #[default]
     Unknown,
     /// Stated to be the recordings' own operating point: a single file's limits are its blocks' own (the
