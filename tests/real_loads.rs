@@ -100,10 +100,10 @@ fn flagged(d: &serde_json::Value) -> bool {
     matches!(d["verdict"]["state"].as_str(), Some("suspect" | "faulty"))
 }
 
-/// The broken tooth on channel 3 alone, against the healthy file of its own load: the spectral change
-/// (3-5 spreads over that file's blocks) and the sideband growth (0.29-0.51 of the sidebands' energy)
-/// stand over the limits of the file's own load but under the allowance kept for a neighbouring load,
-/// so without a word on the load the verdict is healthy (with the doubt said); `--same-load` (the user
+/// The broken tooth on channel 3 alone, against the healthy file of its own load: the sideband growth
+/// (0.29-0.51 of the sidebands' energy; and the spectral change at 0 %, 5.1 spreads over that file's
+/// blocks) stands over the limits of the file's own load but under the allowance kept for a neighbouring
+/// load, so without a word on the load the verdict is healthy (with the doubt said); `--same-load` (the user
 /// knows both were recorded at one load) drops the allowance and the tooth is flagged at 0, 80 and 90 %,
 /// through `--baseline` and through a profile of that one file alike.
 #[test]
@@ -133,7 +133,40 @@ fn the_same_load_said_judges_one_file_on_its_own_limits() {
         assert!((0..=1).contains(&run.code), "{}", run.stderr);
         let p: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
         assert_eq!(p["verdict"], same["verdict"], "{x}: profile and baseline");
+        assert_eq!((same["baseline_same_load"].as_bool(), open.get("baseline_same_load")), (Some(true), None));
     }
+    // channel 4 does not see the tooth (every indicator within a spread of the file's blocks): healthy, and
+    // the verdict says what it rests on
+    let d = judged_on("4", "b30hz0", "h30hz0", true);
+    let reasons = d["verdict"]["reasons"].to_string();
+    assert!(d["verdict"]["state"] == "healthy" && reasons.contains("load and speed as stated"), "{reasons}");
+}
+
+/// With two baseline files the statement changes no limit: the same verdict, scores and local changes.
+#[test]
+fn the_same_load_said_of_two_files_changes_nothing() {
+    let run = |same: bool| {
+        let (rec, a, b) = (real("b30hz80"), real("h30hz90"), real("h30hz80"));
+        let mut args = vec!["diagnose", &rec, "--fs-unknown", "--json", "--baseline", &a, "--baseline", &b];
+        args.extend(same.then_some("--same-load"));
+        let run = gearvib(&args);
+        assert!((0..=1).contains(&run.code), "{}", run.stderr);
+        serde_json::from_str::<serde_json::Value>(run.stdout.lines().next().unwrap()).unwrap()
+    };
+    let (open, same) = (run(false), run(true));
+    for key in ["verdict", "scores", "local_change"] {
+        assert_eq!(open[key], same[key], "{key}");
+    }
+}
+
+/// A statement the measured speed contradicts is said to be contradicted: the rig's healthy 80 % file on
+/// channel 3 against the 0 % file said to be at its load (the induction motor runs 0.43 % slower at 80 %).
+#[test]
+fn the_same_load_said_against_the_speed_is_flagged() {
+    let d = judged_on("3", "h30hz80", "h30hz0", true);
+    let w = d["warnings"].to_string();
+    assert!(w.contains("the statement and the measured speed disagree"), "{w}");
+    assert_ne!(d["verdict"]["state"], "faulty", "{}", d["verdict"]);
 }
 
 /// What `--same-load` costs when it is not so: the healthy 10 % file against the 20 % file alone is healthy

@@ -169,8 +169,8 @@ pub struct DiagnoseArgs {
     pub block_revs: Option<u64>,
     /// A healthy profile written by `learn`: the recordings are judged against it with exactly its
     /// settings (its teeth, speed, channels, tachometer, block length and band); only what describes a
-    /// recording's own file (--fs, --fs-override, --unit, --sensitivity, --same-load) may be given beside
-    /// it.
+    /// recording's own file (--fs, --fs-override, --unit, --sensitivity) may be given beside it, and
+    /// --same-load.
     #[arg(long, conflicts_with = "baseline")]
     pub profile: Option<String>,
     /// The baseline (--baseline or --profile) was recorded at this recording's load and speed: the limits

@@ -40,7 +40,7 @@ pub fn warning(scores: &[Score], changes: &[LocalChange]) -> Option<String> {
     );
     (!items.is_empty()).then(|| {
         format!(
-            "against a single baseline file, over what its blocks show but within what a neighbouring load (10 % of the rated load) moves a healthy recording on a real rig: {}; a change of load and a fault of this size cannot be told apart from one file: a baseline learnt from recordings at two loads or more decides, or, when this file was recorded at this recording's load, saying so judges on its own limits",
+            "against a single baseline file, over what its blocks show but within what a neighbouring load (10 % of the rated load) moves a healthy recording on a real rig: {}; a change of load and a fault of this size cannot be told apart from one file: a baseline learnt from recordings at two loads or more decides, or, if this file was recorded at this recording's load, stating that has the recording judged on the file's own limits",
             items.join("; ")
         )
     })

@@ -461,6 +461,10 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
     if p.facts.is_none() {
         cap = cap.or_else(|| ramp_without_baseline(&d, p.opts.speed_tolerance));
     }
+    d.baseline_same_load = p.reference.as_ref().is_some_and(|r| r.same_load());
+    if d.baseline_same_load && cap.is_some() {
+        d.warnings.push("the baseline was stated to be recorded at this recording's load and speed, but the shaft's speed differs from the baseline's beyond drift (a reason of the verdict): the statement and the measured speed disagree; the limits are kept as stated, and the verdict is held at suspect".to_string());
+    }
     if let (true, Some((spectra, tsas))) = (report, &p.plots) {
         d.baseline_spectra = spectra.clone();
         d.baseline_tsas = tsas.clone();

@@ -97,6 +97,10 @@ pub struct Diagnosis {
     /// Indicators scored against the statistical baseline (empty without a baseline).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub scores: Vec<Score>,
+    /// The baseline was stated to be recorded at this recording's load and speed (`diagnose --same-load`):
+    /// a single file's limits are its own blocks'; absent otherwise.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub baseline_same_load: bool,
     /// Each gear's local change against the baseline (with a baseline of two files or more).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub local_change: Vec<LocalChange>,
