@@ -140,6 +140,9 @@ fn the_same_load_said_judges_one_file_on_its_own_limits() {
     let d = judged_on("4", "b30hz0", "h30hz0", true);
     let reasons = d["verdict"]["reasons"].to_string();
     assert!(d["verdict"]["state"] == "healthy" && reasons.contains("load and speed as stated"), "{reasons}");
+    // a recording that is the file's own data is judged on the absolute limits: no word of the file's limits
+    let d = judged_on("3", "h30hz0", "h30hz0", true);
+    assert!(!d["warnings"].to_string().contains("as stated"), "{}", d["warnings"]);
 }
 
 /// With two baseline files the statement changes no limit: the same verdict, scores and local changes.

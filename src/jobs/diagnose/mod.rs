@@ -261,7 +261,7 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
         && let Some(r) = p.reference.take()
     {
         p.notes.push(if r.files == 1 {
-            "the baseline file is taken as recorded at this recording's load and speed, as stated: its limits are its own blocks', with no allowance for another operating point (which one file cannot show)".to_string()
+            SAME_LOAD_NOTE.to_string()
         } else {
             format!("the baseline's {} files were stated to be recorded at this recording's load and speed: with two files or more that changes no limit (how far the files differ sets their spread)", r.files)
         });
@@ -269,6 +269,10 @@ pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     }
     Ok(p)
 }
+
+/// Said with every verdict against a single file stated to be at the recording's load (not when the
+/// recording is that file's own data, judged on the absolute limits).
+const SAME_LOAD_NOTE: &str = "the baseline file is taken as recorded at this recording's load and speed, as stated: its limits are its own blocks', with no allowance for another operating point (which one file cannot show)";
 
 /// [`prepare`] before the baseline's operating point is applied.
 fn prepare_sides(job: &DiagnoseJob) -> Result<Prepared, Error> {
@@ -478,6 +482,7 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             // nothing to compare: the recording is judged as it would be without a baseline, its scores
             // against the baseline (each at the baseline's centre) kept for the trend
             d.warnings.push(OWN_DATA_WARNING.into());
+            d.warnings.retain(|w| w != SAME_LOAD_NOTE);
             verdict::judge_levels(&mut d, reference, &Thresholds::default(), levels);
             reference = None;
         } else if compared.iter().any(|c| matches!(c, Some(Err(_)))) {
