@@ -11,9 +11,11 @@ Runs the release binary as a user would, on every machine directory under --data
                 fixes channel, teeth and speed source and refuses them on the command line)
 otherwise `diagnose REC --json --channel 1 --teeth ZP,ZW SPEED [--baseline H1]`. Healthy recordings judged: all three without a
 baseline, s2 and s3 against s1, s3 against the profile. Every JSON line and stderr is kept under
---data/results/MODE/MACHINE/, the table and one line per miss go to stdout.
+--data/results/MODE/MACHINE/, the table and one line per miss go to stdout. With --same-load every run
+against a baseline or profile says the baseline was recorded at the recording's load (`diagnose
+--same-load`: a single sibling's limits are then its own blocks'; two siblings' change nothing).
 
-Usage: score_holdout.py [--data /tmp/holdout] [--bin target/release/gearvib] [--jobs 2] [--reuse]
+Usage: score_holdout.py [--data /tmp/holdout] [--bin target/release/gearvib] [--jobs 2] [--reuse] [--same-load]
 """
 
 import argparse
@@ -30,6 +32,7 @@ DEFAULT_BIN = os.path.join(HERE, "..", "..", "target", "release", "gearvib")
 
 SPEEDS = ["rpm", "tacho", "teeth"]
 BASES = ["none", "H1", "profile"]
+BASELINE_FLAGS = []  # added to every run against a baseline or profile (--same-load)
 
 
 def mono_copy(src, dst):
@@ -132,7 +135,7 @@ def machine_jobs(mdir, binary, results, reuse, data):
                 cmd = [binary, "diagnose", rec_path(speed, tr, data), "--json"]
                 if base != "profile":  # the profile fixes channel, teeth and speed source (learned with them)
                     cmd += ["--channel", "1", "--teeth", teeth] + speed_flags(speed, tr)
-                cmd += bflags
+                cmd += bflags + (BASELINE_FLAGS if bflags else [])
                 jobs.append(
                     dict(
                         mode="%s-%s" % (speed, base),
@@ -193,7 +196,9 @@ def main():
     ap.add_argument("--reuse", action="store_true", help="keep results already on disk")
     ap.add_argument("--speeds", default=",".join(SPEEDS), help="speed sources scored: rpm,tacho,teeth")
     ap.add_argument("--machines", default="", help="machines scored, e.g. m1,m3 (default: every one)")
+    ap.add_argument("--same-load", action="store_true", help="runs against a baseline say it was at their load")
     a = ap.parse_args()
+    BASELINE_FLAGS[:] = ["--same-load"] if a.same_load else []
     SPEEDS[:] = [m for m in a.speeds.split(",") if m in SPEEDS]
     binary = os.path.abspath(a.bin)
     results = os.path.join(a.data, "results")
