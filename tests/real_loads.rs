@@ -101,9 +101,9 @@ fn flagged(d: &serde_json::Value) -> bool {
 }
 
 /// The broken tooth on channel 3 alone, against the healthy file of its own load: the sideband growth
-/// (0.29-0.51 of the sidebands' energy; and the spectral change at 0 %, 5.1 spreads over that file's
-/// blocks) stands over the limits of the file's own load but under the allowance kept for a neighbouring
-/// load, so without a word on the load the verdict is healthy (with the doubt said); `--same-load` (the user
+/// (0.29-0.51 of the sidebands' energy; and the spectral change at 0, 80 and 90 %, 5.1, 3.8 and 4.8
+/// spreads over that file's blocks) stands over the limits of the file's own load but under the
+/// allowance kept for a neighbouring load, so without a word on the load the verdict is healthy (with the doubt said); `--same-load` (the user
 /// knows both were recorded at one load) drops the allowance and the tooth is flagged at 0, 80 and 90 %,
 /// through `--baseline` and through a profile of that one file alike.
 #[test]

@@ -77,7 +77,8 @@ pub enum BaselineLoad {
     /// limits `suspect_at_one_load` and `sidebands_limit_one_load` of the scores). On the rig's broken
     /// tooth, channel 3 alone against the healthy file of its load: healthy at every load with the
     /// allowance (sideband growth 0.29-0.51 at every load, over the own-load 0.25; the spectral change
-    /// over its own-load limit at 0 and 20 %, 5.1 and 6.7 spreads), flagged at every load without it.
+    /// 2.8-6.7 spreads, over its own-load limit at seven loads, under the raised one at all), flagged at
+    /// every load without it.
     Same,
 }
 
