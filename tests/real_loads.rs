@@ -9,10 +9,23 @@ fn real(name: &str) -> String {
     repo(&format!("data/realdata/{name}.csv"))
 }
 
+/// `diagnose X --fs-unknown --json` against the baseline files `bases` with the further `flags`: its exit
+/// code and JSON line (`None` when it printed none), and its stderr.
+fn diagnosed(x: &str, bases: &[&str], flags: &[&str]) -> (i32, Option<serde_json::Value>, String) {
+    let (rec, bases) = (real(x), bases.iter().map(|b| real(b)).collect::<Vec<_>>());
+    let mut args = vec!["diagnose", rec.as_str(), "--fs-unknown", "--json"];
+    for b in &bases {
+        args.extend(["--baseline", b.as_str()]);
+    }
+    args.extend(flags);
+    let run = gearvib(&args);
+    (run.code, run.stdout.lines().next().and_then(|l| serde_json::from_str(l).ok()), run.stderr)
+}
+
 fn judged(x: &str, y: &str) -> serde_json::Value {
-    let run = gearvib(&["diagnose", &real(x), "--fs-unknown", "--baseline", &real(y), "--json"]);
-    assert_eq!(run.code, 0, "{x} against {y}: {}", run.stderr);
-    serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap()
+    let (code, json, stderr) = diagnosed(x, &[y], &[]);
+    assert_eq!(code, 0, "{x} against {y}: {stderr}");
+    json.unwrap()
 }
 
 fn load_warning(d: &serde_json::Value) -> Option<String> {
@@ -86,14 +99,11 @@ fn a_single_file_profile_keeps_the_allowance() {
 }
 
 fn judged_on(channel: &str, x: &str, y: &str, same_load: bool) -> serde_json::Value {
-    let (rec, base) = (real(x), real(y));
-    let mut args = vec!["diagnose", &rec, "--fs-unknown", "--channel", channel, "--json", "--baseline", &base];
-    if same_load {
-        args.push("--same-load");
-    }
-    let run = gearvib(&args);
-    assert!((0..=1).contains(&run.code), "{x} against {y}: {}", run.stderr);
-    serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap()
+    let mut flags = vec!["--channel", channel];
+    flags.extend(same_load.then_some("--same-load"));
+    let (code, json, stderr) = diagnosed(x, &[y], &flags);
+    assert!((0..=1).contains(&code), "{x} against {y}: {stderr}");
+    json.unwrap()
 }
 
 fn flagged(d: &serde_json::Value) -> bool {
@@ -149,12 +159,10 @@ fn the_same_load_said_judges_one_file_on_its_own_limits() {
 #[test]
 fn the_same_load_said_of_two_files_changes_nothing() {
     let run = |same: bool| {
-        let (rec, a, b) = (real("b30hz80"), real("h30hz90"), real("h30hz80"));
-        let mut args = vec!["diagnose", &rec, "--fs-unknown", "--json", "--baseline", &a, "--baseline", &b];
-        args.extend(same.then_some("--same-load"));
-        let run = gearvib(&args);
-        assert!((0..=1).contains(&run.code), "{}", run.stderr);
-        serde_json::from_str::<serde_json::Value>(run.stdout.lines().next().unwrap()).unwrap()
+        let flags: Vec<&str> = same.then_some("--same-load").into_iter().collect();
+        let (code, json, stderr) = diagnosed("b30hz80", &["h30hz90", "h30hz80"], &flags);
+        assert!((0..=1).contains(&code), "{stderr}");
+        json.unwrap()
     };
     let (open, same) = (run(false), run(true));
     for key in ["verdict", "scores", "local_change"] {

@@ -257,22 +257,30 @@ type BaselinePlots = (Vec<(usize, crate::signal::Spectrum)>, Vec<(usize, Shaft, 
 /// unreadable profile or comparison scene.
 pub fn prepare(job: &DiagnoseJob) -> Result<Prepared, Error> {
     let mut p = prepare_sides(job)?;
-    if job.baseline_load == baseline::BaselineLoad::Same
-        && let Some(r) = p.reference.take()
-    {
-        p.notes.push(if r.files == 1 {
-            SAME_LOAD_NOTE.to_string()
-        } else {
-            format!("the baseline's {} files were stated to be recorded at this recording's load and speed: with two files or more that changes no limit (how far the files differ sets their spread)", r.files)
-        });
-        p.reference = Some(r.with_load(job.baseline_load));
-    }
+    p.reference = p.reference.map(|r| r.with_load(job.baseline_load));
     Ok(p)
 }
 
-/// Said with every verdict against a single file stated to be at the recording's load (not when the
-/// recording is that file's own data, judged on the absolute limits).
-const SAME_LOAD_NOTE: &str = "the baseline file is taken as recorded at this recording's load and speed, as stated: its limits are its own blocks', with no allowance for another operating point (which one file cannot show)";
+/// What a verdict scored against a reference stated to be at the recording's load rests on ([`BaselineLoad::Same`]):
+/// the statement, and whether the measured speed contradicts it (`operating_point`: the speed differs from
+/// the baseline's beyond drift). Nothing for a reference without the statement.
+fn same_load_words(r: &baseline::Reference, operating_point: bool) -> Vec<String> {
+    if !r.same_load() {
+        return Vec::new();
+    }
+    let mut words = vec![if r.files == 1 {
+        "the baseline file is taken as recorded at this recording's load and speed, as stated: its limits are its own blocks', with no allowance for another operating point (which one file cannot show)".to_string()
+    } else {
+        format!(
+            "the baseline's {} files were stated to be recorded at this recording's load and speed: with two files or more that changes no limit (how far the files differ sets their spread)",
+            r.files
+        )
+    }];
+    if operating_point {
+        words.push("the baseline was stated to be recorded at this recording's load and speed, but the shaft's speed differs from the baseline's beyond drift (a reason of the verdict): the statement and the measured speed disagree; the limits are kept as stated, and the verdict is held at suspect".to_string());
+    }
+    words
+}
 
 /// [`prepare`] before the baseline's operating point is applied.
 fn prepare_sides(job: &DiagnoseJob) -> Result<Prepared, Error> {
@@ -466,9 +474,6 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         cap = cap.or_else(|| ramp_without_baseline(&d, p.opts.speed_tolerance));
     }
     d.baseline_same_load = p.reference.as_ref().is_some_and(|r| r.same_load());
-    if d.baseline_same_load && cap.is_some() {
-        d.warnings.push("the baseline was stated to be recorded at this recording's load and speed, but the shaft's speed differs from the baseline's beyond drift (a reason of the verdict): the statement and the measured speed disagree; the limits are kept as stated, and the verdict is held at suspect".to_string());
-    }
     if let (true, Some((spectra, tsas))) = (report, &p.plots) {
         d.baseline_spectra = spectra.clone();
         d.baseline_tsas = tsas.clone();
@@ -482,7 +487,6 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
             // nothing to compare: the recording is judged as it would be without a baseline, its scores
             // against the baseline (each at the baseline's centre) kept for the trend
             d.warnings.push(OWN_DATA_WARNING.into());
-            d.warnings.retain(|w| w != SAME_LOAD_NOTE);
             verdict::judge_levels(&mut d, reference, &Thresholds::default(), levels);
             reference = None;
         } else if compared.iter().any(|c| matches!(c, Some(Err(_)))) {
@@ -490,6 +494,8 @@ fn finish(mut d: Diagnosis, p: &Prepared, history: &mut verdict::Na4History, rep
         }
         d.local_change = compared.into_iter().flatten().filter_map(Result::ok).collect();
     }
+    // said only where the recording is scored against the reference (not its own data's absolute limits)
+    d.warnings.extend(reference.map_or_else(Vec::new, |r| same_load_words(r, cap.is_some())));
     let scores = std::mem::take(&mut d.scores);
     verdict::judge_levels(&mut d, reference, &Thresholds::default(), levels);
     if reference.is_none() && p.reference.is_some() {
