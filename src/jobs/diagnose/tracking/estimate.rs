@@ -271,6 +271,28 @@ pub(super) fn shaft_from_comb(
         Some((m, _)) => (fp / m as f64, m as f64 * period, m * k, m as f64 * peak),
         None => (fp, period, k, peak),
     };
+    // the comb's revolution may hold several turns of a shaft (a fan's harmonics filling the odd places of
+    // the comb of half the speed): read as the faster shaft's where the record bears that out, else said
+    // as a doubt below, and no verdict of health rests on it (a comb on the mains was followed on the
+    // mains' angle, not a shaft's)
+    let turns = match &followed {
+        Some((_, y)) if !on_mains(fp) => turns_per_revolution(fft, y, (zp * k, zp), (fastest / fp).floor() as usize),
+        _ => None,
+    };
+    // (the faster shaft owns the first comb's evidence: every line of it repeats with that shaft's turn)
+    let faster = turns.and_then(|t| {
+        let first = (fp, t.count, score(fp));
+        faster_shaft(fft, full, &evidence, first, (zp, zw), (slowest, fastest)).map(|f| (t, f, period, score(fp)))
+    });
+    let (fp, period, k, peak, followed, best, turns, turned) = match faster {
+        Some((t, f, first_period, first_evidence)) => {
+            let cycle = f.period / (z_p * f.harmonic as f64);
+            let line = Some((cycle, f.line));
+            let turned = Some((t, first_period, f.evidence, f.wheel));
+            (f.pinion, f.period, f.harmonic, z_p / f.mesh, line, first_evidence.max(best), None, turned)
+        }
+        None => (fp, period, k, peak, followed, best, turns, None),
+    };
     let comb_peak = (followed.is_some() && (period / peak - 1.0).abs() > MAX_TRACKING_SHIFT_ESTIMATED).then_some(peak);
     let hz = |period: f64| revolution_text(period, fs);
     let listed: Vec<String> =
@@ -293,6 +315,17 @@ pub(super) fn shaft_from_comb(
         note.push_str(&format!(
             "; the mesh comb first read gave {}, but the record over {over} that revolution repeats at {orders} too (coherence of its halves {c:.2}): that was {part}",
             hz(period / m as f64)
+        ));
+    }
+    if let Some((t, first_period, own, wheel)) = turned {
+        note.push_str(&format!(
+            "; the mesh comb first read gave {}, but that revolution holds {} turns of {}: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), and the faster shaft's own mesh comb stands (evidence {own:.1}) with its revolution one turn on its mesh line's angle",
+            hz(first_period),
+            t.count,
+            if wheel { "the wheel" } else { "the pinion" },
+            t.count,
+            t.kept,
+            t.lacking
         ));
     }
     if let (Some(&h), Some(f)) = (hum.first(), fs) {
@@ -343,13 +376,6 @@ pub(super) fn shaft_from_comb(
         ));
     }
     let confidence = (1.0 - second / best).clamp(0.0, 1.0) * (best / STRONG_COMB).min(1.0);
-    // the comb's revolution may hold several turns of the shaft (a fan's harmonics filling the odd places of
-    // the comb of half the speed): said, and no verdict of health rests on it (a comb on the mains was
-    // followed on the mains' angle, not a shaft's)
-    let turns = match &followed {
-        Some((_, y)) if !on_mains(fp) => turns_per_revolution(fft, y, (zp * k, zp), (fastest / fp).floor() as usize),
-        _ => None,
-    };
     let turns = turns.map(|t| {
         let said = format!(
             "the estimated revolution may hold {} turns of a shaft: the halves of the record agree at its orders that are multiples of {} (coherence {:.2}) and not at the others ({:.2}), so a shaft may turn {} times as fast ({}: the pinion, or the wheel with the pinion at {})",

@@ -112,8 +112,9 @@ pub(super) struct Turns {
 /// that does not divide it would leave most of the comb's lines off the shaft's. The least such d is
 /// returned; at most `most` turns (the mesh must stay below the highest frequency sought).
 ///
-/// A doubt, not a correction: a true revolution whose pinion carries little content of its own at those
-/// orders reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
+/// On its own a doubt, not a correction ([`faster_shaft`] corrects where the faster shaft's own comb and
+/// line bear it out): a true revolution whose pinion carries little content of its own at those orders
+/// reads the same (the first generator's 18/31 pinion beside a 9-blade fan: 0.17-0.26 at the orders
 /// not divisible by 3, where the fresh 20/33 machine's true double revolutions read -0.33 to 0.12). The
 /// third generator's broken 25/50 wheel took a comb of five wheel turns for the pinion's (its impacts a
 /// line at every wheel order, the mesh one line): the orders of that revolution that are multiples of 5
@@ -137,6 +138,72 @@ pub(super) fn turns_per_revolution(
         let own = speed::Halves::of(fft, y, period / d)?.coherence(&|n| !(n * d).is_multiple_of(zp));
         (own >= SHAFT_LINES).then_some(Turns { count: d, kept, lacking })
     })
+}
+
+/// Least evidence of the faster shaft's own mesh comb, as a share of the comb first taken, for a
+/// revolution of several turns to be read as that shaft's ([`faster_shaft`]): the comb of the slower
+/// speed holds every line of the faster one's and more (the fresh 20/33 machine beside a 10-blade fan:
+/// the half speed's comb 19.5, the true one's 8.7, 45 %).
+pub(super) const FASTER_COMB_SHARE: f64 = 0.25;
+
+/// The shaft a revolution of `count` turns ([`turns_per_revolution`]) belongs to, when the record says so.
+pub(super) struct FasterShaft {
+    /// The pinion's speed, cycles per sample.
+    pub(super) pinion: f64,
+    /// The pinion revolution on the followed line, samples.
+    pub(super) period: f64,
+    /// The harmonic of the mesh followed.
+    pub(super) harmonic: usize,
+    /// The followed line's mesh frequency, cycles per sample.
+    pub(super) mesh: f64,
+    /// The record on the followed line's angle.
+    pub(super) line: Vec<f64>,
+    /// The faster comb's evidence (nats).
+    pub(super) evidence: f64,
+    /// Whether the turns were the wheel's (the pinion then count zw / zp times as fast).
+    pub(super) wheel: bool,
+}
+
+/// The comb's revolution of pinion speed `fp` (cycles per sample) holds `count` turns of a shaft: that
+/// shaft is the pinion turning count times as fast, or the wheel (the pinion count zw / zp times as
+/// fast). Each reading is taken only where the record bears it out: its speed lies within `range`, its
+/// own mesh comb stands (at least [`FASTER_COMB_SHARE`] of `first_evidence`), its mesh line is followed
+/// within [`COMB_AGREEMENT`] of the comb, and on that line's angle its revolution is one turn, neither
+/// several again ([`turns_per_revolution`]) nor a part of one ([`part_of_a_turn`] of 2 and of `count`).
+/// Of the readings that hold, the one whose comb stands higher. (The check the other way round is what
+/// a slower comb taken by mistake fails: the revolution read three times as fast is a third of a turn.)
+pub(super) fn faster_shaft(
+    fft: &mut Fft,
+    full: &[&[f32]],
+    evidence: &crate::signal::mesh_comb::CombEvidence,
+    (fp, count, first_evidence): (f64, usize, f64),
+    (zp, zw): (usize, usize),
+    range: (f64, f64),
+) -> Option<FasterShaft> {
+    let (z_p, z_w) = (zp as f64, zw as f64);
+    let readings = [(count as f64 * fp, false), (count as f64 * fp * z_w / z_p, true)];
+    readings
+        .into_iter()
+        .filter(|&(f, _)| f >= range.0 && f <= range.1)
+        .filter_map(|(f, wheel)| {
+            let score = evidence.at(z_p * f);
+            if score < FASTER_COMB_SHARE * first_evidence {
+                return None;
+            }
+            let peak = evidence.peaks.iter().find(|c| (c.frequency / (z_p * f) - 1.0).abs() < 0.03);
+            let harmonic = peak.map_or(1, |c| c.strongest);
+            let mesh = peak.map_or(z_p * f, |c| c.frequency);
+            let lag = 1.0 / (harmonic as f64 * mesh);
+            let (cycle, line) = follow_line(full, lag).ok().filter(|(c, _)| (c / lag - 1.0).abs() <= COMB_AGREEMENT)?;
+            let cycles = zp * harmonic;
+            let most = (range.1 / f).floor() as usize;
+            let one_turn = turns_per_revolution(fft, &line, (cycles, zp), most).is_none()
+                && part_of_a_turn(fft, &line, cycles, 2, (zp, zw)).is_none()
+                && part_of_a_turn(fft, &line, cycles, count, (zp, zw)).is_none();
+            let period = z_p * harmonic as f64 * cycle;
+            one_turn.then_some(FasterShaft { pinion: f, period, harmonic, mesh, line, evidence: score, wheel })
+        })
+        .max_by(|a, b| a.evidence.total_cmp(&b.evidence))
 }
 
 #[cfg(test)]
