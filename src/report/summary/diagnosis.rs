@@ -1,8 +1,8 @@
 //! The diagnosis of one recording (`diagnose --json`, one object per recording).
 
 use super::{
-    Cepstrum, Comparison, Envelope, GearIndicators, LocalChange, MachineDiagnosis, MeshHarmonic, OtherGear, Score,
-    Shaft, ShaftHz, SpeedProfile, SpeedSource, TeethSource, Tracking, Verdict, VerdictGear, VerdictState,
+    Cepstrum, Comparison, Envelope, GearIndicators, LocalChange, LongScore, MachineDiagnosis, MeshHarmonic, OtherGear,
+    Score, Shaft, ShaftHz, SpeedProfile, SpeedSource, TeethSource, Tracking, Verdict, VerdictGear, VerdictState,
 };
 use crate::signal::Spectrum;
 use serde::Serialize;
@@ -97,6 +97,10 @@ pub struct Diagnosis {
     /// Indicators scored against the statistical baseline (empty without a baseline).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub scores: Vec<Score>,
+    /// The whole record's impulse measures against the baseline files' (empty without a baseline, or when
+    /// the averages' lengths differ).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub long_scores: Vec<LongScore>,
     /// The baseline was stated to be recorded at this recording's load and speed (`diagnose --same-load`):
     /// a single file's limits are its own blocks'; absent otherwise.
     #[serde(skip_serializing_if = "std::ops::Not::not")]

@@ -98,6 +98,33 @@ impl From<Shaft> for VerdictGear {
     }
 }
 
+/// A recording's whole-record impulse measure (FM4, M6A of its average over every revolution) against
+/// the baseline files' own (`baseline::long`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LongScore {
+    /// Gear (shaft).
+    pub gear: Shaft,
+    /// 1-based channel.
+    pub channel: usize,
+    /// FM4 or M6A.
+    pub indicator: Indicator,
+    /// The recording's value over its whole record.
+    pub value: f64,
+    /// Revolutions the recording's average holds.
+    pub revolutions: usize,
+    /// Each baseline file's value over its whole record.
+    pub files: Vec<f64>,
+    /// (ln value - mean of ln files) / spread, the spread that of one baseline block's ln value, at least
+    /// the range of the files' ln values.
+    pub spreads: f64,
+    /// Spreads from which the measure makes its gear suspect: the block scores' suspect limit with two
+    /// files or more; their faulty limit from one file, which cannot show how far healthy recordings'
+    /// averages differ.
+    pub suspect_at: f64,
+    /// Spreads from which it makes its gear faulty (two files or more; never from one).
+    pub faulty_at: f64,
+}
+
 /// One indicator of one gear and channel scored against the statistical baseline.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
@@ -327,4 +354,11 @@ pub enum ToothOrigin {
     /// revolutions the machine had turned: only the distance between teeth is meaningful.
     #[serde(rename = "relative (no tachometer on this shaft)")]
     Relative,
+}
+
+impl LongScore {
+    /// Whether the measure lies at or over its suspect limit.
+    pub fn over_suspect(&self) -> bool {
+        self.spreads >= self.suspect_at
+    }
 }

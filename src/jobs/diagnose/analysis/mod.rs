@@ -464,6 +464,7 @@ fn diagnosis(
         envelope: None,
         cepstrum: None,
         scores: Vec::new(),
+        long_scores: Vec::new(),
         baseline_same_load: false,
         local_change: Vec::new(),
         warnings,

@@ -142,7 +142,7 @@ pub fn synchronous_lost(scores: &[Score]) -> Option<String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::{Block, GearReference};
     use super::*;
     use crate::report::summary::Shaft;
@@ -150,7 +150,7 @@ mod tests {
 
     /// A reference of one pinion average on channel 1 whose mean log spectrum is that of `amplitudes`
     /// (orders 0..), on a floor far below every line.
-    fn reference(amplitudes: &[f64]) -> Reference {
+    pub(in crate::jobs::diagnose::baseline) fn reference(amplitudes: &[f64]) -> Reference {
         let floor = 1e-12;
         let g = GearReference {
             stats: BTreeMap::new(),
@@ -165,6 +165,7 @@ mod tests {
             sidebands_noise: None,
             pattern_healthy: Vec::new(),
             pattern_noise: Vec::new(),
+            long_files: Vec::new(),
         };
         Reference {
             gears: BTreeMap::from([((Shaft::Pinion, 1), g)]),
@@ -174,7 +175,7 @@ mod tests {
         }
     }
 
-    fn pinion(z: usize, blocks: Vec<Vec<f64>>) -> GearIndicators {
+    pub(in crate::jobs::diagnose::baseline) fn pinion(z: usize, blocks: Vec<Vec<f64>>) -> GearIndicators {
         GearIndicators {
             gear: Shaft::Pinion,
             channel: 1,

@@ -20,7 +20,9 @@
 
 use super::{Given, JobError};
 use crate::Error;
-use crate::report::summary::{Block, Diagnosis, GearIndicators, Indicator, LocalChange, Scale, Score, Shaft, Tracking};
+use crate::report::summary::{
+    Block, Diagnosis, GearIndicators, Indicator, LocalChange, LongScore, Scale, Score, Shaft, Tracking,
+};
 use crate::signal::spectrum::Fft;
 use crate::signal::tsa_change::{self, OrderSpectrum, Scatter, SidebandChange};
 use serde::{Deserialize, Serialize};
@@ -284,6 +286,10 @@ struct GearReference {
     /// without a noise allowance (see `local::at_baseline_noise`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pattern_noise: Vec<f64>,
+    /// Each baseline file's whole-record average ([`long`]); empty in profiles written before it, which
+    /// then do not score the whole record.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    long_files: Vec<LongAverage>,
 }
 
 /// The statistical baseline of every gear and channel.
@@ -396,9 +402,11 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
     let mut per_file: BTreeMap<(Shaft, usize), Vec<Vec<&Block>>> = BTreeMap::new();
     let mut revs: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
     let mut teeth: BTreeMap<(Shaft, usize), usize> = BTreeMap::new();
+    let mut long: BTreeMap<(Shaft, usize), Vec<LongAverage>> = BTreeMap::new();
     for d in baselines {
         for g in &d.gears {
             let key = (g.gear.baseline_key(), g.channel);
+            long.entry(key).or_default().push(LongAverage::of(g));
             pooled.entry(key).or_default().extend(&g.blocks);
             per_file.entry(key).or_default().push(g.blocks.iter().collect());
             *revs.entry(key).or_default() += g.revolutions;
@@ -478,6 +486,7 @@ pub fn build(baselines: &[Diagnosis], block_revs: usize) -> Result<Reference, Er
                 sidebands_noise,
                 pattern_healthy,
                 pattern_noise,
+                long_files: long.remove(&key).unwrap_or_default(),
             },
         );
     }
@@ -528,72 +537,17 @@ impl Reference {
     }
 }
 
-/// Scores every deciding indicator of one gear and channel (empty when the reference lacks it).
-pub fn score_one(g: &GearIndicators, r: &Reference) -> Vec<Score> {
-    r.gears.get(&(g.gear.baseline_key(), g.channel)).map(|gr| score_gear(g, gr)).unwrap_or_default()
-}
-
-impl GearReference {
-    /// The blocks of `g` whose averages reach every order of this reference's log spectrum (a block of a
-    /// shorter average cannot be compared), and the number of orders compared plus one (order 0).
-    fn comparable<'a>(&self, g: &'a GearIndicators) -> (Vec<&'a Block>, usize) {
-        let len = self.log_spectrum.len() + 1;
-        (g.blocks.iter().filter(|b| b.amplitudes.len() >= len).collect(), len)
-    }
-}
-
-fn score_gear(g: &GearIndicators, r: &GearReference) -> Vec<Score> {
-    let (blocks, len) = r.comparable(g);
-    Indicator::DECIDING
-        .into_iter()
-        .filter_map(|k| {
-            let stat = r.stats.get(&k)?;
-            let mut values: Vec<f64> = blocks
-                .iter()
-                .map(|b| match k {
-                    Indicator::Na4Star => derived(b, r.residual_var, &r.log_spectrum, r.floor).0,
-                    Indicator::SpectralChange => rms_db(&log_spectrum(&b.amplitudes[..len], r.floor), &r.log_spectrum),
-                    _ => value(b, k),
-                })
-                .filter(|v| v.is_finite())
-                .collect();
-            if values.is_empty() {
-                return None;
-            }
-            let v = median(&mut values);
-            let near_zero = k == Indicator::Si && v.abs().max(stat.centre.abs()) < NEAR_ZERO_OF_RMS * r.rms;
-            let (suspect_at, faulty_at) = limits(stat.count);
-            let (spread, spread_from_files) = stat.scoring_spread(values.len(), suspect_at);
-            let (raised_suspect, raised_faulty) = stat.load_limits(spread, values.len(), suspect_at, faulty_at);
-            Some(Score {
-                suspect_at: raised_suspect,
-                faulty_at: raised_faulty,
-                suspect_at_one_load: suspect_at,
-                gear: g.gear,
-                channel: g.channel,
-                indicator: k,
-                value: v,
-                blocks: values.len(),
-                baseline_centre: stat.scale.from(stat.centre),
-                baseline_spread: spread,
-                spread_from_files,
-                scale: stat.scale,
-                baseline_range: [stat.min, stat.max],
-                baseline_blocks: stat.count,
-                spreads: (stat.scale.to(v) - stat.centre) / spread,
-                decides: !near_zero,
-            })
-        })
-        .collect()
-}
-
 mod fit;
 mod local;
+mod long;
 mod one_file;
+mod score;
 pub use fit::{MESH_LOST_DB, SYNCHRONOUS_LOST_SHARE, mesh_change_db, mesh_lost, synchronous_lost};
 pub use local::SameData;
 use local::{LocalReference, local_change_of, local_reference};
+use long::LongAverage;
 pub use one_file::BaselineLoad;
+pub use score::{score_long, score_one};
 
 #[cfg(test)]
 mod tests;

@@ -113,6 +113,7 @@ fn rise_over(now_db: f64, baseline_db: f64) -> f64 {
 /// baseline (a local fault keeps its impulse whole in its own gear's average).
 fn holds_impulse(d: &Diagnosis, gear: VerdictGear) -> bool {
     d.scores.iter().any(|s| VerdictGear::from(s.gear) == gear && s.indicator.local() && s.over_suspect())
+        || d.long_scores.iter().any(|s| VerdictGear::from(s.gear) == gear && s.over_suspect())
 }
 
 /// Puts the verdict on `shaft`'s gear with `reason` first; a machine's shaft also decides how its gear is

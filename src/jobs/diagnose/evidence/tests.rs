@@ -68,6 +68,7 @@ fn suspect_pinion(wheel_change: f64, pinion_fm4_spreads: f64) -> Diagnosis {
         envelope: None,
         cepstrum: None,
         scores: vec![score(Indicator::Er, 3.8), score(Indicator::Fm4, pinion_fm4_spreads)],
+        long_scores: Vec::new(),
         baseline_same_load: false,
         local_change: vec![change(Shaft::Pinion, 1.0), change(Shaft::Wheel, 3.0 * wheel_change)],
         unit: "m/s^2".into(),

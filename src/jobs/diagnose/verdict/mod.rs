@@ -4,7 +4,8 @@
 
 use super::baseline::{self, Reference};
 use crate::report::summary::{
-    Diagnosis, GearIndicators, Indicator, Indicators, LocalChange, Score, Shaft, Verdict, VerdictGear, VerdictState,
+    Diagnosis, GearIndicators, Indicator, Indicators, LocalChange, LongScore, Score, Shaft, Verdict, VerdictGear,
+    VerdictState,
 };
 use crate::signal::indicators as ind;
 use std::collections::BTreeMap;
@@ -138,7 +139,34 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
         });
     }
     d.scores.extend(scores);
+    let long = baseline::score_long(g, r);
+    out.extend(long.iter().filter_map(|l| long_trigger(g, l)));
+    d.long_scores.extend(long);
     out
+}
+
+/// The trigger of a whole-record impulse measure over its suspect limit ([`LongScore`]).
+fn long_trigger(g: &GearIndicators, l: &LongScore) -> Option<Trigger> {
+    if !l.over_suspect() {
+        return None;
+    }
+    let state = if l.spreads >= l.faulty_at { VerdictState::Faulty } else { VerdictState::Suspect };
+    let files: Vec<String> = l.files.iter().map(|&f| num(f)).collect();
+    let text = format!(
+        "{} (channel {}): {} {} of the whole record's average ({} revolutions) against the baseline files' {}: {:.1} spreads of a block's value above their mean (suspect from {}); {}",
+        g.gear,
+        g.channel,
+        l.indicator.label(),
+        num(l.value),
+        l.revolutions,
+        files.join(", "),
+        l.spreads,
+        num(l.suspect_at),
+        l.indicator.meaning()
+    );
+    // (not an impulse that names the gear: a worn 19/53 pinion sharpened the wheel's whole-record average
+    // 7 spreads, while the block impulses already told the gears apart)
+    Some(Trigger { state, ratio: l.spreads, text, local: false, sideband: false, supporting: false, mesh_ratio: false })
 }
 
 /// SI rose alone: when SI is the only indicator of a gear's average (`gear`, `channel`) over its limit, while the first sidebands of
@@ -328,6 +356,7 @@ fn gear_triggers(
     let mut per_gear = Vec::new();
     let mut not_judged = Vec::new();
     d.scores.clear();
+    d.long_scores.clear();
     let gears = d.gears.clone();
     for g in &gears {
         let triggers = match reference {
