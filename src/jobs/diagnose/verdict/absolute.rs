@@ -89,6 +89,7 @@ pub(super) fn absolute(g: &GearIndicators, t: &Thresholds) -> Vec<Trigger> {
                 sideband: false,
                 supporting: false,
                 mesh_ratio: false,
+                whole_record: false,
                 ratio: now / nominal,
                 text: format!("{} (channel {}): {name} = {}: {why}", g.gear, g.channel, num(now)),
             });
@@ -135,6 +136,7 @@ pub(super) fn own_energy(g: &GearIndicators, gears: &[GearIndicators]) -> Option
         sideband: false,
         supporting: false,
         mesh_ratio: true,
+        whole_record: false,
         ratio: ratio / OWN_ENERGY_OVER_OTHER,
         text: format!(
             "{} (channel {}): ER = {} is {ratio:.1} times the {}'s ({}) over the same mesh lines and at least as many revolutions ({} against {}): something turns with the {} (a fault, or a fan or coupling on its shaft); a baseline would tell",

@@ -62,6 +62,11 @@ struct Trigger {
     /// A ratio of what is not the mesh to the mesh lines (FM0, ER: [`Indicator::mesh_ratio`]): several of
     /// them count as one towards `Thresholds::faulty_count`.
     mesh_ratio: bool,
+    /// A whole-record measure ([`LongScore`]): it raises the gear's state, and weighs in the choice between
+    /// gears only for a gear without a block measure (its spreads are of a block's value, a scale on which
+    /// a whole record's change reads larger than the block scores', and a worn 19/53 pinion sharpened the
+    /// wheel's whole-record M6A 7 spreads).
+    whole_record: bool,
 }
 
 fn level(value: f64, limits: Limits) -> Option<VerdictState> {
@@ -123,6 +128,7 @@ fn against_baseline(d: &mut Diagnosis, g: &GearIndicators, r: &Reference, levels
             sideband: sc.indicator.sideband(),
             supporting: sc.indicator.supporting() || alone,
             mesh_ratio: sc.indicator.mesh_ratio(),
+            whole_record: false,
             ratio: sc.spreads,
             text: format!(
                 "{} (channel {}): {name} {} (median of {} blocks) against the baseline's {} (range {} .. {} over {} blocks): {} spreads above{files}; {why}{cap}",
@@ -164,9 +170,16 @@ fn long_trigger(g: &GearIndicators, l: &LongScore) -> Option<Trigger> {
         num(l.suspect_at),
         l.indicator.meaning()
     );
-    // (not an impulse that names the gear: a worn 19/53 pinion sharpened the wheel's whole-record average
-    // 7 spreads, while the block impulses already told the gears apart)
-    Some(Trigger { state, ratio: l.spreads, text, local: false, sideband: false, supporting: false, mesh_ratio: false })
+    Some(Trigger {
+        state,
+        ratio: l.spreads,
+        text,
+        local: true,
+        sideband: false,
+        supporting: false,
+        mesh_ratio: false,
+        whole_record: true,
+    })
 }
 
 /// SI rose alone: when SI is the only indicator of a gear's average (`gear`, `channel`) over its limit, while the first sidebands of
@@ -384,10 +397,13 @@ fn gear_triggers(
 }
 
 /// The largest ratio of an impulse measure (FM4, M6A) among `triggers`, and the largest of any (spreads
-/// against a baseline, times its healthy value without).
+/// against a baseline, times its healthy value without); whole-record triggers only for a gear without a
+/// block trigger.
 fn weight(triggers: &[Trigger]) -> (f64, f64) {
-    let local = triggers.iter().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
-    (local, triggers.iter().map(|x| x.ratio).fold(0.0, f64::max))
+    let blocks = triggers.iter().any(|x| !x.whole_record);
+    let counted = || triggers.iter().filter(move |x| !(blocks && x.whole_record));
+    let local = counted().filter(|x| x.local).map(|x| x.ratio).fold(0.0, f64::max);
+    (local, counted().map(|x| x.ratio).fold(0.0, f64::max))
 }
 
 /// How much further (as a ratio of the strongest triggers' ratios to their limits) one gear's indicators

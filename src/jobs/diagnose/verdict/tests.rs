@@ -9,6 +9,7 @@ fn trigger(ratio: f64, local: bool) -> Trigger {
         sideband: false,
         supporting: false,
         mesh_ratio: false,
+        whole_record: false,
     }
 }
 
@@ -52,6 +53,29 @@ fn a_gear_that_moved_clearly_further_outranks_an_impulse() {
         gear(Shaft::Wheel, vec![trigger(1.86, true)]),
     ];
     assert_eq!(worst_gear(&spall, &t, true).map(|g| g.gear), Some(Shaft::Pinion));
+}
+
+/// A whole-record trigger weighs in the choice between gears only for a gear without a block trigger: the
+/// hold-out's worn 19/53 pinion (ER 8.4 spreads) beside a wheel whose block M6A moved 4.7 and whose
+/// whole-record M6A read 7.1 spreads of a block's value stays on the pinion (8.4 is clearly further than
+/// the wheel's block 5.0); a gear whose only triggers are whole-record ones is weighed on them (a spalled
+/// wheel beside a pinion of energy measures).
+#[test]
+fn a_whole_record_trigger_weighs_only_where_no_block_one_does() {
+    let t = Thresholds::default();
+    let long = |ratio: f64| Trigger { whole_record: true, ..trigger(ratio, true) };
+    let worn = [
+        gear(Shaft::Pinion, vec![trigger(8.4, false), trigger(4.4, false)]),
+        gear(Shaft::Wheel, vec![trigger(5.0, false), trigger(4.7, true), long(7.1)]),
+    ];
+    assert_eq!(worst_gear(&worn, &t, true).map(|g| g.gear), Some(Shaft::Pinion));
+    assert_eq!(weight(&worn[1].triggers), (4.7, 5.0));
+    let spall = [
+        gear(Shaft::Pinion, vec![trigger(3.5, false), trigger(3.4, false)]),
+        gear(Shaft::Wheel, vec![long(9.0), long(5.0)]),
+    ];
+    assert_eq!(weight(&spall[1].triggers), (9.0, 9.0));
+    assert_eq!(worst_gear(&spall, &t, true).map(|g| g.gear), Some(Shaft::Wheel));
 }
 
 /// No impulse anywhere: a wheel FAULTY on ER alone (6 spreads) beside a pinion whose own sidebands moved
