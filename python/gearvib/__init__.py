@@ -104,6 +104,11 @@ def diagnose(
     profile: Union[None, str, "os.PathLike[str]"] = None,
     same_load: bool = False,
     fs_unknown: bool = False,
+    speed_tolerance: float = 0.05,
+    pulses_per_rev: int = 1,
+    block_revs: Optional[int] = None,
+    sensitivity: Optional[float] = None,
+    machine: Union[None, str, "os.PathLike[str]"] = None,
 ) -> Union[dict, list]:
     """Diagnose recordings: a numpy array (1-D, or channels x samples; float32 or float64, any layout) at
     ``fs`` Hz, a WAV/CSV path, a directory (its .wav and .csv recordings in name order), or a list of them
@@ -116,7 +121,14 @@ def diagnose(
     and unit, and its reference replaces a baseline); ``same_load``: the baseline or profile was recorded at
     the recordings' load and speed, so a single baseline file's limits keep no allowance for a neighbouring
     load (``diagnose --same-load``); ``fs_unknown``: no sample rate is known (a CSV without a time column),
-    so the recording is analysed in orders of its estimated shaft period (``diagnose --fs-unknown``).
+    so the recording is analysed in orders of its estimated shaft period (``diagnose --fs-unknown``);
+    ``speed_tolerance``: relative window the mesh line is sought in around ``rpm`` (``--speed-tolerance``,
+    0 to 0.2); ``pulses_per_rev``: tachometer pulses per revolution; ``block_revs``: revolutions per block
+    of the statistical baseline (2 to 10000; default 8, fewer for a short baseline); ``sensitivity``:
+    recorded value per physical unit (the samples are divided by it); ``machine``: a machine file
+    (``--machine``: several stages or a planetary one; not with ``teeth``). A profile replaces
+    ``speed_tolerance``, ``pulses_per_rev``, ``block_revs`` and ``machine`` as it replaces ``rpm`` and
+    ``teeth``; ``sensitivity``, like ``unit``, still describes the recording's own file.
     Returns the ``diagnose --json`` dictionary (verdict, indicators, speed profile, ...) with, unless
     ``arrays`` is False, numpy arrays: ``spectra`` (per channel: ``frequency_hz`` [Hz], ``amplitude`` [unit]),
     in each entry of ``gears`` the ``tsa``, ``residual`` and ``difference`` signals over one revolution
@@ -140,7 +152,8 @@ def diagnose(
     if same_load and not base and prof is None:
         raise ValueError("same_load needs a baseline or a profile: it says where the baseline was recorded")
     teeth_pair = tuple(teeth) if teeth else None
-    args = (paths, data, fs, rpm, teeth_pair, tacho, channel, unit, base, prof, bool(same_load), bool(fs_unknown))
+    more = _more(speed_tolerance, pulses_per_rev, block_revs, sensitivity, machine)
+    args = (paths, data, fs, rpm, teeth_pair, tacho, channel, unit, base, prof, bool(same_load), bool(fs_unknown), more)
     raw = _gearvib.diagnose(*args)
     # files come back first (a directory as all its recordings, in name order), then arrays: restore the
     # order given, a directory expanded in its place
@@ -238,6 +251,20 @@ def write_recording(
     )
 
 
+def _more(speed_tolerance, pulses_per_rev, block_revs, sensitivity, machine):
+    """The settings beyond the common ones, as the extension takes them (a number that is not one raises
+    ValueError naming its keyword)."""
+    try:
+        tolerance, pulses = float(speed_tolerance), int(pulses_per_rev)
+        revs = None if block_revs is None else int(block_revs)
+        sens = None if sensitivity is None else float(sensitivity)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"speed_tolerance, pulses_per_rev, block_revs, sensitivity: {e}") from None
+    if pulses < 0 or (revs is not None and revs < 0):
+        raise ValueError("pulses_per_rev and block_revs: must be positive counts")
+    return (tolerance, pulses, revs, sens, None if machine is None else os.fspath(machine))
+
+
 def learn(
     healthy: Union[str, "os.PathLike[str]", Iterable[Union[str, "os.PathLike[str]"]]],
     output: Union[str, "os.PathLike[str]"],
@@ -249,12 +276,20 @@ def learn(
     channel: Optional[int] = None,
     unit: Optional[str] = None,
     fs_unknown: bool = False,
+    speed_tolerance: float = 0.05,
+    pulses_per_rev: int = 1,
+    block_revs: Optional[int] = None,
+    sensitivity: Optional[float] = None,
+    machine: Union[None, str, "os.PathLike[str]"] = None,
 ) -> dict:
     """Learn a healthy profile from healthy recordings of one machine (paths or directories) and write it to
     ``output`` (``gearvib learn ... -o output``); returns the profile as a dictionary. Pass ``output`` as
     ``profile=`` to :func:`diagnose` to judge recordings against it with exactly its settings. ``fs_unknown``:
-    no sample rate is known (``learn --fs-unknown``); the profile keeps it."""
+    no sample rate is known (``learn --fs-unknown``); the profile keeps it, as it keeps
+    ``speed_tolerance``, ``pulses_per_rev``, ``block_revs``, ``sensitivity`` and ``machine`` (see
+    :func:`diagnose`)."""
     paths = [os.fspath(healthy)] if isinstance(healthy, (str, os.PathLike)) else [os.fspath(h) for h in healthy]
     teeth_pair = tuple(teeth) if teeth else None
-    text = _gearvib.learn(paths, os.fspath(output), fs, rpm, teeth_pair, tacho, channel, unit, bool(fs_unknown))
+    more = _more(speed_tolerance, pulses_per_rev, block_revs, sensitivity, machine)
+    text = _gearvib.learn(paths, os.fspath(output), fs, rpm, teeth_pair, tacho, channel, unit, bool(fs_unknown), more)
     return json.loads(text)

@@ -34,6 +34,11 @@ def diagnose(
     profile: Optional[PathLike] = ...,
     same_load: bool = ...,
     fs_unknown: bool = ...,
+    speed_tolerance: float = ...,
+    pulses_per_rev: int = ...,
+    block_revs: Optional[int] = ...,
+    sensitivity: Optional[float] = ...,
+    machine: Optional[PathLike] = ...,
 ) -> Union[dict[str, Any], list[dict[str, Any]]]:
     """Diagnosis of an array at `fs` [Hz] or a WAV/CSV path (or a list): the `diagnose --json` keys plus
     numpy arrays (unless `arrays` is False): `spectra` [Hz, unit], per gear `tsa`, `residual`,
@@ -78,5 +83,10 @@ def learn(
     channel: Optional[int] = ...,
     unit: Optional[str] = ...,
     fs_unknown: bool = ...,
+    speed_tolerance: float = ...,
+    pulses_per_rev: int = ...,
+    block_revs: Optional[int] = ...,
+    sensitivity: Optional[float] = ...,
+    machine: Optional[PathLike] = ...,
 ) -> dict[str, Any]:
     """The healthy profile learned from `healthy` and written to `output` (the `learn` JSON)."""

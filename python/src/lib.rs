@@ -117,6 +117,44 @@ struct Kw {
     unit: Option<String>,
     /// No sample rate is known: analyse in orders of the estimated shaft period (`--fs-unknown`).
     fs_unknown: bool,
+    /// The settings `--speed-tolerance`, `--pulses-per-rev`, `--block-revs`, `--sensitivity` and
+    /// `--machine` give the command.
+    more: More,
+}
+
+/// The keyword arguments beyond the common ones: (speed_tolerance [relative], pulses_per_rev,
+/// block_revs, sensitivity [recorded value per physical unit], machine [path of a machine file]).
+type More = (f64, usize, Option<usize>, Option<f64>, Option<String>);
+
+/// The options `more` sets, checked as the command line checks its flags (named by the keyword).
+fn more_options(k: &Kw, o: &mut Options) -> PyResult<()> {
+    let (tolerance, pulses, block_revs, sensitivity, machine) = k.more.clone();
+    if !(tolerance.is_finite() && (0.0..=0.2).contains(&tolerance)) {
+        return Err(PyValueError::new_err(format!(
+            "speed_tolerance: must be between 0 and 0.2 (relative), got {tolerance}"
+        )));
+    }
+    if pulses == 0 {
+        return Err(PyValueError::new_err("pulses_per_rev: must be 1 or more"));
+    }
+    if let Some(r) = block_revs.filter(|r| !(2..=10_000).contains(r)) {
+        return Err(PyValueError::new_err(format!("block_revs: must be 2 to 10000, got {r}")));
+    }
+    if let Some(v) = sensitivity.filter(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(PyValueError::new_err(format!("sensitivity: must be a positive number, got {v}")));
+    }
+    if machine.is_some() && k.teeth.is_some() {
+        return Err(PyValueError::new_err(
+            "teeth and machine: the machine file states every stage's teeth (teeth is the one-stage shorthand)",
+        ));
+    }
+    o.speed_tolerance = tolerance;
+    o.pulses_per_rev = pulses;
+    o.block_revs = block_revs;
+    o.sensitivity = sensitivity;
+    o.machine =
+        machine.map(|m| gearvib::scene::machine::load_machine_file(&m)).transpose().map_err(|e| to_py(e.into()))?;
+    Ok(())
 }
 
 fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
@@ -159,11 +197,11 @@ fn options(k: &Kw, fs: Option<f64>) -> Result<Options, gearvib::Error> {
     })
 }
 
-/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline, profile, same_load, fs_unknown) -> list of (`diagnose --json`
+/// diagnose(paths, arrays, fs, rpm, teeth, tacho, channel, unit, baseline, profile, same_load, fs_unknown, more) -> list of (`diagnose --json`
 /// object as a JSON string, its curves as numpy arrays (see `Curves::into_py`)): files first, then the
 /// in-memory recordings (channels x samples, float32 or float64, any layout) named "array 1", "array 2", ...
 #[pyfunction]
-#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None, same_load=false, fs_unknown=false))]
+#[pyo3(signature = (paths, arrays, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, baseline=Vec::new(), profile=None, same_load=false, fs_unknown=false, more=(0.05, 1, None, None, None)))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
     py: Python<'_>,
@@ -179,6 +217,7 @@ fn diagnose(
     profile: Option<String>,
     same_load: bool,
     fs_unknown: bool,
+    more: More,
 ) -> PyResult<Vec<(String, Py<PyDict>)>> {
     // the arrays stay borrowed (read-only) for the whole call: float32 rows that are contiguous are read in
     // place, others are converted once
@@ -187,8 +226,9 @@ fn diagnose(
     for (i, h) in held.iter().enumerate() {
         in_memory.push((PathBuf::from(format!("array {}", i + 1)), recording_of(h, fs)?));
     }
-    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown };
-    let job_options = options(&kw, fs).map_err(to_py)?;
+    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown, more };
+    let mut job_options = options(&kw, fs).map_err(to_py)?;
+    more_options(&kw, &mut job_options)?;
     py.detach(|| {
         let job = DiagnoseJob {
             recordings: paths.iter().map(PathBuf::from).collect(),
@@ -213,10 +253,10 @@ fn diagnose(
     .and_then(|all| all.into_iter().map(|(text, curves)| Ok((text, curves.into_py(py)?))).collect())
 }
 
-/// learn(paths, output, fs, rpm, teeth, tacho, channel, unit, fs_unknown) -> the profile written to `output`, as JSON
+/// learn(paths, output, fs, rpm, teeth, tacho, channel, unit, fs_unknown, more) -> the profile written to `output`, as JSON
 /// text (`gearvib learn ... -o output`).
 #[pyfunction]
-#[pyo3(signature = (paths, output, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, fs_unknown=false))]
+#[pyo3(signature = (paths, output, fs=None, rpm=None, teeth=None, tacho=None, channel=None, unit=None, fs_unknown=false, more=(0.05, 1, None, None, None)))]
 #[allow(clippy::too_many_arguments)]
 fn learn(
     py: Python<'_>,
@@ -229,9 +269,11 @@ fn learn(
     channel: Option<usize>,
     unit: Option<String>,
     fs_unknown: bool,
+    more: More,
 ) -> PyResult<String> {
-    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown };
-    let options = options(&kw, fs).map_err(to_py)?;
+    let kw = Kw { rpm, teeth, tacho, channel, unit, fs_unknown, more };
+    let mut options = options(&kw, fs).map_err(to_py)?;
+    more_options(&kw, &mut options)?;
     py.detach(|| {
         let job = gearvib::jobs::diagnose::profile::LearnJob {
             healthy: paths.iter().map(PathBuf::from).collect(),

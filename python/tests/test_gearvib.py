@@ -342,3 +342,41 @@ def test_sweep_refuses_a_huge_iterable_at_its_limit():
     # issue 29: sweep(..., iter(range(10**12))) read the whole iterable before its limit
     with pytest.raises(ValueError, match="more than"):
         gearvib.sweep(SCENE.format("paper-gear-fig8a"), "speed", iter(range(10**12)))
+
+
+def test_the_commands_other_settings_equal_the_cli(tmp_path):
+    # speed tolerance, tachometer pulses, block length, sensitivity and a machine file as the command's
+    # flags: each call equals the command with that flag (the same library options, so the same JSON)
+    cracked, healthy = REC.format("cracked-pinion-tooth3"), REC.format("healthy")
+    machine = os.path.join(ROOT, "data", "machines", "paper-single-pair-z14z39.json")
+    cases = [
+        (dict(rpm=1750, speed_tolerance=0.01), ["--rpm", "1750", "--speed-tolerance", "0.01"]),
+        (dict(tacho=2, pulses_per_rev=2), ["--tacho-channel", "2", "--pulses-per-rev", "2"]),
+        (dict(block_revs=4, baseline=healthy), ["--block-revs", "4", "--baseline", healthy]),
+        (dict(sensitivity=0.5), ["--sensitivity", "0.5"]),
+    ]
+    for kw, flags in cases:
+        got = gearvib.diagnose(cracked, teeth=(14, 39), arrays=False, **kw)
+        # (two pulses of a once-per-turn tachometer: not judged, exit 3, the JSON printed all the same)
+        run = subprocess.run([CLI, "diagnose", cracked, "--teeth", "14,39", *flags, "--json"], capture_output=True, text=True)
+        assert got == json.loads(run.stdout.splitlines()[0]), flags
+    got = gearvib.diagnose(cracked, machine=machine, baseline=healthy, arrays=False)
+    assert got == cli_json("diagnose", cracked, "--machine", machine, "--baseline", healthy)[0]
+    p = gearvib.learn(healthy, tmp_path / "p.json", teeth=(14, 39), block_revs=4, speed_tolerance=0.02)
+    assert p["processing"]["block_revs"] == 4 and p["processing"]["speed_tolerance"] == 0.02
+    cli_p = tmp_path / "cli.json"
+    learn = [CLI, "learn", healthy, "--teeth", "14,39", "--block-revs", "4", "--speed-tolerance", "0.02"]
+    subprocess.run(learn + ["-o", str(cli_p)], check=True, capture_output=True)
+    want = cli_json("diagnose", cracked, "--profile", str(cli_p))[0]
+    got = gearvib.diagnose(cracked, profile=tmp_path / "p.json", arrays=False)
+    assert (got["verdict"], got["scores"]) == (want["verdict"], want["scores"])
+    # out of range: one ValueError naming the keyword, as the command names its flag
+    for kw, word in [
+        (dict(speed_tolerance=0.5), "speed_tolerance"),
+        (dict(pulses_per_rev=0), "pulses_per_rev"),
+        (dict(block_revs=1), "block_revs"),
+        (dict(sensitivity=-1.0), "sensitivity"),
+        (dict(machine=machine), "machine"),
+    ]:
+        with pytest.raises(ValueError, match=word):
+            gearvib.diagnose(cracked, teeth=(14, 39), arrays=False, **kw)
