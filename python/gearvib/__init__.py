@@ -251,18 +251,35 @@ def write_recording(
     )
 
 
-def _more(speed_tolerance, pulses_per_rev, block_revs, sensitivity, machine):
-    """The settings beyond the common ones, as the extension takes them (a number that is not one raises
-    ValueError naming its keyword)."""
+def _number(name, value):
+    """``value`` as a float, or ValueError naming ``name``."""
     try:
-        tolerance, pulses = float(speed_tolerance), int(pulses_per_rev)
-        revs = None if block_revs is None else int(block_revs)
-        sens = None if sensitivity is None else float(sensitivity)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"speed_tolerance, pulses_per_rev, block_revs, sensitivity: {e}") from None
-    if pulses < 0 or (revs is not None and revs < 0):
-        raise ValueError("pulses_per_rev and block_revs: must be positive counts")
-    return (tolerance, pulses, revs, sens, None if machine is None else os.fspath(machine))
+        return float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name}: {value!r} is not a number") from None
+
+
+def _count(name, value, least, most):
+    """``value`` as a whole number from ``least`` to ``most``, or ValueError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name}: {value!r} is not a whole number")
+    if not least <= int(value) <= most:
+        raise ValueError(f"{name}: must be {least} to {most}, got {value}")
+    return int(value)
+
+
+def _more(speed_tolerance, pulses_per_rev, block_revs, sensitivity, machine):
+    """The settings beyond the common ones, as the extension takes them (a value that is not one raises
+    ValueError naming its keyword; the ranges are checked there, as the command checks its flags)."""
+    if machine is not None and not isinstance(machine, (str, os.PathLike)):
+        raise ValueError(f"machine: {machine!r} is not a path of a machine file")
+    return (
+        _number("speed_tolerance", speed_tolerance),
+        _count("pulses_per_rev", pulses_per_rev, 1, 10_000),
+        None if block_revs is None else _count("block_revs", block_revs, 2, 10_000),
+        None if sensitivity is None else _number("sensitivity", sensitivity),
+        None if machine is None else os.fspath(machine),
+    )
 
 
 def learn(

@@ -152,8 +152,10 @@ fn more_options(k: &Kw, o: &mut Options) -> PyResult<()> {
     o.pulses_per_rev = pulses;
     o.block_revs = block_revs;
     o.sensitivity = sensitivity;
-    o.machine =
-        machine.map(|m| gearvib::scene::machine::load_machine_file(&m)).transpose().map_err(|e| to_py(e.into()))?;
+    o.machine = machine
+        .map(|m| gearvib::scene::machine::load_machine_file(&m))
+        .transpose()
+        .map_err(|e| PyValueError::new_err(format!("machine: {e}")))?;
     Ok(())
 }
 

@@ -377,6 +377,11 @@ def test_the_commands_other_settings_equal_the_cli(tmp_path):
         (dict(block_revs=1), "block_revs"),
         (dict(sensitivity=-1.0), "sensitivity"),
         (dict(machine=machine), "machine"),
+        (dict(pulses_per_rev=1.5), "pulses_per_rev"),
+        (dict(block_revs=2**70), "block_revs"),
+        (dict(speed_tolerance="a"), "speed_tolerance"),
+        (dict(teeth=None, machine=5), "machine"),
+        (dict(teeth=None, machine="/nonexistent.json"), "machine"),
     ]:
         with pytest.raises(ValueError, match=word):
-            gearvib.diagnose(cracked, teeth=(14, 39), arrays=False, **kw)
+            gearvib.diagnose(cracked, arrays=False, **{"teeth": (14, 39), **kw})

@@ -114,8 +114,9 @@ pub struct LongScore {
     pub revolutions: usize,
     /// Each baseline file's value over its whole record.
     pub files: Vec<f64>,
-    /// (ln value - mean of ln files) / spread, the spread that of one baseline block's ln value, at least
-    /// the range of the files' ln values.
+    /// (ln value - centre) / spread: the centre the mean of the files' ln values, at least a normal
+    /// signal's (ln 3 for FM4, ln 15 for M6A); the spread one baseline block's, at least the range of the
+    /// files' ln values and what healthy siblings differ by (`baseline::long`).
     pub spreads: f64,
     /// Spreads from which the measure makes its gear suspect: the block scores' suspect limit with two
     /// files or more; their faulty limit from one file, which cannot show how far healthy recordings'
