@@ -158,8 +158,9 @@ fn long_trigger(g: &GearIndicators, l: &LongScore) -> Option<Trigger> {
     }
     let state = if l.spreads >= l.faulty_at { VerdictState::Faulty } else { VerdictState::Suspect };
     let files: Vec<String> = l.files.iter().map(|&f| num(f)).collect();
+    let normal = if l.indicator == Indicator::Fm4 { 3 } else { 15 };
     let text = format!(
-        "{} (channel {}): {} {} of the whole record's average ({} revolutions) against the baseline files' {}: {:.1} spreads of a block's value above their mean (suspect from {}); {}",
+        "{} (channel {}): {} {} of the whole record's average ({} revolutions) against the baseline files' {}: {:.1} spreads above their mean or a normal signal's {normal}, whichever is higher (suspect from {}); {}",
         g.gear,
         g.channel,
         l.indicator.label(),
