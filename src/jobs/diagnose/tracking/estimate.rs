@@ -155,6 +155,27 @@ pub(super) const CLOSE_COMB: f64 = 0.6;
 /// mesh cycle (a quarter of the sample rate leaves four).
 pub(super) const MESH_HIGHEST: f64 = 0.25;
 
+/// A mesh comb's line, followed: the comb peak within 3 % of the mesh frequency sought (when there is one),
+/// the harmonic of it that stands highest among the first four, the mesh frequency (the peak's, or the one
+/// sought), and the followed line (its mean cycle in samples and the record on its angle) when its cycle
+/// agrees with the comb within [`COMB_AGREEMENT`].
+pub(super) struct CombLine {
+    pub(super) harmonic: usize,
+    pub(super) mesh: f64,
+    pub(super) followed: Option<(f64, Vec<f64>)>,
+}
+
+/// The line of the comb of `evidence` near the mesh frequency `mesh` (cycles per sample), its strongest
+/// low harmonic followed on `full` for the mean cycle ([`CombLine`]).
+pub(super) fn comb_line(full: &[&[f32]], evidence: &crate::signal::mesh_comb::CombEvidence, mesh: f64) -> CombLine {
+    let peak = evidence.peaks.iter().find(|c| (c.frequency / mesh - 1.0).abs() < 0.03);
+    let harmonic = peak.map_or(1, |c| c.strongest);
+    let mesh = peak.map_or(mesh, |c| c.frequency);
+    let lag = 1.0 / (harmonic as f64 * mesh);
+    let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
+    CombLine { harmonic, mesh, followed }
+}
+
 /// Without a speed but with the teeth `zp`, `zw`: the mesh is the harmonic series of lines that stands
 /// highest in short segments of the record ([`mesh_comb::comb_candidates`], a pinion of at least
 /// `min_revs` revolutions and [`MIN_SAMPLES_PER_REV`] samples per revolution); the pinion revolution is
@@ -242,13 +263,8 @@ pub(super) fn shaft_from_comb(
             (top, best, fp) = (t, b, mesh_of(t));
         }
     }
-    let first = evidence.peaks.iter().find(|c| (c.frequency / (z_p * fp) - 1.0).abs() < 0.03);
-    // the mesh comb's strongest low harmonic is followed for the mean cycle (a line that cannot be
-    // followed leaves the speed the comb gives)
-    let k = first.map_or(1, |c| c.strongest);
-    let mesh = first.map_or(z_p * fp, |c| c.frequency);
-    let lag = 1.0 / (k as f64 * mesh);
-    let followed = follow_line(full, lag).ok().filter(|(cycle, _)| (cycle / lag - 1.0).abs() <= COMB_AGREEMENT);
+    // (a line that cannot be followed leaves the speed the comb gives)
+    let CombLine { harmonic: k, mesh, followed } = comb_line(full, &evidence, z_p * fp);
     let period = followed.as_ref().map_or(z_p / mesh, |(cycle, _)| z_p * k as f64 * cycle);
     // the mesh taken as m times the best comb's may be that comb's harmonic m (standing on a housing
     // mode): when over m of the taken revolutions the shaft's own lines stand between the multiples of m,
@@ -280,12 +296,13 @@ pub(super) fn shaft_from_comb(
         _ => None,
     };
     // (the faster shaft owns the first comb's evidence: every line of it repeats with that shaft's turn)
+    let (first_period, first_evidence) = (period, score(fp));
     let faster = turns.and_then(|t| {
-        let first = (fp, t.count, score(fp));
-        faster_shaft(fft, full, &evidence, first, (zp, zw), (slowest, fastest)).map(|f| (t, f, period, score(fp)))
+        let first = (fp, t.count, first_evidence);
+        faster_shaft(fft, full, &evidence, first, (zp, zw), (slowest, fastest)).map(|f| (t, f))
     });
     let (fp, period, k, peak, followed, best, turns, turned) = match faster {
-        Some((t, f, first_period, first_evidence)) => {
+        Some((t, f)) => {
             let cycle = f.period / (z_p * f.harmonic as f64);
             let line = Some((cycle, f.line));
             let turned = Some((t, first_period, f.evidence, f.wheel));

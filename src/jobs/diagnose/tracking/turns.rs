@@ -168,7 +168,7 @@ pub(super) struct FasterShaft {
 /// shaft is the pinion turning count times as fast, or the wheel (the pinion count zw / zp times as
 /// fast). Each reading is taken only where the record bears it out: its speed lies within `range`, its
 /// own mesh comb stands (at least [`FASTER_COMB_SHARE`] of `first_evidence`), its mesh line is followed
-/// within [`COMB_AGREEMENT`] of the comb, and on that line's angle its revolution is one turn, neither
+/// within [`COMB_AGREEMENT`] of the comb ([`comb_line`]), and on that line's angle its revolution is one turn, neither
 /// several again ([`turns_per_revolution`]) nor a part of one ([`part_of_a_turn`] of 2 and of `count`).
 /// Of the readings that hold, the one whose comb stands higher. (The check the other way round is what
 /// a slower comb taken by mistake fails: the revolution read three times as fast is a third of a turn.)
@@ -190,11 +190,8 @@ pub(super) fn faster_shaft(
             if score < FASTER_COMB_SHARE * first_evidence {
                 return None;
             }
-            let peak = evidence.peaks.iter().find(|c| (c.frequency / (z_p * f) - 1.0).abs() < 0.03);
-            let harmonic = peak.map_or(1, |c| c.strongest);
-            let mesh = peak.map_or(z_p * f, |c| c.frequency);
-            let lag = 1.0 / (harmonic as f64 * mesh);
-            let (cycle, line) = follow_line(full, lag).ok().filter(|(c, _)| (c / lag - 1.0).abs() <= COMB_AGREEMENT)?;
+            let CombLine { harmonic, mesh, followed } = comb_line(full, evidence, z_p * f);
+            let (cycle, line) = followed?;
             let cycles = zp * harmonic;
             let most = (range.1 / f).floor() as usize;
             let one_turn = turns_per_revolution(fft, &line, (cycles, zp), most).is_none()
